@@ -1,0 +1,1 @@
+//! Constant-mean-curvature surfaces (seed chapter 5).

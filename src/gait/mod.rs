@@ -1,0 +1,1 @@
+//! Reduced-gradient spacetime optimization of articulated characters (seed chapter 3).

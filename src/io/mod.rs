@@ -1,0 +1,1 @@
+//! File formats: result files, glTF, previews; atomic writes.

@@ -1,0 +1,2 @@
+//! The `optimize` command line.
+fn main() {}

@@ -1,0 +1,109 @@
+//! What every problem kind shares at run time: the CLI's run options, the result summary written
+//! as `result.json`, and the files a run produces.
+//!
+//! Each module exposes `load(path) -> Result<Problem, InputError>` (parse + validate) and
+//! `run(&Problem, &RunOptions) -> Result<Outcome, Error>`; the CLI and the golden tests call the
+//! same functions. Modules never touch the filesystem: they return [`Artifact`]s, which
+//! [`crate::io`] writes atomically.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use serde::Serialize;
+
+use crate::solver::{Evaluations, Solution, Status};
+
+/// Options from the command line that apply to every kind.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Output folder; `None` means `out/<problem name>/`.
+    pub out_dir: Option<PathBuf>,
+    /// Suppress the live log.
+    pub quiet: bool,
+    /// More detail in the live log.
+    pub verbose: bool,
+    /// Only parse, validate, build the model and check derivatives against finite differences.
+    pub check: bool,
+    /// Overrides `[solver] max_iterations`.
+    pub max_iter: Option<usize>,
+    /// Seed for every random choice (ground structures, random starts, annealing).
+    pub seed: u64,
+    /// Worker threads for parallel parts (trials, multistart); `None` = all cores.
+    pub threads: Option<usize>,
+    /// Gait: run only this trial (1-based).
+    pub trial: Option<usize>,
+    /// Truss: number of topology rounds.
+    pub rounds: Option<usize>,
+    /// Set by Ctrl-C; solvers stop at the end of the current iteration.
+    pub interrupt: Option<Arc<AtomicBool>>,
+}
+
+/// The `result.json` summary: common figures plus module-specific ones under `figures`.
+#[derive(Debug, Clone, Serialize)]
+pub struct ResultSummary {
+    /// Problem name (file's `name` key, or its stem).
+    pub problem: String,
+    /// "gait", "truss" or "cmc".
+    pub kind: String,
+    /// Solver status name, e.g. "Optimal"; "Checked" for `--check` runs.
+    pub status: String,
+    /// The status explained in one sentence.
+    pub status_message: String,
+    /// Final objective value (module units, see `figures`).
+    pub objective: f64,
+    /// Largest bound or constraint violation.
+    pub max_violation: f64,
+    /// Major iterations (summed over rounds, trials or starts).
+    pub iterations: usize,
+    /// Evaluation counts (summed likewise).
+    pub evaluations: Evaluations,
+    /// Wall time per phase in seconds ("build", "solve", "export", ...).
+    pub timings: BTreeMap<String, f64>,
+    /// The seed used.
+    pub seed: u64,
+    /// Module-specific figures (areas, masses, trial tables, ...).
+    pub figures: serde_json::Value,
+}
+
+impl ResultSummary {
+    /// Fills the common solver fields from a solution.
+    pub fn from_solution(problem: &str, kind: &str, seed: u64, solution: &Solution) -> Self {
+        ResultSummary {
+            problem: problem.to_string(),
+            kind: kind.to_string(),
+            status: format!("{:?}", solution.status),
+            status_message: solution.status.sentence().to_string(),
+            objective: solution.objective,
+            max_violation: solution.max_violation,
+            iterations: solution.iterations,
+            evaluations: solution.evaluations,
+            timings: BTreeMap::new(),
+            seed,
+            figures: serde_json::Value::Object(Default::default()),
+        }
+    }
+}
+
+/// A file a run produces, held in memory until the run is complete.
+#[derive(Debug, Clone)]
+pub struct Artifact {
+    /// File name inside the output folder, e.g. "model.glb".
+    pub name: String,
+    /// Contents.
+    pub bytes: Vec<u8>,
+}
+
+/// Everything a run produces.
+#[derive(Debug, Clone)]
+pub struct Outcome {
+    /// The summary (written as `result.json`).
+    pub summary: ResultSummary,
+    /// How the main solve ended; decides the exit code. `None` for `--check` runs.
+    pub status: Option<Status>,
+    /// Whether `--check` found the derivatives consistent (only for `--check` runs).
+    pub check_passed: Option<bool>,
+    /// Other files: `iterations.csv`, `model.glb`, previews, CSVs.
+    pub artifacts: Vec<Artifact>,
+}

@@ -1,0 +1,58 @@
+//! Solver options: tolerances, limits, Hessian mode, verbosity.
+
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use serde::{Deserialize, Serialize};
+
+/// How the solver obtains second-order information.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum HessianMode {
+    /// Exact if the problem provides it, else dense damped BFGS for small n, L-BFGS for large n.
+    #[default]
+    Auto,
+    /// Dense damped (Powell) BFGS.
+    Bfgs,
+    /// Limited-memory BFGS (no dense n×n matrix).
+    Lbfgs,
+    /// The problem's exact Lagrangian Hessian with inertia correction.
+    Exact,
+}
+
+/// Everything that steers a solve. `Default` gives the documented defaults.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Scaled dual-optimality tolerance.
+    pub tolerance: f64,
+    /// Scaled primal-feasibility tolerance.
+    pub constraint_tolerance: f64,
+    /// Major-iteration limit.
+    pub max_iterations: usize,
+    /// Wall-clock limit in seconds.
+    pub max_time: Option<f64>,
+    /// Hessian mode.
+    pub hessian: HessianMode,
+    /// Correction pairs kept by L-BFGS.
+    pub lbfgs_memory: usize,
+    /// 0 silent, 1 one line per iteration, 2 more detail. The log goes to stderr.
+    pub verbosity: u8,
+    /// Set from outside (Ctrl-C) to stop at the end of the current iteration with status
+    /// `Interrupted`, returning the best point so far.
+    pub interrupt: Option<Arc<AtomicBool>>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            tolerance: 1e-6,
+            constraint_tolerance: 1e-6,
+            max_iterations: 1000,
+            max_time: None,
+            hessian: HessianMode::Auto,
+            lbfgs_memory: 10,
+            verbosity: 1,
+            interrupt: None,
+        }
+    }
+}

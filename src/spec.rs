@@ -1,0 +1,304 @@
+//! Problem files: TOML into typed structs, with errors that point into the file.
+//!
+//! Every problem kind deserializes its file into plain structs marked
+//! `#[serde(deny_unknown_fields)]`, then checks value ranges in a `validate` step. Both kinds of
+//! error reach the user as one line naming `file:line:col`:
+//! - serde errors (syntax, unknown key, wrong type, missing key) carry a byte span from the toml
+//!   parser; unknown keys get the closest valid key as a suggestion;
+//! - range errors from `validate` name a key path (`["solver", "tolerance"]`), which
+//!   [`Source::error_at`] maps back to the key's position with the toml parser's spans.
+//!
+//! The shared `[solver]` table ([`SolverSpec`]) is accepted by every kind.
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+use serde::de::DeserializeOwned;
+
+use crate::error::InputError;
+use crate::solver::{HessianMode, Options};
+
+/// A problem file's text, kept to point errors found after parsing back into the file.
+#[derive(Debug, Clone)]
+pub struct Source {
+    /// The path as the user gave it.
+    pub path: PathBuf,
+    /// The whole file.
+    pub text: String,
+}
+
+/// One step of a key path: a table key or an array index.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Key<'a> {
+    /// A key in a table.
+    Name(&'a str),
+    /// An element of an array (also of an array of tables, `[[link]]`).
+    Index(usize),
+}
+
+impl<'a> From<&'a str> for Key<'a> {
+    fn from(name: &'a str) -> Self {
+        Key::Name(name)
+    }
+}
+
+impl From<usize> for Key<'_> {
+    fn from(index: usize) -> Self {
+        Key::Index(index)
+    }
+}
+
+impl Source {
+    /// Reads a problem file; a missing or unreadable file is an [`InputError`].
+    pub fn read(path: &Path) -> Result<Self, InputError> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            let why = match e.kind() {
+                std::io::ErrorKind::NotFound => "no such file".to_string(),
+                std::io::ErrorKind::InvalidData => "not UTF-8 text".to_string(),
+                _ => e.to_string(),
+            };
+            InputError::whole_file(path, format!("cannot read problem file: {why}"))
+        })?;
+        Ok(Source {
+            path: path.to_path_buf(),
+            text,
+        })
+    }
+
+    /// Deserializes the whole file into `T`, mapping toml/serde errors to positioned messages.
+    pub fn parse<T: DeserializeOwned>(&self) -> Result<T, InputError> {
+        toml::from_str::<T>(&self.text).map_err(|e| self.translate(&e))
+    }
+
+    /// An error positioned at the key at `path` (its name), or at the closest enclosing table
+    /// that exists in the file when the key itself is absent (a default value was used).
+    pub fn error_at(&self, path: &[Key<'_>], message: impl Into<String>) -> InputError {
+        let offset = self.key_offset(path).unwrap_or(0);
+        InputError::at_offset(&self.path, &self.text, offset, message)
+    }
+
+    /// Byte offset of the deepest existing element along `path`.
+    fn key_offset(&self, path: &[Key<'_>]) -> Option<usize> {
+        let root = toml::de::DeTable::parse(&self.text).ok()?;
+        let mut offset = None;
+        let mut table = Some(root.get_ref());
+        let mut array: Option<&toml::de::DeArray<'_>> = None;
+        for key in path {
+            let value = match (*key, table, array) {
+                (Key::Name(name), Some(t), _) => {
+                    let (k, v) = t.get_key_value(name)?;
+                    offset = Some(k.span().start);
+                    v
+                }
+                (Key::Index(i), _, Some(a)) => {
+                    let v = a.get(i)?;
+                    offset = Some(v.span().start);
+                    v
+                }
+                _ => break,
+            };
+            table = value.get_ref().as_table();
+            array = value.get_ref().as_array();
+        }
+        offset
+    }
+
+    fn translate(&self, e: &toml::de::Error) -> InputError {
+        let offset = e.span().map_or(0, |s| s.start);
+        let message = tidy_message(e.message());
+        InputError::at_offset(&self.path, &self.text, offset, message)
+    }
+}
+
+/// Turns serde's messages into short sentences; unknown keys get a "did you mean" hint.
+fn tidy_message(raw: &str) -> String {
+    let raw = raw.trim().trim_end_matches('.');
+    if let Some(rest) = raw.strip_prefix("unknown field `")
+        && let Some((key, expected)) = rest.split_once('`')
+    {
+        let valid: Vec<&str> = expected.split('`').skip(1).step_by(2).collect();
+        return match closest(key, &valid) {
+            Some(best) => format!("unknown key `{key}`; did you mean `{best}`?"),
+            None if valid.is_empty() => format!("unknown key `{key}`"),
+            None => format!("unknown key `{key}`; valid keys: {}", valid.join(", ")),
+        };
+    }
+    if let Some(rest) = raw.strip_prefix("missing field `") {
+        return format!("missing key `{}", rest);
+    }
+    raw.replace("invalid type: ", "wrong type: found ")
+        .replace('\n', " ")
+}
+
+/// The valid key nearest to `key` by edit distance, if it is plausibly a typo.
+fn closest<'a>(key: &str, valid: &[&'a str]) -> Option<&'a str> {
+    valid
+        .iter()
+        .map(|v| (edit_distance(key, v), *v))
+        .filter(|(d, v)| *d <= (v.len().max(key.len()) / 3).max(2))
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, v)| v)
+}
+
+/// Levenshtein distance over characters.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let substitution = diagonal + usize::from(ca != *cb);
+            diagonal = row[j + 1];
+            row[j + 1] = substitution.min(row[j] + 1).min(row[j + 1] + 1);
+        }
+    }
+    row[b.len()]
+}
+
+/// The `[solver]` table every problem kind accepts. All keys optional.
+#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSpec {
+    /// Scaled optimality (dual) tolerance; default 1e-6.
+    pub tolerance: Option<f64>,
+    /// Scaled feasibility (primal) tolerance; default 1e-6.
+    pub constraint_tolerance: Option<f64>,
+    /// Maximum number of major (SQP) iterations; default 1000.
+    pub max_iterations: Option<usize>,
+    /// Wall-clock limit for one solve, in seconds; default unlimited.
+    pub max_time: Option<f64>,
+    /// Hessian approximation: "auto" (default), "bfgs", "lbfgs" or "exact".
+    pub hessian: Option<HessianMode>,
+    /// Number of correction pairs kept by limited-memory BFGS; default 10.
+    pub lbfgs_memory: Option<usize>,
+    /// Iteration-log detail: 0 silent, 1 one line per iteration (default), 2 more.
+    pub verbosity: Option<u8>,
+}
+
+impl SolverSpec {
+    /// Checks ranges; `path` is where this table sits in the file (usually `["solver"]`).
+    pub fn validate(&self, source: &Source, path: &[Key<'_>]) -> Result<(), InputError> {
+        let at = |key: &'static str, msg: String| {
+            let mut p = path.to_vec();
+            p.push(Key::Name(key));
+            source.error_at(&p, msg)
+        };
+        for (key, value) in [
+            ("tolerance", self.tolerance),
+            ("constraint_tolerance", self.constraint_tolerance),
+        ] {
+            if let Some(v) = value
+                && !(v > 0.0 && v < 1.0)
+            {
+                return Err(at(key, format!("`{key}` must be in (0, 1), got {v}")));
+            }
+        }
+        if let Some(t) = self.max_time
+            && !(t > 0.0)
+        {
+            return Err(at(
+                "max_time",
+                format!("`max_time` must be positive seconds, got {t}"),
+            ));
+        }
+        if self.lbfgs_memory == Some(0) {
+            return Err(at(
+                "lbfgs_memory",
+                "`lbfgs_memory` must be at least 1".into(),
+            ));
+        }
+        if let Some(v) = self.verbosity
+            && v > 2
+        {
+            return Err(at(
+                "verbosity",
+                format!("`verbosity` must be 0, 1 or 2, got {v}"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Solver options: defaults overridden by this table.
+    pub fn options(&self) -> Options {
+        let mut o = Options::default();
+        if let Some(v) = self.tolerance {
+            o.tolerance = v;
+        }
+        if let Some(v) = self.constraint_tolerance {
+            o.constraint_tolerance = v;
+        }
+        if let Some(v) = self.max_iterations {
+            o.max_iterations = v;
+        }
+        if let Some(v) = self.max_time {
+            o.max_time = Some(v);
+        }
+        if let Some(v) = self.hessian {
+            o.hessian = v;
+        }
+        if let Some(v) = self.lbfgs_memory {
+            o.lbfgs_memory = v;
+        }
+        if let Some(v) = self.verbosity {
+            o.verbosity = v;
+        }
+        o
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    #[allow(dead_code)]
+    struct File {
+        name: String,
+        #[serde(default)]
+        solver: SolverSpec,
+    }
+
+    fn source(text: &str) -> Source {
+        Source {
+            path: PathBuf::from("p.toml"),
+            text: text.to_string(),
+        }
+    }
+
+    #[test]
+    fn unknown_key_suggests_the_closest() {
+        let e = source("name = \"a\"\n[solver]\ntolerence = 1e-6\n")
+            .parse::<File>()
+            .unwrap_err();
+        assert_eq!(e.position, Some((3, 1)));
+        assert!(
+            e.message.contains("did you mean `tolerance`"),
+            "{}",
+            e.message
+        );
+    }
+
+    #[test]
+    fn wrong_type_is_positioned() {
+        let e = source("name = 3\n").parse::<File>().unwrap_err();
+        assert_eq!(e.position.map(|p| p.0), Some(1));
+        assert!(e.message.contains("wrong type"), "{}", e.message);
+    }
+
+    #[test]
+    fn range_error_points_at_the_key() {
+        let s = source("name = \"a\"\n\n[solver]\nmax_time = -1.0\n");
+        let f: File = s.parse().unwrap();
+        let e = f.solver.validate(&s, &[Key::Name("solver")]).unwrap_err();
+        assert_eq!(e.position, Some((4, 1)));
+        assert!(e.to_string().starts_with("p.toml:4:1: `max_time`"), "{e}");
+    }
+
+    #[test]
+    fn edit_distance_is_levenshtein() {
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+        assert_eq!(edit_distance("", "abc"), 3);
+    }
+}

@@ -1,0 +1,1 @@
+//! Truss geometry and sizing optimization on a ground structure (seed chapter 4).
