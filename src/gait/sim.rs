@@ -1,0 +1,187 @@
+//! Forward simulation: the state derivative `(q̇, v̇) = (N(q)·v, ABA(q, v, τ_act + τ_passive,
+//! f_contact))` and classic fixed-step fourth-order Runge–Kutta rollouts, generic over the scalar.
+//!
+//! One RK4 step of size `h` from `(t, x)`: `k₁ = f(t, x)`, `k₂ = f(t + h/2, x + h/2·k₁)`,
+//! `k₃ = f(t + h/2, x + h/2·k₂)`, `k₄ = f(t + h, x + h·k₃)`,
+//! `x ← x + h/6·(k₁ + 2k₂ + 2k₃ + k₄)`, then a floating base's quaternion is renormalized.
+//! Controls are actuator forces (N·m or N) as functions of time, evaluated at the stage times.
+//! A step whose state is not finite (e.g. a contact point driven far below the ground, where the
+//! contact spring's exponential overflows) is reported as a [`SimError`].
+
+use super::aba::Dynamics;
+use super::character::Model;
+use super::contact::add_contact_forces;
+use super::spatial::{Force, Real};
+
+/// The simulation left the domain where it is defined.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("simulation state not finite at t = {time} s")]
+pub struct SimError {
+    /// Time of the failed step (s).
+    pub time: f64,
+}
+
+/// Actuator forces as functions of time: fills `out` (one per actuator, N·m or N) at `t` (s).
+pub trait Controls<T> {
+    /// Actuator forces at time `t`.
+    fn forces(&self, t: f64, out: &mut [T]);
+}
+
+impl<T, F: Fn(f64, &mut [T])> Controls<T> for F {
+    fn forces(&self, t: f64, out: &mut [T]) {
+        self(t, out)
+    }
+}
+
+/// A simulation state: generalized coordinates and velocities.
+#[derive(Debug, Clone, PartialEq)]
+pub struct State<T> {
+    /// Coordinates (length nq).
+    pub q: Vec<T>,
+    /// Velocities (length nv).
+    pub v: Vec<T>,
+}
+
+/// Reusable simulator: dynamics scratch space and RK4 stage buffers.
+#[derive(Debug, Clone)]
+pub struct Simulator<'m, T> {
+    model: &'m Model,
+    /// Dynamics scratch; after [`Simulator::observe`] it holds the kinematics of that state.
+    pub dynamics: Dynamics<T>,
+    f_ext: Vec<Force<T>>,
+    act: Vec<T>,
+    tau: Vec<T>,
+    kq: [Vec<T>; 4],
+    kv: [Vec<T>; 4],
+    tmp: State<T>,
+}
+
+impl<'m, T: Real> Simulator<'m, T> {
+    /// A simulator for `model`.
+    pub fn new(model: &'m Model) -> Self {
+        let z = |n| vec![T::zero(); n];
+        Simulator {
+            model,
+            dynamics: Dynamics::new(model),
+            f_ext: vec![Force::zero(); model.links.len()],
+            act: z(model.actuators.len()),
+            tau: z(model.nv),
+            kq: std::array::from_fn(|_| z(model.nq)),
+            kv: std::array::from_fn(|_| z(model.nv)),
+            tmp: State {
+                q: z(model.nq),
+                v: z(model.nv),
+            },
+        }
+    }
+
+    /// The model simulated.
+    pub fn model(&self) -> &'m Model {
+        self.model
+    }
+
+    /// The state derivative `(q̇, v̇)` at time `t`.
+    pub fn derivative(
+        &mut self,
+        t: f64,
+        x: &State<T>,
+        controls: &dyn Controls<T>,
+        qd: &mut [T],
+        vd: &mut [T],
+    ) {
+        let m = self.model;
+        self.dynamics.kinematics(m, &x.q, &x.v);
+        self.f_ext.fill(Force::zero());
+        add_contact_forces(m, &self.dynamics, &mut self.f_ext);
+        self.tau.fill(T::zero());
+        m.add_passive(&x.q, &x.v, &mut self.tau);
+        controls.forces(t, &mut self.act);
+        for (a, f) in m.actuators.iter().zip(&self.act) {
+            self.tau[m.links[a.link].v_index] += *f;
+        }
+        m.qdot(&x.q, &x.v, qd);
+        self.dynamics.accelerations(m, &self.tau, &self.f_ext, vd);
+    }
+
+    /// Advances `x` by one RK4 step of `h` seconds from time `t`.
+    pub fn step(
+        &mut self,
+        t: f64,
+        h: f64,
+        x: &mut State<T>,
+        controls: &dyn Controls<T>,
+    ) -> Result<(), SimError> {
+        let mut kq = std::mem::take(&mut self.kq);
+        let mut kv = std::mem::take(&mut self.kv);
+        let mut tmp = std::mem::replace(
+            &mut self.tmp,
+            State {
+                q: Vec::new(),
+                v: Vec::new(),
+            },
+        );
+        let stages = [(0.0, 0.0), (0.5, 0.5), (0.5, 0.5), (1.0, 1.0)];
+        for s in 0..4 {
+            let (dt_frac, x_frac) = stages[s];
+            if s == 0 {
+                tmp.q.copy_from_slice(&x.q);
+                tmp.v.copy_from_slice(&x.v);
+            } else {
+                let w = h * x_frac;
+                for j in 0..x.q.len() {
+                    tmp.q[j] = x.q[j] + kq[s - 1][j] * w;
+                }
+                for j in 0..x.v.len() {
+                    tmp.v[j] = x.v[j] + kv[s - 1][j] * w;
+                }
+            }
+            let (qd, vd) = (&mut kq[s], &mut kv[s]);
+            self.derivative(t + dt_frac * h, &tmp, controls, qd, vd);
+        }
+        let w = h / 6.0;
+        for j in 0..x.q.len() {
+            x.q[j] += (kq[0][j] + (kq[1][j] + kq[2][j]) * 2.0 + kq[3][j]) * w;
+        }
+        for j in 0..x.v.len() {
+            x.v[j] += (kv[0][j] + (kv[1][j] + kv[2][j]) * 2.0 + kv[3][j]) * w;
+        }
+        self.model.normalize(&mut x.q);
+        self.kq = kq;
+        self.kv = kv;
+        self.tmp = tmp;
+        if x.q.iter().chain(&x.v).all(|z| z.re().is_finite()) {
+            Ok(())
+        } else {
+            Err(SimError { time: t + h })
+        }
+    }
+
+    /// Runs kinematics at state `x` so that [`Simulator::dynamics`] can be read out (point
+    /// positions and velocities, centre of mass, energies).
+    pub fn observe(&mut self, x: &State<T>) {
+        self.dynamics.kinematics(self.model, &x.q, &x.v);
+    }
+
+    /// Simulates from `x` at `t = 0` with steps of `h` for `steps[last]` steps, calling
+    /// `sample(k, x, self)` after step `steps[k]` (ascending step counts; 0 means the initial
+    /// state) with the state's kinematics computed.
+    pub fn rollout(
+        &mut self,
+        x: &mut State<T>,
+        h: f64,
+        steps: &[usize],
+        controls: &dyn Controls<T>,
+        mut sample: impl FnMut(usize, &State<T>, &Self),
+    ) -> Result<(), SimError> {
+        let mut n = 0;
+        for (k, &target) in steps.iter().enumerate() {
+            while n < target {
+                self.step(n as f64 * h, h, x, controls)?;
+                n += 1;
+            }
+            self.observe(x);
+            sample(k, x, self);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,1146 @@
+//! The gait problem file: a character (links, joints, actuators, contact points), the contact
+//! law, the integration step, the initial state, the actuator controls and the tasks. Parsed
+//! with `deny_unknown_fields` and validated with errors positioned at the offending key.
+//!
+//! All quantities are SI: m, kg, s, rad, N, N·m; y is up. Layout (every key is documented on
+//! its field below; `docs/problem-files.md` shows complete files):
+//! ```toml
+//! name = "pogo_jump"
+//! dt = 1e-4                     # s, RK4 step
+//! gravity = [0.0, -9.81, 0.0]   # m/s²
+//! [[link]]                      # parents before children; the first link is the root
+//! name = "foot"
+//! mass = 0.5                    # kg
+//! shape = { type = "sphere", radius = 0.02, center = [0, 0, 0] }
+//! contacts = [[0.0, 0.0, 0.0]]  # m, link coordinates
+//! joint = { type = "planar", position = [0.0, 0.004] }
+//! [[actuator]]
+//! name = "leg"
+//! joint = "head"                # the link whose joint it drives
+//! bounds = [-200.0, 200.0]      # N or N·m
+//! [controls]
+//! knots = 6
+//! [[task]]
+//! time = 1.0
+//! quantity = "point_position"
+//! link = "head"
+//! axis = "y"
+//! min = 0.5
+//! ```
+
+use std::collections::HashMap;
+
+use serde::Deserialize;
+
+use super::character::{
+    Actuator, ContactParams, JointKind, Limits, Link, Model, Shape, Spring, shape_center,
+    shape_inertia,
+};
+use super::sim::State;
+use super::spatial::{Mat3, RigidInertia, Vec3};
+use super::task::{PoseConstraint, Quantity};
+use crate::error::InputError;
+use crate::spec::{Key, SolverSpec, Source};
+
+/// The whole file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FileSpec {
+    /// Problem name; defaults to the file stem.
+    pub name: Option<String>,
+    /// What the task is, for people.
+    pub description: Option<String>,
+    /// RK4 step (s).
+    pub dt: f64,
+    /// Gravity acceleration (m/s²); default `[0, −9.81, 0]`.
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+    /// Links, parents first.
+    pub link: Vec<LinkSpec>,
+    /// Actuators.
+    #[serde(default)]
+    pub actuator: Vec<ActuatorSpec>,
+    /// Contact law constants (seed defaults).
+    #[serde(default)]
+    pub contact: ContactSpec,
+    /// Control parametrization.
+    #[serde(default)]
+    pub controls: ControlsSpec,
+    /// Pose constraints.
+    #[serde(default)]
+    pub task: Vec<TaskSpec>,
+    /// Solver options.
+    #[serde(default)]
+    pub solver: SolverSpec,
+}
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, -9.81, 0.0]
+}
+
+/// One rigid link and its joint.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinkSpec {
+    /// Unique name.
+    pub name: String,
+    /// Mass (kg), positive.
+    pub mass: f64,
+    /// Centre of mass in link coordinates (m); default the shape's centre.
+    pub com: Option<[f64; 3]>,
+    /// Principal moments about the centre of mass along link axes `[Ixx, Iyy, Izz]` (kg·m²);
+    /// default: the uniform solid `shape` of this mass.
+    pub inertia: Option<[f64; 3]>,
+    /// Products of inertia `[Ixy, Ixz, Iyz]` (kg·m²); default zero.
+    pub inertia_products: Option<[f64; 3]>,
+    /// Display shape (link coordinates, m).
+    pub shape: ShapeSpec,
+    /// Contact points in link coordinates (m).
+    #[serde(default)]
+    pub contacts: Vec<[f64; 3]>,
+    /// The joint attaching this link to its parent (the root's: to the world).
+    pub joint: JointSpec,
+}
+
+/// Display shape.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ShapeSpec {
+    /// A box of full side lengths `size` (m) centred at `center` (m).
+    Box {
+        /// Side lengths (m).
+        size: [f64; 3],
+        /// Centre (m); default origin.
+        #[serde(default)]
+        center: [f64; 3],
+    },
+    /// A capsule of `radius` (m) from `from` to `to` (m).
+    Capsule {
+        /// Radius (m).
+        radius: f64,
+        /// First end (m).
+        from: [f64; 3],
+        /// Second end (m).
+        to: [f64; 3],
+    },
+    /// A sphere of `radius` (m) centred at `center`.
+    Sphere {
+        /// Radius (m).
+        radius: f64,
+        /// Centre (m); default origin.
+        #[serde(default)]
+        center: [f64; 3],
+    },
+}
+
+/// Joint type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JointType {
+    /// Rotation about `axis` (rad).
+    Revolute,
+    /// Translation along `axis` (m).
+    Prismatic,
+    /// Root only: x, y translation and rotation about z (2-D characters).
+    Planar,
+    /// Root only: six degrees of freedom (3-D characters).
+    Floating,
+}
+
+/// A number or a list of numbers.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+pub enum Numbers {
+    /// One number.
+    One(f64),
+    /// Several.
+    Many(Vec<f64>),
+}
+
+impl Numbers {
+    fn as_slice(&self) -> &[f64] {
+        match self {
+            Numbers::One(x) => std::slice::from_ref(x),
+            Numbers::Many(v) => v,
+        }
+    }
+}
+
+/// A joint and its initial state.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointSpec {
+    /// Joint type.
+    #[serde(rename = "type")]
+    pub kind: JointType,
+    /// Parent link's name; omitted for the root (attached to the world).
+    pub parent: Option<String>,
+    /// Joint frame origin in the parent's frame (m); default origin.
+    #[serde(default)]
+    pub origin: [f64; 3],
+    /// Axis of a revolute or prismatic joint (parent frame; normalized); default `[0, 0, 1]`.
+    pub axis: Option<[f64; 3]>,
+    /// Coordinate limits `[lower, upper]` (rad or m) of a scalar joint.
+    pub limits: Option<[f64; 2]>,
+    /// Stiffness of the limit springs (N·m/rad or N/m); default 100.
+    pub limit_stiffness: Option<f64>,
+    /// Smoothing width of the limit springs (rad or m); default 0.005.
+    pub limit_width: Option<f64>,
+    /// Passive spring stiffness (N·m/rad or N/m); default 0.
+    #[serde(default)]
+    pub stiffness: f64,
+    /// Passive spring rest coordinate (rad or m); default 0.
+    #[serde(default)]
+    pub rest: f64,
+    /// Passive damping (N·m·s/rad or N·s/m); default 0.
+    #[serde(default)]
+    pub damping: f64,
+    /// Initial coordinate: scalar joints a number (rad or m); planar `[x, y]`, floating
+    /// `[x, y, z]` (m, world position of the link frame).
+    pub position: Option<Numbers>,
+    /// Planar root: initial rotation about z (rad).
+    pub angle: Option<f64>,
+    /// Floating root: initial orientation as a quaternion `[w, x, y, z]` (normalized).
+    pub orientation: Option<[f64; 4]>,
+    /// Initial rate: scalar joints a number (rad/s or m/s); planar `[vx, vy]`, floating
+    /// `[vx, vy, vz]` (m/s, world velocity of the link frame's origin).
+    pub velocity: Option<Numbers>,
+    /// Root: initial angular velocity, planar a number (rad/s about z), floating `[ωx, ωy, ωz]`
+    /// (world axes).
+    pub angular_velocity: Option<Numbers>,
+}
+
+/// An actuator.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ActuatorSpec {
+    /// Unique name.
+    pub name: String,
+    /// The link whose (scalar) joint it drives.
+    pub joint: String,
+    /// Force bounds `[lower, upper]` (N·m for revolute, N for prismatic joints).
+    pub bounds: [f64; 2],
+    /// Starting guess: force at each control knot (N·m or N); default zeros.
+    pub start: Option<Vec<f64>>,
+}
+
+/// Contact law constants; see [`crate::gait::contact`]. All optional, seed values by default.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// a (N), seed 0.5336.
+    pub spring_force: Option<f64>,
+    /// b (1/m), seed 700.
+    pub spring_rate: Option<f64>,
+    /// y₀ (m), seed 0.0035423.
+    pub spring_offset: Option<f64>,
+    /// d (N·s/m), seed 1000.
+    pub damping: Option<f64>,
+    /// r (1/m), seed 200.
+    pub damping_rate: Option<f64>,
+    /// k (dimensionless), seed 10.
+    pub damping_factor: Option<f64>,
+    /// g₀ (m), seed 0.005.
+    pub damping_offset: Option<f64>,
+    /// Coulomb friction coefficient μ; default 0.8.
+    pub friction: Option<f64>,
+    /// Friction regularization speed (m/s); default 0.01.
+    pub slip_speed: Option<f64>,
+    /// Ground height (m); default 0.
+    pub ground: Option<f64>,
+}
+
+/// Control parametrization.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControlsSpec {
+    /// Hermite knots per actuator, evenly spaced over `[0, horizon]`; default 6 (seed: 6–8).
+    pub knots: Option<usize>,
+    /// Control horizon (s); default the last task time.
+    pub horizon: Option<f64>,
+}
+
+/// Simulated quantity a task constrains.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum QuantitySpec {
+    /// A link point's world position component (m).
+    PointPosition,
+    /// A link point's world velocity component (m/s).
+    PointVelocity,
+    /// A scalar joint's coordinate (rad or m).
+    JointPosition,
+    /// A scalar joint's rate (rad/s or m/s).
+    JointVelocity,
+    /// The centre of mass position component (m).
+    ComPosition,
+    /// The centre of mass velocity component (m/s).
+    ComVelocity,
+    /// Every contact point at least `min` above the ground (m).
+    Airborne,
+}
+
+/// World axis name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Axis {
+    /// x (forward).
+    X,
+    /// y (up).
+    Y,
+    /// z.
+    Z,
+}
+
+/// A pose constraint.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TaskSpec {
+    /// Key time (s), a multiple of `dt` within the horizon.
+    pub time: f64,
+    /// What is constrained.
+    pub quantity: QuantitySpec,
+    /// Link (point and airborne-free quantities) or joint (the link whose joint) name.
+    pub link: Option<String>,
+    /// Point on the link (m, link coordinates); default the link origin.
+    pub point: Option<[f64; 3]>,
+    /// World axis of a vector quantity.
+    pub axis: Option<Axis>,
+    /// Lower bound (quantity's unit).
+    pub min: Option<f64>,
+    /// Upper bound (quantity's unit).
+    pub max: Option<f64>,
+    /// Equality target (quantity's unit); excludes `min` and `max`.
+    pub value: Option<f64>,
+}
+
+/// A validated gait problem.
+#[derive(Debug, Clone)]
+pub struct Problem {
+    /// Name.
+    pub name: String,
+    /// The character.
+    pub model: Model,
+    /// Initial state.
+    pub initial: State<f64>,
+    /// RK4 step (s).
+    pub dt: f64,
+    /// Knots per actuator.
+    pub knots: usize,
+    /// Control horizon (s).
+    pub horizon: f64,
+    /// Starting knot forces per actuator (N·m or N).
+    pub start: Vec<Vec<f64>>,
+    /// Pose constraints, ordered by time.
+    pub constraints: Vec<PoseConstraint>,
+    /// Solver options table.
+    pub solver: SolverSpec,
+}
+
+/// Parses and validates a problem file's text.
+pub fn load_source(source: &Source) -> Result<Problem, InputError> {
+    let file: FileSpec = source.parse()?;
+    build(source, file)
+}
+
+type Path<'a> = Vec<Key<'a>>;
+
+fn path<'a>(keys: &[Key<'a>]) -> Path<'a> {
+    keys.to_vec()
+}
+
+fn finite_all(xs: &[f64]) -> bool {
+    xs.iter().all(|x| x.is_finite())
+}
+
+fn unit(v: [f64; 3]) -> Option<[f64; 3]> {
+    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    (n > 1e-12 && n.is_finite()).then(|| v.map(|x| x / n))
+}
+
+fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
+    let err = |p: Path<'_>, msg: String| source.error_at(&p, msg);
+    file.solver.validate(source, &[Key::Name("solver")])?;
+    if !(file.dt > 0.0 && file.dt <= 0.01) {
+        return Err(err(
+            path(&["dt".into()]),
+            format!("`dt` must be in (0, 0.01] s, got {}", file.dt),
+        ));
+    }
+    if !finite_all(&file.gravity) {
+        return Err(err(
+            path(&["gravity".into()]),
+            "`gravity` must be finite".into(),
+        ));
+    }
+    if file.link.is_empty() {
+        return Err(err(path(&[]), "at least one [[link]] is required".into()));
+    }
+    let mut index: HashMap<&str, usize> = HashMap::new();
+    let mut links = Vec::new();
+    for (i, l) in file.link.iter().enumerate() {
+        let at = |key: &'static str| vec![Key::Name("link"), Key::Index(i), Key::Name(key)];
+        let jat = |key: &'static str| {
+            vec![
+                Key::Name("link"),
+                Key::Index(i),
+                Key::Name("joint"),
+                Key::Name(key),
+            ]
+        };
+        if index.insert(l.name.as_str(), i).is_some() {
+            return Err(err(
+                at("name"),
+                format!("link name `{}` is used twice", l.name),
+            ));
+        }
+        if !(l.mass > 0.0 && l.mass.is_finite()) {
+            return Err(err(
+                at("mass"),
+                format!("`mass` must be positive kg, got {}", l.mass),
+            ));
+        }
+        let shape = build_shape(&l.shape).map_err(|m| err(at("shape"), m))?;
+        let com = l.com.unwrap_or_else(|| shape_center(&shape));
+        if !finite_all(&com) {
+            return Err(err(at("com"), "`com` must be finite".into()));
+        }
+        let mut inertia = shape_inertia(&shape, l.mass);
+        if let Some(d) = l.inertia {
+            inertia = [[d[0], 0.0, 0.0], [0.0, d[1], 0.0], [0.0, 0.0, d[2]]];
+        }
+        if let Some([xy, xz, yz]) = l.inertia_products {
+            inertia[0][1] = xy;
+            inertia[1][0] = xy;
+            inertia[0][2] = xz;
+            inertia[2][0] = xz;
+            inertia[1][2] = yz;
+            inertia[2][1] = yz;
+        }
+        if !positive_definite(&inertia) {
+            let key = if l.inertia.is_some() || l.inertia_products.is_some() {
+                "inertia"
+            } else {
+                "shape"
+            };
+            return Err(err(at(key), "the rotational inertia must be positive definite (check moments, products and the triangle inequality)".into()));
+        }
+        for c in &l.contacts {
+            if !finite_all(c) {
+                return Err(err(at("contacts"), "contact points must be finite".into()));
+            }
+        }
+        let j = &l.joint;
+        let parent = match &j.parent {
+            None if i == 0 => None,
+            None => {
+                return Err(err(
+                    jat("type"),
+                    format!(
+                        "link `{}` needs a `parent` (only the first link is the root)",
+                        l.name
+                    ),
+                ));
+            }
+            Some(_) if i == 0 => {
+                return Err(err(
+                    jat("parent"),
+                    "the first link is the root and is attached to the world: remove `parent`"
+                        .into(),
+                ));
+            }
+            Some(p) => match index.get(p.as_str()) {
+                Some(&k) if k < i => Some(k),
+                _ => {
+                    return Err(err(
+                        jat("parent"),
+                        format!("parent `{p}` is not a link listed before `{}`", l.name),
+                    ));
+                }
+            },
+        };
+        let kind = match j.kind {
+            JointType::Revolute | JointType::Prismatic => {
+                let axis = unit(j.axis.unwrap_or([0.0, 0.0, 1.0])).ok_or_else(|| {
+                    err(
+                        jat("axis"),
+                        "`axis` must be a non-zero finite vector".into(),
+                    )
+                })?;
+                if j.kind == JointType::Revolute {
+                    JointKind::Revolute { axis }
+                } else {
+                    JointKind::Prismatic { axis }
+                }
+            }
+            JointType::Planar | JointType::Floating if i > 0 => {
+                return Err(err(
+                    jat("type"),
+                    "planar and floating joints attach the root (first link) to the world".into(),
+                ));
+            }
+            JointType::Planar => JointKind::Planar,
+            JointType::Floating => JointKind::Floating,
+        };
+        if !finite_all(&j.origin) {
+            return Err(err(jat("origin"), "`origin` must be finite".into()));
+        }
+        let scalar = kind.is_scalar();
+        for (key, present) in [
+            ("axis", j.axis.is_some()),
+            ("limits", j.limits.is_some()),
+            ("limit_stiffness", j.limit_stiffness.is_some()),
+            ("limit_width", j.limit_width.is_some()),
+        ] {
+            if present && !scalar {
+                return Err(err(
+                    jat(key),
+                    format!("`{key}` applies to revolute and prismatic joints only"),
+                ));
+            }
+        }
+        if !scalar && (j.stiffness != 0.0 || j.damping != 0.0 || j.rest != 0.0) {
+            return Err(err(
+                jat("stiffness"),
+                "passive springs apply to revolute and prismatic joints only".into(),
+            ));
+        }
+        let spring = if j.stiffness != 0.0 || j.damping != 0.0 {
+            if !(j.stiffness >= 0.0
+                && j.damping >= 0.0
+                && j.stiffness.is_finite()
+                && j.damping.is_finite()
+                && j.rest.is_finite())
+            {
+                return Err(err(
+                    jat("stiffness"),
+                    "`stiffness` and `damping` must be finite and non-negative".into(),
+                ));
+            }
+            Some(Spring {
+                stiffness: j.stiffness,
+                rest: j.rest,
+                damping: j.damping,
+            })
+        } else {
+            None
+        };
+        let limits = match j.limits {
+            Some([lo, hi]) => {
+                if !(lo < hi && lo.is_finite() && hi.is_finite()) {
+                    return Err(err(
+                        jat("limits"),
+                        format!("`limits` must be finite with lower < upper, got [{lo}, {hi}]"),
+                    ));
+                }
+                let stiffness = j.limit_stiffness.unwrap_or(100.0);
+                let width = j.limit_width.unwrap_or(0.005);
+                if !(stiffness > 0.0 && stiffness.is_finite()) {
+                    return Err(err(
+                        jat("limit_stiffness"),
+                        "`limit_stiffness` must be positive".into(),
+                    ));
+                }
+                if !(width > 0.0 && width < hi - lo) {
+                    return Err(err(
+                        jat("limit_width"),
+                        "`limit_width` must be positive and smaller than the range".into(),
+                    ));
+                }
+                Some(Limits {
+                    lower: lo,
+                    upper: hi,
+                    stiffness,
+                    width,
+                })
+            }
+            None => None,
+        };
+        links.push(Link {
+            name: l.name.clone(),
+            parent,
+            joint: kind,
+            origin: j.origin,
+            inertia: RigidInertia {
+                mass: l.mass,
+                com: Vec3(com),
+                inertia_com: Mat3(inertia),
+            },
+            spring,
+            limits,
+            shape,
+            contacts: l.contacts.clone(),
+            q_index: 0,
+            v_index: 0,
+        });
+    }
+    let contact = build_contact(source, &file.contact)?;
+    let mut actuators = Vec::new();
+    let mut names = HashMap::new();
+    for (a, spec) in file.actuator.iter().enumerate() {
+        let at = |key: &'static str| vec![Key::Name("actuator"), Key::Index(a), Key::Name(key)];
+        if names.insert(spec.name.as_str(), a).is_some() {
+            return Err(err(
+                at("name"),
+                format!("actuator name `{}` is used twice", spec.name),
+            ));
+        }
+        let link = *index
+            .get(spec.joint.as_str())
+            .ok_or_else(|| err(at("joint"), format!("no link named `{}`", spec.joint)))?;
+        if !links[link].joint.is_scalar() {
+            return Err(err(
+                at("joint"),
+                "actuators drive revolute or prismatic joints only".into(),
+            ));
+        }
+        if actuators.iter().any(|x: &Actuator| x.link == link) {
+            return Err(err(
+                at("joint"),
+                format!("joint `{}` already has an actuator", spec.joint),
+            ));
+        }
+        let [lo, hi] = spec.bounds;
+        if !(lo < hi && lo.is_finite() && hi.is_finite()) {
+            return Err(err(
+                at("bounds"),
+                format!("`bounds` must be finite with lower < upper, got [{lo}, {hi}]"),
+            ));
+        }
+        actuators.push(Actuator {
+            name: spec.name.clone(),
+            link,
+            bounds: [lo, hi],
+        });
+    }
+    let model = Model::new(links, actuators, file.gravity, contact);
+    let initial = build_initial(source, &file, &model)?;
+
+    let knots = file.controls.knots.unwrap_or(6);
+    if !(2..=100).contains(&knots) {
+        return Err(err(
+            path(&["controls".into(), "knots".into()]),
+            format!("`knots` must be in 2..=100, got {knots}"),
+        ));
+    }
+    let mut start = Vec::new();
+    for (a, spec) in file.actuator.iter().enumerate() {
+        let at = vec![Key::Name("actuator"), Key::Index(a), Key::Name("start")];
+        let s = spec.start.clone().unwrap_or_else(|| vec![0.0; knots]);
+        if s.len() != knots {
+            return Err(err(
+                at,
+                format!(
+                    "`start` needs one force per knot ({knots}), got {}",
+                    s.len()
+                ),
+            ));
+        }
+        if !finite_all(&s) {
+            return Err(err(at, "`start` must be finite".into()));
+        }
+        start.push(s);
+    }
+    let constraints = build_tasks(source, &file, &model, &index)?;
+    let last = constraints.iter().map(|c| c.time).fold(0.0, f64::max);
+    let horizon = file.controls.horizon.unwrap_or(last);
+    let hat = path(&["controls".into(), "horizon".into()]);
+    if !(horizon > 0.0 && horizon.is_finite()) {
+        return Err(err(
+            hat,
+            "`horizon` must be positive seconds (or give at least one task)".into(),
+        ));
+    }
+    if last > horizon + 1e-12 {
+        return Err(err(
+            hat,
+            format!("`horizon` {horizon} s ends before the last task time {last} s"),
+        ));
+    }
+    let name = file.name.clone().unwrap_or_else(|| {
+        source
+            .path
+            .file_stem()
+            .map_or("gait".into(), |s| s.to_string_lossy().into_owned())
+    });
+    Ok(Problem {
+        name,
+        model,
+        initial,
+        dt: file.dt,
+        knots,
+        horizon,
+        start,
+        constraints,
+        solver: file.solver,
+    })
+}
+
+fn build_shape(s: &ShapeSpec) -> Result<Shape, String> {
+    let shape = match *s {
+        ShapeSpec::Box { size, center } => Shape::Box { size, center },
+        ShapeSpec::Capsule { radius, from, to } => Shape::Capsule { radius, from, to },
+        ShapeSpec::Sphere { radius, center } => Shape::Sphere { radius, center },
+    };
+    let ok = match shape {
+        Shape::Box { size, center } => {
+            size.iter().all(|&x| x > 0.0) && finite_all(&size) && finite_all(&center)
+        }
+        Shape::Capsule { radius, from, to } => {
+            radius > 0.0 && radius.is_finite() && finite_all(&from) && finite_all(&to)
+        }
+        Shape::Sphere { radius, center } => {
+            radius > 0.0 && radius.is_finite() && finite_all(&center)
+        }
+    };
+    if ok {
+        Ok(shape)
+    } else {
+        Err("shape sizes must be positive and coordinates finite".into())
+    }
+}
+
+/// Sylvester's criterion on a symmetric 3×3 matrix.
+fn positive_definite(m: &[[f64; 3]; 3]) -> bool {
+    let d1 = m[0][0];
+    let d2 = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    let d3 = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    d1 > 0.0 && d2 > 0.0 && d3 > 0.0 && m.iter().flatten().all(|x| x.is_finite())
+}
+
+fn build_contact(source: &Source, c: &ContactSpec) -> Result<ContactParams, InputError> {
+    let mut p = ContactParams::default();
+    let fields: [(&'static str, Option<f64>, &mut f64, bool); 10] = [
+        ("spring_force", c.spring_force, &mut p.spring_force, true),
+        ("spring_rate", c.spring_rate, &mut p.spring_rate, true),
+        (
+            "spring_offset",
+            c.spring_offset,
+            &mut p.spring_offset,
+            false,
+        ),
+        ("damping", c.damping, &mut p.damping, false),
+        ("damping_rate", c.damping_rate, &mut p.damping_rate, true),
+        (
+            "damping_factor",
+            c.damping_factor,
+            &mut p.damping_factor,
+            true,
+        ),
+        (
+            "damping_offset",
+            c.damping_offset,
+            &mut p.damping_offset,
+            false,
+        ),
+        ("friction", c.friction, &mut p.friction, false),
+        ("slip_speed", c.slip_speed, &mut p.slip_speed, true),
+        ("ground", c.ground, &mut p.ground, false),
+    ];
+    for (key, value, slot, positive) in fields {
+        if let Some(v) = value {
+            let ok = v.is_finite()
+                && if positive {
+                    v > 0.0
+                } else {
+                    key == "ground" || key == "spring_offset" || key == "damping_offset" || v >= 0.0
+                };
+            if !ok {
+                let need = if positive {
+                    "positive"
+                } else {
+                    "finite and non-negative"
+                };
+                return Err(source.error_at(
+                    &[Key::Name("contact"), Key::Name(key)],
+                    format!("`{key}` must be {need}, got {v}"),
+                ));
+            }
+            *slot = v;
+        }
+    }
+    Ok(p)
+}
+
+fn build_initial(
+    source: &Source,
+    file: &FileSpec,
+    model: &Model,
+) -> Result<State<f64>, InputError> {
+    let mut q = model.neutral();
+    let mut v = vec![0.0; model.nv];
+    for (i, (l, spec)) in model.links.iter().zip(&file.link).enumerate() {
+        let j = &spec.joint;
+        let jat = |key: &'static str| {
+            vec![
+                Key::Name("link"),
+                Key::Index(i),
+                Key::Name("joint"),
+                Key::Name(key),
+            ]
+        };
+        let get = |key: &'static str,
+                   x: &Option<Numbers>,
+                   n: usize|
+         -> Result<Option<Vec<f64>>, InputError> {
+            match x {
+                None => Ok(None),
+                Some(nums) => {
+                    let s = nums.as_slice();
+                    let ok = s.len() == n
+                        && finite_all(s)
+                        && (n == 1 || matches!(nums, Numbers::Many(_)));
+                    if ok {
+                        Ok(Some(s.to_vec()))
+                    } else {
+                        let what = if n == 1 {
+                            "a number".to_string()
+                        } else {
+                            format!("a list of {n} numbers")
+                        };
+                        Err(source
+                            .error_at(&jat(key), format!("`{key}` must be {what} for this joint")))
+                    }
+                }
+            }
+        };
+        let (qa, va) = (l.q_index, l.v_index);
+        let root_only = |key: &'static str, present: bool| {
+            if present {
+                Err(source.error_at(
+                    &jat(key),
+                    format!("`{key}` applies to a planar or floating root only"),
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        match l.joint {
+            JointKind::Revolute { .. } | JointKind::Prismatic { .. } => {
+                root_only("angle", j.angle.is_some())?;
+                root_only("orientation", j.orientation.is_some())?;
+                root_only("angular_velocity", j.angular_velocity.is_some())?;
+                if let Some(p) = get("position", &j.position, 1)? {
+                    q[qa] = p[0];
+                }
+                if let Some(p) = get("velocity", &j.velocity, 1)? {
+                    v[va] = p[0];
+                }
+            }
+            JointKind::Planar => {
+                root_only("orientation", j.orientation.is_some())?;
+                if let Some(p) = get("position", &j.position, 2)? {
+                    q[qa] = p[0];
+                    q[qa + 1] = p[1];
+                }
+                let theta = j.angle.unwrap_or(0.0);
+                if !theta.is_finite() {
+                    return Err(source.error_at(&jat("angle"), "`angle` must be finite"));
+                }
+                q[qa + 2] = theta;
+                let w = get("angular_velocity", &j.angular_velocity, 1)?.map_or(0.0, |x| x[0]);
+                let vw = get("velocity", &j.velocity, 2)?.unwrap_or(vec![0.0, 0.0]);
+                // World origin velocity to link coordinates: v_b = Rᵀ·v_w.
+                let (s, c) = theta.sin_cos();
+                v[va] = w;
+                v[va + 1] = c * vw[0] + s * vw[1];
+                v[va + 2] = -s * vw[0] + c * vw[1];
+            }
+            JointKind::Floating => {
+                root_only("angle", j.angle.is_some())?;
+                if let Some(p) = get("position", &j.position, 3)? {
+                    q[qa..qa + 3].copy_from_slice(&p);
+                }
+                let quat = j.orientation.unwrap_or([1.0, 0.0, 0.0, 0.0]);
+                let n = quat.iter().map(|x| x * x).sum::<f64>().sqrt();
+                if !(n > 1e-9 && n.is_finite()) {
+                    return Err(source.error_at(
+                        &jat("orientation"),
+                        "`orientation` must be a non-zero quaternion [w, x, y, z]",
+                    ));
+                }
+                for k in 0..4 {
+                    q[qa + 3 + k] = quat[k] / n;
+                }
+                let r = Mat3::<f64>::from_quaternion([q[qa + 3], q[qa + 4], q[qa + 5], q[qa + 6]]);
+                let w = get("angular_velocity", &j.angular_velocity, 3)?.unwrap_or(vec![0.0; 3]);
+                let vw = get("velocity", &j.velocity, 3)?.unwrap_or(vec![0.0; 3]);
+                let wb = r.tr_mul_vec(&Vec3([w[0], w[1], w[2]]));
+                let vb = r.tr_mul_vec(&Vec3([vw[0], vw[1], vw[2]]));
+                v[va..va + 3].copy_from_slice(&wb.0);
+                v[va + 3..va + 6].copy_from_slice(&vb.0);
+            }
+        }
+    }
+    Ok(State { q, v })
+}
+
+fn build_tasks(
+    source: &Source,
+    file: &FileSpec,
+    model: &Model,
+    index: &HashMap<&str, usize>,
+) -> Result<Vec<PoseConstraint>, InputError> {
+    let mut out = Vec::new();
+    for (k, t) in file.task.iter().enumerate() {
+        let at = |key: &'static str| vec![Key::Name("task"), Key::Index(k), Key::Name(key)];
+        let steps = t.time / file.dt;
+        if !(t.time > 0.0 && t.time.is_finite())
+            || (steps - steps.round()).abs() > 1e-6 * steps.max(1.0)
+        {
+            return Err(source.error_at(
+                &at("time"),
+                format!(
+                    "`time` must be a positive multiple of dt = {} s, got {}",
+                    file.dt, t.time
+                ),
+            ));
+        }
+        let step = steps.round() as usize;
+        let (lower, upper) = match (t.value, t.min, t.max) {
+            (Some(v), None, None) => (v, v),
+            (None, lo, hi) if lo.is_some() || hi.is_some() => {
+                (lo.unwrap_or(f64::NEG_INFINITY), hi.unwrap_or(f64::INFINITY))
+            }
+            (Some(_), _, _) => {
+                return Err(
+                    source.error_at(&at("value"), "give either `value` or `min`/`max`, not both")
+                );
+            }
+            _ => {
+                return Err(source.error_at(&at("quantity"), "a task needs `value`, `min` or `max`"));
+            }
+        };
+        if lower.is_nan() || upper.is_nan() || lower > upper {
+            return Err(source.error_at(&at("min"), "bounds must satisfy min ≤ max"));
+        }
+        let link =
+            match &t.link {
+                None => None,
+                Some(name) => Some(*index.get(name.as_str()).ok_or_else(|| {
+                    source.error_at(&at("link"), format!("no link named `{name}`"))
+                })?),
+            };
+        let need_link =
+            || link.ok_or_else(|| source.error_at(&at("quantity"), "this quantity needs `link`"));
+        let need_axis = || {
+            t.axis.map(|a| a as usize).ok_or_else(|| {
+                source.error_at(
+                    &at("quantity"),
+                    "this quantity needs `axis` (\"x\", \"y\" or \"z\")",
+                )
+            })
+        };
+        let point = t.point.unwrap_or([0.0; 3]);
+        if !finite_all(&point) {
+            return Err(source.error_at(&at("point"), "`point` must be finite"));
+        }
+        let scalar_joint = |l: usize| {
+            if model.links[l].joint.is_scalar() {
+                Ok(l)
+            } else {
+                Err(source.error_at(
+                    &at("link"),
+                    "joint quantities apply to revolute and prismatic joints",
+                ))
+            }
+        };
+        let name = |what: String| {
+            let b = match (lower == upper, lower.is_finite(), upper.is_finite()) {
+                (true, _, _) => format!("= {lower}"),
+                (false, true, true) => format!("in [{lower}, {upper}]"),
+                (false, true, false) => format!("≥ {lower}"),
+                _ => format!("≤ {upper}"),
+            };
+            format!("t={:.3} {what} {b}", t.time)
+        };
+        let axis_name = |a: usize| ["x", "y", "z"][a];
+        let mut push = |quantity: Quantity, what: String| {
+            out.push(PoseConstraint {
+                name: name(what),
+                time: t.time,
+                step,
+                quantity,
+                lower,
+                upper,
+            });
+        };
+        match t.quantity {
+            QuantitySpec::PointPosition | QuantitySpec::PointVelocity => {
+                let (l, a) = (need_link()?, need_axis()?);
+                let lname = &model.links[l].name;
+                if t.quantity == QuantitySpec::PointPosition {
+                    push(
+                        Quantity::PointPosition {
+                            link: l,
+                            point,
+                            axis: a,
+                        },
+                        format!("{lname}.{}", axis_name(a)),
+                    );
+                } else {
+                    push(
+                        Quantity::PointVelocity {
+                            link: l,
+                            point,
+                            axis: a,
+                        },
+                        format!("{lname}.v{}", axis_name(a)),
+                    );
+                }
+            }
+            QuantitySpec::JointPosition => {
+                let l = scalar_joint(need_link()?)?;
+                push(
+                    Quantity::JointPosition {
+                        q_index: model.links[l].q_index,
+                    },
+                    format!("{}.q", model.links[l].name),
+                );
+            }
+            QuantitySpec::JointVelocity => {
+                let l = scalar_joint(need_link()?)?;
+                push(
+                    Quantity::JointVelocity {
+                        v_index: model.links[l].v_index,
+                    },
+                    format!("{}.qdot", model.links[l].name),
+                );
+            }
+            QuantitySpec::ComPosition => {
+                let a = need_axis()?;
+                push(
+                    Quantity::ComPosition { axis: a },
+                    format!("com.{}", axis_name(a)),
+                );
+            }
+            QuantitySpec::ComVelocity => {
+                let a = need_axis()?;
+                push(
+                    Quantity::ComVelocity { axis: a },
+                    format!("com.v{}", axis_name(a)),
+                );
+            }
+            QuantitySpec::Airborne => {
+                if t.max.is_some()
+                    || t.value.is_some()
+                    || t.link.is_some()
+                    || t.axis.is_some()
+                    || t.point.is_some()
+                {
+                    return Err(source.error_at(
+                        &at("quantity"),
+                        "`airborne` takes only `time` and `min` (m above the ground)",
+                    ));
+                }
+                let mut any = false;
+                for (li, l) in model.links.iter().enumerate() {
+                    for (ci, c) in l.contacts.iter().enumerate() {
+                        any = true;
+                        push(
+                            Quantity::Height {
+                                link: li,
+                                point: *c,
+                            },
+                            format!("{}.contact{ci}.height", l.name),
+                        );
+                    }
+                }
+                if !any {
+                    return Err(source.error_at(
+                        &at("quantity"),
+                        "`airborne` needs contact points on the character",
+                    ));
+                }
+            }
+        }
+    }
+    out.sort_by(|a, b| a.time.total_cmp(&b.time));
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    fn load(text: &str) -> Result<Problem, InputError> {
+        load_source(&Source {
+            path: PathBuf::from("p.toml"),
+            text: text.into(),
+        })
+    }
+
+    const BASE: &str = r#"
+dt = 1e-3
+[[link]]
+name = "body"
+mass = 1.0
+shape = { type = "box", size = [0.1, 0.2, 0.1] }
+contacts = [[0.0, -0.1, 0.0]]
+joint = { type = "planar", position = [0.0, 0.5], velocity = [1.0, 0.0], angle = 0.5 }
+[[link]]
+name = "arm"
+mass = 0.5
+shape = { type = "capsule", radius = 0.02, from = [0, 0, 0], to = [0.3, 0, 0] }
+joint = { type = "revolute", parent = "body", origin = [0.0, 0.1, 0.0], limits = [-1.0, 1.0], position = 0.2 }
+[[actuator]]
+name = "shoulder"
+joint = "arm"
+bounds = [-2.0, 2.0]
+[[task]]
+time = 0.5
+quantity = "airborne"
+min = 0.1
+"#;
+
+    #[test]
+    fn a_valid_file_loads() {
+        let p = load(BASE).unwrap();
+        assert_eq!((p.model.nq, p.model.nv), (4, 4));
+        assert_eq!(p.constraints[0].step, 500);
+        assert_eq!(p.horizon, 0.5);
+        assert_eq!(p.start, vec![vec![0.0; 6]]);
+        // World velocity (1, 0) seen from a link rotated by 0.5 rad.
+        assert!(
+            (p.initial.v[1] - 0.5f64.cos()).abs() < 1e-15
+                && (p.initial.v[2] + 0.5f64.sin()).abs() < 1e-15
+        );
+        // Inertia from the capsule shape: centre of mass at its middle.
+        assert_eq!(p.model.links[1].inertia.com.0, [0.15, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn errors_point_at_the_key() {
+        let cases = [
+            ("mass = 0.5\n", "mass = -0.5\n", "`mass` must be positive"),
+            ("parent = \"body\"", "parent = \"leg\"", "parent `leg`"),
+            (
+                "joint = \"arm\"",
+                "joint = \"body\"",
+                "revolute or prismatic",
+            ),
+            ("time = 0.5", "time = 0.5004", "multiple of dt"),
+            ("min = 0.1", "mni = 0.1", "did you mean `min`"),
+            (
+                "limits = [-1.0, 1.0]",
+                "limits = [1.0, -1.0]",
+                "lower < upper",
+            ),
+        ];
+        for (from, to, msg) in cases {
+            let text = BASE.replacen(from, to, 1);
+            let e = load(&text).unwrap_err();
+            assert!(e.message.contains(msg), "{}: {}", to, e.message);
+            let (line, _) = e.position.unwrap();
+            let bad = text.lines().nth(line - 1).unwrap();
+            let key = to.split([' ', '=']).next().unwrap();
+            assert!(
+                bad.contains(key) || bad.contains("[[task]]") || bad.contains("quantity"),
+                "{to}: line {line} `{bad}`"
+            );
+        }
+    }
+}
