@@ -910,7 +910,9 @@ fn build_tasks(
                 );
             }
             _ => {
-                return Err(source.error_at(&at("quantity"), "a task needs `value`, `min` or `max`"));
+                return Err(
+                    source.error_at(&at("quantity"), "a task needs `value`, `min` or `max`")
+                );
             }
         };
         if lower.is_nan() || upper.is_nan() || lower > upper {

@@ -1,0 +1,270 @@
+//! The reduced-gradient spacetime problem (seed §3.5, eq. 3.22) as an [`Nlp`]:
+//! ```text
+//!   min_p  Σₐ ∫₀ᵀ Fₐ(t; p)² dt    s.t.   lower ≤ C(x(t_i; p)) ≤ upper   (pose constraints)
+//!   bounds: knot values within the actuator's force bounds, slopes free
+//! ```
+//! where `p` are the Hermite spline parameters of the actuator forces ([`crate::gait::spline`])
+//! and `x(t; p)` is the RK4 simulation from the fixed initial state. `eval` simulates only to the
+//! last constraint time. `eval_derivatives` differentiates the whole rollout exactly with forward
+//! dual numbers (`DualSVec64<8>`): the columns are split into chunks of 8 directions, ordered by
+//! knot so that a chunk of late knots runs a short rollout — a knot whose support starts at or
+//! after a constraint's time cannot affect it, so that Jacobian entry is structurally zero and
+//! absent from the pattern. Chunks run in parallel (rayon); each chunk's result is independent
+//! of scheduling. The objective and its gradient are closed-form and need no simulation.
+
+use num_dual::DualSVec64;
+use rayon::prelude::*;
+
+use super::sim::{SimError, Simulator, State};
+use super::spatial::Real;
+use super::spec::Problem;
+use super::spline::{KnotGrid, SplineControls};
+use crate::solver::{Dims, EvalError, Nlp};
+
+/// Directions propagated per dual rollout.
+pub const CHUNK: usize = 8;
+
+/// The reduced-gradient NLP of one gait problem.
+#[derive(Debug, Clone)]
+pub struct Reduced<'p> {
+    problem: &'p Problem,
+    grid: KnotGrid,
+    /// Distinct sample steps, ascending.
+    steps: Vec<usize>,
+    /// For each constraint row, its index into `steps`.
+    row_sample: Vec<usize>,
+    /// Jacobian pattern, (row, col), row-major.
+    pattern: Vec<(usize, usize)>,
+    /// Position of (row, col) in `pattern`, dense m×n.
+    slot: Vec<Option<usize>>,
+    /// Column chunks for dual rollouts.
+    chunks: Vec<Vec<usize>>,
+}
+
+impl<'p> Reduced<'p> {
+    /// Builds the NLP; the problem's constraints must be sorted by time (the loader does this).
+    pub fn new(problem: &'p Problem) -> Self {
+        let grid = KnotGrid {
+            knots: problem.knots,
+            horizon: problem.horizon,
+        };
+        let mut steps: Vec<usize> = problem.constraints.iter().map(|c| c.step).collect();
+        steps.dedup();
+        let row_sample = problem
+            .constraints
+            .iter()
+            .map(|c| steps.binary_search(&c.step).unwrap_or(0))
+            .collect();
+        let n = problem.model.actuators.len() * grid.per_actuator();
+        let m = problem.constraints.len();
+        let mut pattern = Vec::new();
+        let mut slot = vec![None; m * n];
+        for (r, c) in problem.constraints.iter().enumerate() {
+            for j in 0..n {
+                if Self::affects(&grid, j, c.time) {
+                    slot[r * n + j] = Some(pattern.len());
+                    pattern.push((r, j));
+                }
+            }
+        }
+        let mut cols: Vec<usize> = (0..n).collect();
+        cols.sort_by_key(|&j| (grid.knot_of(j % grid.per_actuator()), j));
+        let chunks = cols.chunks(CHUNK).map(|c| c.to_vec()).collect();
+        Reduced {
+            problem,
+            grid,
+            steps,
+            row_sample,
+            pattern,
+            slot,
+            chunks,
+        }
+    }
+
+    /// Whether parameter `j` can influence the motion before time `t` (s): knot `k`'s basis
+    /// functions vanish on `[0, t_{k−1}]`.
+    fn affects(grid: &KnotGrid, j: usize, t: f64) -> bool {
+        let k = grid.knot_of(j % grid.per_actuator());
+        k == 0 || grid.time(k - 1) < t
+    }
+
+    /// The knot grid.
+    pub fn grid(&self) -> KnotGrid {
+        self.grid
+    }
+
+    /// Simulates with parameters `x` (scalar type `T`) up to `last` samples and writes the
+    /// constraint rows whose sample is among them via `write(row, value)`.
+    fn simulate<T: Real>(
+        &self,
+        x: Vec<T>,
+        last: usize,
+        mut write: impl FnMut(usize, &T),
+    ) -> Result<(), SimError> {
+        let p = self.problem;
+        let m = &p.model;
+        let controls = SplineControls {
+            grid: self.grid,
+            params: x,
+        };
+        let mut state = State {
+            q: p.initial.q.iter().map(|&z| T::from(z)).collect(),
+            v: p.initial.v.iter().map(|&z| T::from(z)).collect(),
+        };
+        let mut sim = Simulator::<T>::new(m);
+        let rows = &self.row_sample;
+        sim.rollout(
+            &mut state,
+            p.dt,
+            &self.steps[..last],
+            &controls,
+            |k, s, sim| {
+                for (r, c) in p.constraints.iter().enumerate() {
+                    if rows[r] == k {
+                        write(r, &c.quantity.value(m, s, &sim.dynamics));
+                    }
+                }
+            },
+        )
+    }
+
+    fn objective(&self, x: &[f64], grad: Option<&mut [f64]>) -> f64 {
+        let block = self.grid.per_actuator();
+        let mut f = 0.0;
+        match grad {
+            Some(g) => {
+                g.fill(0.0);
+                for (xa, ga) in x.chunks(block).zip(g.chunks_mut(block)) {
+                    f += self.grid.integral_of_square(xa, Some(ga));
+                }
+            }
+            None => {
+                for xa in x.chunks(block) {
+                    f += self.grid.integral_of_square(xa, None);
+                }
+            }
+        }
+        f
+    }
+}
+
+fn domain(e: SimError) -> EvalError {
+    EvalError::Domain(e.to_string())
+}
+
+impl Nlp for Reduced<'_> {
+    fn dims(&self) -> Dims {
+        Dims {
+            n: self.problem.model.actuators.len() * self.grid.per_actuator(),
+            m: self.problem.constraints.len(),
+            jac_nnz: self.pattern.len(),
+            hess_nnz: 0,
+        }
+    }
+
+    fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
+        let (k, block) = (self.grid.knots, self.grid.per_actuator());
+        for (a, act) in self.problem.model.actuators.iter().enumerate() {
+            for j in 0..block {
+                let (lo, hi) = if j < k {
+                    (act.bounds[0], act.bounds[1])
+                } else {
+                    (f64::NEG_INFINITY, f64::INFINITY)
+                };
+                xl[a * block + j] = lo;
+                xu[a * block + j] = hi;
+            }
+        }
+        for (r, c) in self.problem.constraints.iter().enumerate() {
+            cl[r] = c.lower;
+            cu[r] = c.upper;
+        }
+    }
+
+    fn start(&self, x: &mut [f64]) {
+        let (k, block) = (self.grid.knots, self.grid.per_actuator());
+        x.fill(0.0);
+        for (a, s) in self.problem.start.iter().enumerate() {
+            x[a * block..a * block + k].copy_from_slice(s);
+        }
+    }
+
+    fn jacobian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
+        for (i, &(r, c)) in self.pattern.iter().enumerate() {
+            rows[i] = r;
+            cols[i] = c;
+        }
+    }
+
+    fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
+        *f = self.objective(x, None);
+        self.simulate(x.to_vec(), self.steps.len(), |r, v| c[r] = *v)
+            .map_err(domain)?;
+        if f.is_finite() && c.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(EvalError::Domain(
+                "non-finite objective or constraint".into(),
+            ))
+        }
+    }
+
+    fn eval_derivatives(
+        &self,
+        x: &[f64],
+        grad: &mut [f64],
+        jac: &mut [f64],
+    ) -> Result<(), EvalError> {
+        self.objective(x, Some(grad));
+        let n = x.len();
+        let results: Vec<Result<Vec<(usize, f64)>, SimError>> = self
+            .chunks
+            .par_iter()
+            .map(|cols| {
+                // Rows this chunk can affect; simulate up to the last of their samples.
+                let last = self
+                    .problem
+                    .constraints
+                    .iter()
+                    .enumerate()
+                    .filter(|(r, _)| cols.iter().any(|&j| self.slot[r * n + j].is_some()))
+                    .map(|(r, _)| self.row_sample[r] + 1)
+                    .max()
+                    .unwrap_or(0);
+                let mut out = Vec::new();
+                if last == 0 {
+                    return Ok(out);
+                }
+                let mut params: Vec<DualSVec64<CHUNK>> =
+                    x.iter().map(|&z| DualSVec64::from_re(z)).collect();
+                for (d, &j) in cols.iter().enumerate() {
+                    params[j] = params[j].derivative(d);
+                }
+                self.simulate(params, last, |r, v| {
+                    for (d, &j) in cols.iter().enumerate() {
+                        if let Some(s) = self.slot[r * n + j] {
+                            let eps = v.eps.0.as_ref().map_or(0.0, |e| e[d]);
+                            out.push((s, eps));
+                        }
+                    }
+                })?;
+                Ok(out)
+            })
+            .collect();
+        jac.fill(0.0);
+        for r in results {
+            for (s, v) in r.map_err(domain)? {
+                jac[s] = v;
+            }
+        }
+        if grad.iter().chain(jac.iter()).all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(EvalError::Domain("non-finite derivatives".into()))
+        }
+    }
+
+    fn constraint_name(&self, row: usize) -> String {
+        self.problem.constraints[row].name.clone()
+    }
+}
