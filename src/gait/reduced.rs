@@ -268,3 +268,90 @@ impl Nlp for Reduced<'_> {
         self.problem.constraints[row].name.clone()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+    use std::path::PathBuf;
+
+    /// A problem file with its key times (and horizon) scaled by `factor`.
+    fn shortened(name: &str, factor: f64) -> Problem {
+        let path =
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("problems/gait/{name}.toml"));
+        let mut p = crate::gait::load(&path).unwrap();
+        p.horizon *= factor;
+        for c in &mut p.constraints {
+            c.time *= factor;
+            c.step = (c.time / p.dt).round() as usize;
+        }
+        p
+    }
+
+    #[test]
+    fn exact_derivatives_match_central_differences() {
+        for (name, factor) in [("luxo_leap", 0.1), ("pogo_jump", 0.1), ("biped_hop", 0.05)] {
+            let p = shortened(name, factor);
+            let nlp = Reduced::new(&p);
+            let d = nlp.dims();
+            let mut rng = ChaCha8Rng::seed_from_u64(3);
+            let mut x = vec![0.0; d.n];
+            nlp.start(&mut x);
+            let (mut xl, mut xu, mut cl, mut cu) = (
+                vec![0.0; d.n],
+                vec![0.0; d.n],
+                vec![0.0; d.m],
+                vec![0.0; d.m],
+            );
+            nlp.bounds(&mut xl, &mut xu, &mut cl, &mut cu);
+            for j in 0..d.n {
+                // Random forces within a third of the bounds; random slopes.
+                let span = if xl[j].is_finite() {
+                    (xu[j] - xl[j]) / 6.0
+                } else {
+                    20.0
+                };
+                x[j] = rng.random_range(-span..span);
+            }
+            let mut grad = vec![0.0; d.n];
+            let mut jac = vec![0.0; d.jac_nnz];
+            nlp.eval_derivatives(&x, &mut grad, &mut jac).unwrap();
+            let (mut rows, mut cols) = (vec![0; d.jac_nnz], vec![0; d.jac_nnz]);
+            nlp.jacobian_structure(&mut rows, &mut cols);
+            let mut dense = vec![0.0; d.m * d.n];
+            for k in 0..d.jac_nnz {
+                dense[rows[k] * d.n + cols[k]] += jac[k];
+            }
+            let (mut worst, mut worst_g): (f64, f64) = (0.0, 0.0);
+            for j in 0..d.n {
+                let h = 1e-6 * x[j].abs().max(1.0);
+                let (mut xp, mut xm) = (x.clone(), x.clone());
+                xp[j] += h;
+                xm[j] -= h;
+                let (mut fp, mut fm, mut cp, mut cm) = (0.0, 0.0, vec![0.0; d.m], vec![0.0; d.m]);
+                nlp.eval(&xp, &mut fp, &mut cp).unwrap();
+                nlp.eval(&xm, &mut fm, &mut cm).unwrap();
+                let g = (fp - fm) / (2.0 * h);
+                worst_g = worst_g.max((g - grad[j]).abs() / grad[j].abs().max(1.0));
+                for r in 0..d.m {
+                    let fd = (cp[r] - cm[r]) / (2.0 * h);
+                    let ad = dense[r * d.n + j];
+                    if nlp.slot[r * d.n + j].is_none() {
+                        assert_eq!(
+                            fd, 0.0,
+                            "{name}: structural zero ({r}, {j}) has a difference {fd}"
+                        );
+                    }
+                    worst = worst.max((fd - ad).abs() / ad.abs().max(1.0));
+                }
+            }
+            println!(
+                "{name}: n = {}, m = {}, nnz = {}, max relative |dual − central| = {worst:.2e}, gradient {worst_g:.2e}",
+                d.n, d.m, d.jac_nnz
+            );
+            assert!(worst < 1e-5, "{name}: {worst}");
+            assert!(worst_g < 1e-6, "{name}: {worst_g}");
+        }
+    }
+}
