@@ -15,6 +15,9 @@
 //! External forces `f_ext` are spatial forces on each link in link coordinates (N·m, N). The
 //! floating base is the six-column case `S = 1` (`D` is the full articulated inertia).
 
+// Index loops below mirror the algorithm's subscripts (joint columns k, j of S, U and D⁻¹).
+#![allow(clippy::needless_range_loop)]
+
 use super::character::Model;
 use super::spatial::{ArticulatedInertia, Force, Motion, Real, Vec3, Xform};
 

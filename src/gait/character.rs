@@ -79,12 +79,12 @@ impl JointKind {
     pub fn transform<T: Real>(&self, q: &[T]) -> Xform<T> {
         match self {
             JointKind::Revolute { axis } => Xform {
-                e: Mat3::rotation(&Vec3::from_f64(*axis), q[0]).transpose(),
+                e: Mat3::rotation(*axis, q[0]).transpose(),
                 r: Vec3::zero(),
             },
             JointKind::Prismatic { axis } => Xform::translation(Vec3::from_f64(*axis).scale(q[0])),
             JointKind::Planar => Xform {
-                e: Mat3::rotation(&Vec3::from_f64([0.0, 0.0, 1.0]), q[2]).transpose(),
+                e: Mat3::rotation([0.0, 0.0, 1.0], q[2]).transpose(),
                 r: Vec3([q[0], q[1], T::zero()]),
             },
             JointKind::Floating => Xform {

@@ -121,30 +121,30 @@ impl<'m, T: Real> Simulator<'m, T> {
             },
         );
         let stages = [(0.0, 0.0), (0.5, 0.5), (0.5, 0.5), (1.0, 1.0)];
-        for s in 0..4 {
-            let (dt_frac, x_frac) = stages[s];
+        for (s, &(dt_frac, x_frac)) in stages.iter().enumerate() {
             if s == 0 {
                 tmp.q.copy_from_slice(&x.q);
                 tmp.v.copy_from_slice(&x.v);
             } else {
                 let w = h * x_frac;
-                for j in 0..x.q.len() {
-                    tmp.q[j] = x.q[j] + kq[s - 1][j] * w;
+                for ((t, x0), k) in tmp.q.iter_mut().zip(&x.q).zip(&kq[s - 1]) {
+                    *t = *x0 + *k * w;
                 }
-                for j in 0..x.v.len() {
-                    tmp.v[j] = x.v[j] + kv[s - 1][j] * w;
+                for ((t, x0), k) in tmp.v.iter_mut().zip(&x.v).zip(&kv[s - 1]) {
+                    *t = *x0 + *k * w;
                 }
             }
             let (qd, vd) = (&mut kq[s], &mut kv[s]);
             self.derivative(t + dt_frac * h, &tmp, controls, qd, vd);
         }
         let w = h / 6.0;
-        for j in 0..x.q.len() {
-            x.q[j] += (kq[0][j] + (kq[1][j] + kq[2][j]) * 2.0 + kq[3][j]) * w;
-        }
-        for j in 0..x.v.len() {
-            x.v[j] += (kv[0][j] + (kv[1][j] + kv[2][j]) * 2.0 + kv[3][j]) * w;
-        }
+        let combine = |x: &mut [T], k: &[Vec<T>; 4]| {
+            for (j, xj) in x.iter_mut().enumerate() {
+                *xj += (k[0][j] + (k[1][j] + k[2][j]) * 2.0 + k[3][j]) * w;
+            }
+        };
+        combine(&mut x.q, &kq);
+        combine(&mut x.v, &kv);
         self.model.normalize(&mut x.q);
         self.kq = kq;
         self.kv = kv;

@@ -135,12 +135,21 @@ impl<T: Real> Mat3<T> {
         let o = T::zero();
         Mat3([[o, -z, y], [z, o, -x], [-y, x, o]])
     }
-    /// Rotation by `angle` (rad) about the unit `axis` (Rodrigues): columns are the rotated axes.
-    pub fn rotation(axis: &Vec3<T>, angle: T) -> Self {
+    /// Rotation by `angle` (rad) about the constant unit `axis` (Rodrigues):
+    /// `R = cos·1 + sin·[a]× + (1 − cos)·aaᵀ`; columns are the rotated axes.
+    pub fn rotation(axis: [f64; 3], angle: T) -> Self {
         let (s, co) = angle.sin_cos();
-        let k = Self::skew(axis);
-        let k2 = k.mul_mat(&k);
-        Self::identity() + k.scaled(s) + k2.scaled(T::one() - co)
+        let omc = T::one() - co;
+        let [x, y, z] = axis;
+        let k = [[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]];
+        let mut r = Self::zero();
+        for i in 0..3 {
+            for j in 0..3 {
+                r.0[i][j] = omc * (axis[i] * axis[j]) + s * k[i][j];
+            }
+            r.0[i][i] += co;
+        }
+        r
     }
     /// Rotation matrix of the unit quaternion `(w, x, y, z)`.
     pub fn from_quaternion(q: [T; 4]) -> Self {
@@ -568,7 +577,7 @@ mod tests {
         let mut axis = rv(rng);
         axis = axis.scale(1.0 / axis.dot(&axis).sqrt());
         Xform {
-            e: Mat3::rotation(&axis, rng.random_range(-3.0..3.0)),
+            e: Mat3::rotation(axis.0, rng.random_range(-3.0..3.0)),
             r: rv(rng),
         }
     }
@@ -652,12 +661,12 @@ mod tests {
 
     #[test]
     fn quaternion_and_rodrigues_rotations_agree() {
-        let axis = Vec3([0.0, 0.6, 0.8]);
+        let axis = [0.0, 0.6, 0.8];
         let angle: f64 = 1.1;
         let (s, co) = (0.5 * angle).sin_cos();
         let q = [co, 0.0, 0.6 * s, 0.8 * s];
         let a = Mat3::from_quaternion(q);
-        let b = Mat3::rotation(&axis, angle);
+        let b = Mat3::rotation(axis, angle);
         assert!((m3(&a) - m3(&b)).norm() < 1e-14);
         assert!((m3(&a) * m3(&a).transpose() - Matrix3::identity()).norm() < 1e-14);
     }

@@ -176,20 +176,12 @@ mod tests {
         };
         let p = [1.0, -2.0, 0.5, 3.0, 10.0, 4.0, -1.0, 2.0];
         // Composite Gauss–Legendre (5 points per segment) integrates the degree-6 integrand exactly.
-        let nodes = [
-            0.0,
-            -0.5384693101056831,
-            0.5384693101056831,
-            -0.9061798459386640,
-            0.9061798459386640,
-        ];
-        let weights = [
-            0.5688888888888889,
-            0.4786286704993665,
-            0.4786286704993665,
-            0.2369268850561891,
-            0.2369268850561891,
-        ];
+        let r = (10.0f64 / 7.0).sqrt();
+        let (a, b) = ((5.0 - 2.0 * r).sqrt() / 3.0, (5.0 + 2.0 * r).sqrt() / 3.0);
+        let s70 = 70.0f64.sqrt();
+        let (wa, wb) = ((322.0 + 13.0 * s70) / 900.0, (322.0 - 13.0 * s70) / 900.0);
+        let nodes = [0.0, -a, a, -b, b];
+        let weights = [128.0 / 225.0, wa, wa, wb, wb];
         let h = grid.spacing();
         let mut quad = 0.0;
         for k in 0..3 {

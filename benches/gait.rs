@@ -1,0 +1,94 @@
+//! Gait benchmarks: one ABA call per character, 1 s of simulated Luxo motion, and one full exact
+//! gradient of the Luxo leap (all 42 spline parameters, dual numbers through ABA + RK4) on one
+//! thread, whose time divided by the simulation's is the gradient/simulation ratio.
+
+use std::path::PathBuf;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use optimize::gait::aba::Dynamics;
+use optimize::gait::reduced::Reduced;
+use optimize::gait::sim::Simulator;
+use optimize::gait::spatial::Force;
+use optimize::gait::spline::{KnotGrid, SplineControls};
+use optimize::solver::Nlp;
+
+fn problem(name: &str) -> optimize::gait::Problem {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("problems/gait/{name}.toml"));
+    optimize::gait::load(&path).expect("problem file loads")
+}
+
+/// Luxo start parameters: a crouch-and-push torque profile (the shipped start is all zeros).
+fn luxo_params(nlp: &Reduced<'_>) -> Vec<f64> {
+    let n = nlp.dims().n;
+    let k = nlp.grid().knots;
+    let mut x = vec![0.0; n];
+    for a in 0..3 {
+        for j in 0..k {
+            let t = j as f64 / (k - 1) as f64;
+            x[a * 2 * k + j] = [6.0, -4.0, 1.0][a] * (6.0 * t).sin();
+        }
+    }
+    x
+}
+
+fn benches(c: &mut Criterion) {
+    for name in ["pogo_jump", "luxo_leap", "biped_hop"] {
+        let p = problem(name);
+        let m = &p.model;
+        let mut d = Dynamics::<f64>::new(m);
+        let tau = vec![0.1; m.nv];
+        let f_ext = vec![Force::zero(); m.links.len()];
+        let mut vdot = vec![0.0; m.nv];
+        c.bench_function(&format!("aba/{name}"), |b| {
+            b.iter(|| {
+                d.kinematics(m, &p.initial.q, &p.initial.v);
+                d.accelerations(m, &tau, &f_ext, &mut vdot);
+                std::hint::black_box(&vdot);
+            })
+        });
+    }
+
+    let p = problem("luxo_leap");
+    let nlp = Reduced::new(&p);
+    let x = luxo_params(&nlp);
+    let grid = KnotGrid {
+        knots: p.knots,
+        horizon: p.horizon,
+    };
+    let steps = (1.0 / p.dt).round() as usize;
+    let mut group = c.benchmark_group("luxo");
+    group.sample_size(10);
+    group.bench_function("simulate_1s", |b| {
+        b.iter(|| {
+            let controls = SplineControls {
+                grid,
+                params: x.clone(),
+            };
+            let mut sim = Simulator::<f64>::new(&p.model);
+            let mut s = p.initial.clone();
+            for n in 0..steps {
+                sim.step(n as f64 * p.dt, p.dt, &mut s, &controls)
+                    .expect("finite");
+            }
+            std::hint::black_box(&s);
+        })
+    });
+    let d = nlp.dims();
+    let (mut grad, mut jac) = (vec![0.0; d.n], vec![0.0; d.jac_nnz]);
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("thread pool");
+    group.bench_function("exact_gradient_1thread", |b| {
+        b.iter(|| {
+            one.install(|| {
+                nlp.eval_derivatives(&x, &mut grad, &mut jac)
+                    .expect("finite")
+            })
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(gait, benches);
+criterion_main!(gait);
