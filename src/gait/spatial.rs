@@ -37,18 +37,22 @@ pub struct Mat3<T>(pub [[T; 3]; 3]);
 
 impl<T: Real> Vec3<T> {
     /// The zero vector.
+    #[inline]
     pub fn zero() -> Self {
         Vec3([T::zero(); 3])
     }
     /// Lifts an `f64` vector.
+    #[inline]
     pub fn from_f64(v: [f64; 3]) -> Self {
         Vec3(v.map(c))
     }
     /// Dot product.
+    #[inline]
     pub fn dot(&self, o: &Self) -> T {
         self.0[0] * o.0[0] + self.0[1] * o.0[1] + self.0[2] * o.0[2]
     }
     /// Cross product `self × o`.
+    #[inline]
     pub fn cross(&self, o: &Self) -> Self {
         let (a, b) = (&self.0, &o.0);
         Vec3([
@@ -58,10 +62,12 @@ impl<T: Real> Vec3<T> {
         ])
     }
     /// Multiplies every component by `s`.
+    #[inline]
     pub fn scale(&self, s: T) -> Self {
         Vec3(self.0.map(|x| x * s))
     }
     /// Real parts.
+    #[inline]
     pub fn re(&self) -> [f64; 3] {
         self.0.map(|x| x.re())
     }
@@ -69,18 +75,21 @@ impl<T: Real> Vec3<T> {
 
 impl<T: Real> Add for Vec3<T> {
     type Output = Self;
+    #[inline]
     fn add(self, o: Self) -> Self {
         Vec3([self.0[0] + o.0[0], self.0[1] + o.0[1], self.0[2] + o.0[2]])
     }
 }
 impl<T: Real> Sub for Vec3<T> {
     type Output = Self;
+    #[inline]
     fn sub(self, o: Self) -> Self {
         Vec3([self.0[0] - o.0[0], self.0[1] - o.0[1], self.0[2] - o.0[2]])
     }
 }
 impl<T: Real> Neg for Vec3<T> {
     type Output = Self;
+    #[inline]
     fn neg(self) -> Self {
         Vec3(self.0.map(|x| -x))
     }
@@ -88,10 +97,12 @@ impl<T: Real> Neg for Vec3<T> {
 
 impl<T: Real> Mat3<T> {
     /// The zero matrix.
+    #[inline]
     pub fn zero() -> Self {
         Mat3([[T::zero(); 3]; 3])
     }
     /// The identity.
+    #[inline]
     pub fn identity() -> Self {
         let mut m = Self::zero();
         for i in 0..3 {
@@ -100,20 +111,24 @@ impl<T: Real> Mat3<T> {
         m
     }
     /// Lifts an `f64` matrix.
+    #[inline]
     pub fn from_f64(m: [[f64; 3]; 3]) -> Self {
         Mat3(m.map(|r| r.map(c)))
     }
     /// `self · v`.
+    #[inline]
     pub fn mul_vec(&self, v: &Vec3<T>) -> Vec3<T> {
         let m = &self.0;
         Vec3([0, 1, 2].map(|i| m[i][0] * v.0[0] + m[i][1] * v.0[1] + m[i][2] * v.0[2]))
     }
     /// `selfᵀ · v`.
+    #[inline]
     pub fn tr_mul_vec(&self, v: &Vec3<T>) -> Vec3<T> {
         let m = &self.0;
         Vec3([0, 1, 2].map(|i| m[0][i] * v.0[0] + m[1][i] * v.0[1] + m[2][i] * v.0[2]))
     }
     /// `self · o`.
+    #[inline]
     pub fn mul_mat(&self, o: &Self) -> Self {
         let mut r = Self::zero();
         for i in 0..3 {
@@ -125,11 +140,13 @@ impl<T: Real> Mat3<T> {
         r
     }
     /// The transpose.
+    #[inline]
     pub fn transpose(&self) -> Self {
         let m = &self.0;
         Mat3([0, 1, 2].map(|i| [m[0][i], m[1][i], m[2][i]]))
     }
     /// The matrix `[v]×` with `[v]×·w = v × w`.
+    #[inline]
     pub fn skew(v: &Vec3<T>) -> Self {
         let [x, y, z] = v.0;
         let o = T::zero();
@@ -137,6 +154,7 @@ impl<T: Real> Mat3<T> {
     }
     /// Rotation by `angle` (rad) about the constant unit `axis` (Rodrigues):
     /// `R = cos·1 + sin·[a]× + (1 − cos)·aaᵀ`; columns are the rotated axes.
+    #[inline]
     pub fn rotation(axis: [f64; 3], angle: T) -> Self {
         let (s, co) = angle.sin_cos();
         let omc = T::one() - co;
@@ -152,6 +170,7 @@ impl<T: Real> Mat3<T> {
         r
     }
     /// Rotation matrix of the unit quaternion `(w, x, y, z)`.
+    #[inline]
     pub fn from_quaternion(q: [T; 4]) -> Self {
         let [w, x, y, z] = q;
         let two = c::<T>(2.0);
@@ -174,7 +193,33 @@ impl<T: Real> Mat3<T> {
             ],
         ])
     }
+    /// `[r]×·self`: the cross product of `r` with each column (18 multiplications, not 27).
+    #[inline]
+    pub fn skew_mul(r: &Vec3<T>, m: &Self) -> Self {
+        let [x, y, z] = r.0;
+        let m = &m.0;
+        Mat3([0, 1, 2].map(|i| {
+            [0, 1, 2].map(|j| match i {
+                0 => y * m[2][j] - z * m[1][j],
+                1 => z * m[0][j] - x * m[2][j],
+                _ => x * m[1][j] - y * m[0][j],
+            })
+        }))
+    }
+    /// `self·[r]×`: row `i` is `rowᵢ × r`.
+    #[inline]
+    pub fn mul_skew(&self, r: &Vec3<T>) -> Self {
+        let [x, y, z] = r.0;
+        Mat3(self.0.map(|m| {
+            [
+                m[1] * z - m[2] * y,
+                m[2] * x - m[0] * z,
+                m[0] * y - m[1] * x,
+            ]
+        }))
+    }
     /// Multiplies every entry by `s`.
+    #[inline]
     pub fn scaled(&self, s: T) -> Self {
         Mat3(self.0.map(|r| r.map(|x| x * s)))
     }
@@ -182,6 +227,7 @@ impl<T: Real> Mat3<T> {
 
 impl<T: Real> Add for Mat3<T> {
     type Output = Self;
+    #[inline]
     fn add(self, o: Self) -> Self {
         let mut r = self;
         for i in 0..3 {
@@ -194,6 +240,7 @@ impl<T: Real> Add for Mat3<T> {
 }
 impl<T: Real> Sub for Mat3<T> {
     type Output = Self;
+    #[inline]
     fn sub(self, o: Self) -> Self {
         let mut r = self;
         for i in 0..3 {
@@ -225,6 +272,7 @@ pub struct Force<T> {
 
 impl<T: Real> Motion<T> {
     /// The zero motion.
+    #[inline]
     pub fn zero() -> Self {
         Motion {
             ang: Vec3::zero(),
@@ -232,6 +280,7 @@ impl<T: Real> Motion<T> {
         }
     }
     /// Component `k` of `[ω; v]` (0..6).
+    #[inline]
     pub fn get(&self, k: usize) -> T {
         if k < 3 {
             self.ang.0[k]
@@ -240,6 +289,7 @@ impl<T: Real> Motion<T> {
         }
     }
     /// The unit motion along component `k` of `[ω; v]`.
+    #[inline]
     pub fn unit(k: usize) -> Self {
         let mut m = Self::zero();
         if k < 3 {
@@ -250,6 +300,7 @@ impl<T: Real> Motion<T> {
         m
     }
     /// Multiplies by a scalar.
+    #[inline]
     pub fn scale(&self, s: T) -> Self {
         Motion {
             ang: self.ang.scale(s),
@@ -257,6 +308,7 @@ impl<T: Real> Motion<T> {
         }
     }
     /// Motion cross product `self ×m m`.
+    #[inline]
     pub fn cross_motion(&self, m: &Motion<T>) -> Motion<T> {
         Motion {
             ang: self.ang.cross(&m.ang),
@@ -264,6 +316,7 @@ impl<T: Real> Motion<T> {
         }
     }
     /// Force cross product `self ×f f`.
+    #[inline]
     pub fn cross_force(&self, f: &Force<T>) -> Force<T> {
         Force {
             ang: self.ang.cross(&f.ang) + self.lin.cross(&f.lin),
@@ -271,6 +324,7 @@ impl<T: Real> Motion<T> {
         }
     }
     /// The power pairing `self · f` (W).
+    #[inline]
     pub fn dot(&self, f: &Force<T>) -> T {
         self.ang.dot(&f.ang) + self.lin.dot(&f.lin)
     }
@@ -278,6 +332,7 @@ impl<T: Real> Motion<T> {
 
 impl<T: Real> Add for Motion<T> {
     type Output = Self;
+    #[inline]
     fn add(self, o: Self) -> Self {
         Motion {
             ang: self.ang + o.ang,
@@ -286,13 +341,18 @@ impl<T: Real> Add for Motion<T> {
     }
 }
 impl<T: Real> AddAssign for Motion<T> {
+    #[inline]
     fn add_assign(&mut self, o: Self) {
-        *self = *self + o;
+        for k in 0..3 {
+            self.ang.0[k] += o.ang.0[k];
+            self.lin.0[k] += o.lin.0[k];
+        }
     }
 }
 
 impl<T: Real> Force<T> {
     /// The zero force.
+    #[inline]
     pub fn zero() -> Self {
         Force {
             ang: Vec3::zero(),
@@ -300,6 +360,7 @@ impl<T: Real> Force<T> {
         }
     }
     /// Component `k` of `[n; f]` (0..6).
+    #[inline]
     pub fn get(&self, k: usize) -> T {
         if k < 3 {
             self.ang.0[k]
@@ -308,6 +369,7 @@ impl<T: Real> Force<T> {
         }
     }
     /// Multiplies by a scalar.
+    #[inline]
     pub fn scale(&self, s: T) -> Self {
         Force {
             ang: self.ang.scale(s),
@@ -316,6 +378,7 @@ impl<T: Real> Force<T> {
     }
     /// The spatial force of a pure force `f` (N) acting at point `p` (m), both in these
     /// coordinates.
+    #[inline]
     pub fn at_point(p: &Vec3<T>, f: &Vec3<T>) -> Self {
         Force {
             ang: p.cross(f),
@@ -326,6 +389,7 @@ impl<T: Real> Force<T> {
 
 impl<T: Real> Add for Force<T> {
     type Output = Self;
+    #[inline]
     fn add(self, o: Self) -> Self {
         Force {
             ang: self.ang + o.ang,
@@ -335,6 +399,7 @@ impl<T: Real> Add for Force<T> {
 }
 impl<T: Real> Sub for Force<T> {
     type Output = Self;
+    #[inline]
     fn sub(self, o: Self) -> Self {
         Force {
             ang: self.ang - o.ang,
@@ -343,8 +408,12 @@ impl<T: Real> Sub for Force<T> {
     }
 }
 impl<T: Real> AddAssign for Force<T> {
+    #[inline]
     fn add_assign(&mut self, o: Self) {
-        *self = *self + o;
+        for k in 0..3 {
+            self.ang.0[k] += o.ang.0[k];
+            self.lin.0[k] += o.lin.0[k];
+        }
     }
 }
 
@@ -359,6 +428,7 @@ pub struct Xform<T> {
 
 impl<T: Real> Xform<T> {
     /// The identity transform.
+    #[inline]
     pub fn identity() -> Self {
         Xform {
             e: Mat3::identity(),
@@ -366,6 +436,7 @@ impl<T: Real> Xform<T> {
         }
     }
     /// A pure translation: B's origin at `r` in A, axes parallel.
+    #[inline]
     pub fn translation(r: Vec3<T>) -> Self {
         Xform {
             e: Mat3::identity(),
@@ -373,6 +444,7 @@ impl<T: Real> Xform<T> {
         }
     }
     /// `X·m` for a motion vector given in A-coordinates.
+    #[inline]
     pub fn apply_motion(&self, m: &Motion<T>) -> Motion<T> {
         Motion {
             ang: self.e.mul_vec(&m.ang),
@@ -380,6 +452,7 @@ impl<T: Real> Xform<T> {
         }
     }
     /// `X⁻¹·m` for a motion vector given in B-coordinates.
+    #[inline]
     pub fn inv_apply_motion(&self, m: &Motion<T>) -> Motion<T> {
         let ang = self.e.tr_mul_vec(&m.ang);
         Motion {
@@ -388,6 +461,7 @@ impl<T: Real> Xform<T> {
         }
     }
     /// `X*·f` for a force vector given in A-coordinates.
+    #[inline]
     pub fn apply_force(&self, f: &Force<T>) -> Force<T> {
         Force {
             ang: self.e.mul_vec(&(f.ang - self.r.cross(&f.lin))),
@@ -395,6 +469,7 @@ impl<T: Real> Xform<T> {
         }
     }
     /// `Xᵀ·f`: a force vector in B-coordinates carried back to A-coordinates.
+    #[inline]
     pub fn tr_apply_force(&self, f: &Force<T>) -> Force<T> {
         let lin = self.e.tr_mul_vec(&f.lin);
         Force {
@@ -403,6 +478,7 @@ impl<T: Real> Xform<T> {
         }
     }
     /// The composition `self · inner` (first `inner`: A→B, then `self`: B→C).
+    #[inline]
     pub fn compose(&self, inner: &Xform<T>) -> Xform<T> {
         Xform {
             e: self.e.mul_mat(&inner.e),
@@ -410,6 +486,7 @@ impl<T: Real> Xform<T> {
         }
     }
     /// A point given in B-coordinates expressed in A-coordinates (m).
+    #[inline]
     pub fn point_to_a(&self, p: &Vec3<T>) -> Vec3<T> {
         self.r + self.e.tr_mul_vec(p)
     }
@@ -428,6 +505,7 @@ pub struct RigidInertia<T> {
 
 impl<T: Real> RigidInertia<T> {
     /// `I·v`: the momentum of the body moving with spatial velocity `v`.
+    #[inline]
     pub fn mul_motion(&self, v: &Motion<T>) -> Force<T> {
         // Linear momentum m·(v − c×ω); angular momentum about the origin I_c·ω + c×h.
         let h = (v.lin - self.com.cross(&v.ang)).scale(self.mass);
@@ -437,6 +515,7 @@ impl<T: Real> RigidInertia<T> {
         }
     }
     /// The same inertia as a general 6×6 articulated-body inertia.
+    #[inline]
     pub fn to_articulated(&self) -> ArticulatedInertia<T> {
         let cx = Mat3::skew(&self.com);
         let mcx = cx.scaled(self.mass);
@@ -462,6 +541,7 @@ pub struct ArticulatedInertia<T> {
 
 impl<T: Real> ArticulatedInertia<T> {
     /// The zero inertia.
+    #[inline]
     pub fn zero() -> Self {
         ArticulatedInertia {
             a: Mat3::zero(),
@@ -470,6 +550,7 @@ impl<T: Real> ArticulatedInertia<T> {
         }
     }
     /// `I·v`.
+    #[inline]
     pub fn mul_motion(&self, v: &Motion<T>) -> Force<T> {
         Force {
             ang: self.a.mul_vec(&v.ang) + self.b.mul_vec(&v.lin),
@@ -477,6 +558,7 @@ impl<T: Real> ArticulatedInertia<T> {
         }
     }
     /// `Xᵀ·I·X`: an inertia given in B-coordinates expressed in A-coordinates (`X`: A→B).
+    #[inline]
     pub fn transform_back(&self, x: &Xform<T>) -> Self {
         let e = &x.e;
         let et = e.transpose();
@@ -485,9 +567,8 @@ impl<T: Real> ArticulatedInertia<T> {
         let b = et.mul_mat(&self.b).mul_mat(e);
         let cc = et.mul_mat(&self.c).mul_mat(e);
         // Translate with X_t = [1 0; −[r]× 1]: [A + [r]×Bᵀ − (B + [r]×C)[r]×,  B + [r]×C;  ·,  C].
-        let rx = Mat3::skew(&x.r);
-        let b2 = b + rx.mul_mat(&cc);
-        let a2 = a + rx.mul_mat(&b.transpose()) - b2.mul_mat(&rx);
+        let b2 = b + Mat3::skew_mul(&x.r, &cc);
+        let a2 = a + Mat3::skew_mul(&x.r, &b.transpose()) - b2.mul_skew(&x.r);
         ArticulatedInertia {
             a: a2,
             b: b2,
@@ -495,6 +576,7 @@ impl<T: Real> ArticulatedInertia<T> {
         }
     }
     /// `self − u·uᵀ·s` for a force vector `u` and scalar `s` (a rank-one update).
+    #[inline]
     pub fn sub_outer(&self, u: &Force<T>, s: T) -> Self {
         let mut r = *self;
         for i in 0..3 {
@@ -508,6 +590,7 @@ impl<T: Real> ArticulatedInertia<T> {
     }
     /// `self − Σᵢⱼ uᵢ·Wᵢⱼ·uⱼᵀ` for force vectors `u` and a symmetric weight matrix `w`
     /// (its leading `u.len()` square block).
+    #[inline]
     pub fn sub_weighted(&self, u: &[Force<T>], w: &[[T; 6]; 6]) -> Self {
         let mut r = *self;
         for (i, ui) in u.iter().enumerate() {
@@ -528,6 +611,7 @@ impl<T: Real> ArticulatedInertia<T> {
 
 impl<T: Real> Add for ArticulatedInertia<T> {
     type Output = Self;
+    #[inline]
     fn add(self, o: Self) -> Self {
         ArticulatedInertia {
             a: self.a + o.a,
@@ -537,8 +621,15 @@ impl<T: Real> Add for ArticulatedInertia<T> {
     }
 }
 impl<T: Real> AddAssign for ArticulatedInertia<T> {
+    #[inline]
     fn add_assign(&mut self, o: Self) {
-        *self = *self + o;
+        for i in 0..3 {
+            for j in 0..3 {
+                self.a.0[i][j] += o.a.0[i][j];
+                self.b.0[i][j] += o.b.0[i][j];
+                self.c.0[i][j] += o.c.0[i][j];
+            }
+        }
     }
 }
 
@@ -642,6 +733,9 @@ mod tests {
             lin: rv(&mut rng),
         };
         let ia = body.to_articulated();
+        let (r, mm) = (rv(&mut rng), l.mul_mat(&Mat3::skew(&rv(&mut rng))));
+        assert!((m3(&Mat3::skew_mul(&r, &mm)) - skew(&r) * m3(&mm)).norm() < 1e-14);
+        assert!((m3(&mm.mul_skew(&r)) - m3(&mm) * skew(&r)).norm() < 1e-14);
         assert!((fv(&body.mul_motion(&v)) - i6(&ia) * mv(&v)).norm() < 1e-12);
         assert!((fv(&ia.mul_motion(&v)) - i6(&ia) * mv(&v)).norm() < 1e-12);
         let xm = x6(&x);

@@ -3,7 +3,7 @@
 //! with `deny_unknown_fields` and validated with errors positioned at the offending key.
 //!
 //! All quantities are SI: m, kg, s, rad, N, N·m; y is up. Layout (every key is documented on
-//! its field below; `docs/problem-files.md` shows complete files):
+//! its field below; the files in `problems/gait/` are complete, commented examples):
 //! ```toml
 //! name = "pogo_jump"
 //! dt = 1e-4                     # s, RK4 step
