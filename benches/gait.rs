@@ -1,6 +1,7 @@
 //! Gait benchmarks: one ABA call per character, 1 s of simulated Luxo motion, and one full exact
-//! gradient of the Luxo leap (all 42 spline parameters, dual numbers through ABA + RK4) on one
-//! thread, whose time divided by the simulation's is the gradient/simulation ratio.
+//! gradient of the Luxo leap (all 42 spline parameters, chunked dual numbers through ABA + RK4)
+//! on one thread, whose time divided by the simulation's is the gradient/simulation ratio; and the
+//! discrete-tangent Jacobian (sequential) for comparison.
 
 use std::path::PathBuf;
 
@@ -85,6 +86,13 @@ fn benches(c: &mut Criterion) {
                 nlp.eval_derivatives(&x, &mut grad, &mut jac)
                     .expect("finite")
             })
+        })
+    });
+    let mut jac2 = vec![0.0; d.jac_nnz];
+    group.bench_function("jacobian_tangents", |b| {
+        b.iter(|| {
+            nlp.jacobian_by_tangents::<24>(&x, &mut jac2)
+                .expect("finite")
         })
     });
     group.finish();

@@ -12,10 +12,11 @@
 //! absent from the pattern. Chunks run in parallel (rayon); each chunk's result is independent
 //! of scheduling. The objective and its gradient are closed-form and need no simulation.
 
+use nalgebra::DMatrix;
 use num_dual::DualSVec64;
 use rayon::prelude::*;
 
-use super::sim::{SimError, Simulator, State};
+use super::sim::{Controls, SimError, Simulator, State};
 use super::spatial::Real;
 use super::spec::Problem;
 use super::spline::{KnotGrid, SplineControls};
@@ -128,6 +129,153 @@ impl<'p> Reduced<'p> {
         )
     }
 
+    /// Jacobian values (pattern order) by propagating parameter directions: chunks of
+    /// [`CHUNK`] parameters seeded as dual directions through whole rollouts, in parallel.
+    pub fn jacobian_by_parameter_duals(&self, x: &[f64], jac: &mut [f64]) -> Result<(), SimError> {
+        let n = x.len();
+        let results: Vec<Result<Vec<(usize, f64)>, SimError>> = self
+            .chunks
+            .par_iter()
+            .map(|cols| {
+                // Rows this chunk can affect; simulate up to the last of their samples.
+                let last = self
+                    .problem
+                    .constraints
+                    .iter()
+                    .enumerate()
+                    .filter(|(r, _)| cols.iter().any(|&j| self.slot[r * n + j].is_some()))
+                    .map(|(r, _)| self.row_sample[r] + 1)
+                    .max()
+                    .unwrap_or(0);
+                let mut out = Vec::new();
+                if last == 0 {
+                    return Ok(out);
+                }
+                let mut params: Vec<DualSVec64<CHUNK>> =
+                    x.iter().map(|&z| DualSVec64::from_re(z)).collect();
+                for (d, &j) in cols.iter().enumerate() {
+                    params[j] = params[j].derivative(d);
+                }
+                self.simulate(params, last, |r, v| {
+                    for (d, &j) in cols.iter().enumerate() {
+                        if let Some(s) = self.slot[r * n + j] {
+                            let eps = v.eps.0.as_ref().map_or(0.0, |e| e[d]);
+                            out.push((s, eps));
+                        }
+                    }
+                })?;
+                Ok(out)
+            })
+            .collect();
+        for r in results {
+            for (s, v) in r? {
+                jac[s] = v;
+            }
+        }
+        Ok(())
+    }
+
+    /// Jacobian values (pattern order) by discrete tangent propagation: each RK4 step is
+    /// differentiated once with `N ≥ nx + 3·na` dual directions (the state, and the actuator
+    /// forces at the step's three distinct stage times), giving `Φ = ∂x_{n+1}/∂x_n` and
+    /// `G_s = ∂x_{n+1}/∂u_s`; the sensitivities `S = dx/dp` follow
+    /// `S_{n+1} = Φ·S_n + Σ_s G_s·W_s` with `W_s` the spline weights at stage time `s`, and a
+    /// constraint row is `∂C/∂x · S` at its sample. The cost per step does not grow with the
+    /// number of parameters (apart from the small product), but num-dual's wider duals cost more
+    /// per direction than chunks of eight (Luxo: see BENCHMARKS.md), so this is the independent
+    /// cross-check rather than the default.
+    pub fn jacobian_by_tangents<const N: usize>(
+        &self,
+        x: &[f64],
+        jac: &mut [f64],
+    ) -> Result<(), SimError> {
+        type D<const N: usize> = DualSVec64<N>;
+        let p = self.problem;
+        let m = &p.model;
+        let (nq, nv, na) = (m.nq, m.nv, m.actuators.len());
+        let nx = nq + nv;
+        assert!(nx + 3 * na <= N, "too few dual directions");
+        let n_par = x.len();
+        let block = self.grid.per_actuator();
+        let h = p.dt;
+        let spline = SplineControls {
+            grid: self.grid,
+            params: x.to_vec(),
+        };
+        let lift = |s: &State<f64>| State {
+            q: s.q
+                .iter()
+                .enumerate()
+                .map(|(i, &z)| D::<N>::from_re(z).derivative(i))
+                .collect(),
+            v: s.v
+                .iter()
+                .enumerate()
+                .map(|(i, &z)| D::<N>::from_re(z).derivative(nq + i))
+                .collect(),
+        };
+        let eps = |z: &D<N>, d: usize| z.eps.0.as_ref().map_or(0.0, |e| e[d]);
+        let mut sens = DMatrix::<f64>::zeros(nx, n_par);
+        let mut next = DMatrix::<f64>::zeros(nx, n_par);
+        let mut phi = DMatrix::<f64>::zeros(nx, nx);
+        let mut state = p.initial.clone();
+        let mut sim = Simulator::<D<N>>::new(m);
+        let mut n = 0;
+        for (k, &target) in self.steps.iter().enumerate() {
+            while n < target {
+                let t0 = n as f64 * h;
+                let mut xd = lift(&state);
+                let controls = |t: f64, out: &mut [D<N>]| {
+                    let mut f = vec![0.0; out.len()];
+                    spline.forces(t, &mut f);
+                    let stage = ((t - t0) / h * 2.0).round() as usize;
+                    for (a, (o, fa)) in out.iter_mut().zip(&f).enumerate() {
+                        *o = D::<N>::from_re(*fa).derivative(nx + stage * na + a);
+                    }
+                };
+                sim.step(t0, h, &mut xd, &controls)?;
+                let outs: Vec<&D<N>> = xd.q.iter().chain(&xd.v).collect();
+                for (i, z) in outs.iter().enumerate() {
+                    for j in 0..nx {
+                        phi[(i, j)] = eps(z, j);
+                    }
+                }
+                next.gemm(1.0, &phi, &sens, 0.0);
+                for stage in 0..3 {
+                    let (idx, w) = self.grid.weights(t0 + 0.5 * h * stage as f64);
+                    for a in 0..na {
+                        let d = nx + stage * na + a;
+                        for (i, z) in outs.iter().enumerate() {
+                            let g = eps(z, d);
+                            for (c, wc) in idx.iter().zip(&w) {
+                                next[(i, a * block + c)] += g * wc;
+                            }
+                        }
+                    }
+                }
+                std::mem::swap(&mut sens, &mut next);
+                for (dst, z) in state.q.iter_mut().chain(state.v.iter_mut()).zip(&outs) {
+                    *dst = z.re;
+                }
+                n += 1;
+            }
+            let xd = lift(&state);
+            sim.observe(&xd);
+            for (r, c) in p.constraints.iter().enumerate() {
+                if self.row_sample[r] != k {
+                    continue;
+                }
+                let v = c.quantity.value(m, &xd, &sim.dynamics);
+                for j in 0..n_par {
+                    if let Some(slot) = self.slot[r * n_par + j] {
+                        jac[slot] = (0..nx).map(|i| eps(&v, i) * sens[(i, j)]).sum();
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
     fn objective(&self, x: &[f64], grad: Option<&mut [f64]>) -> f64 {
         let block = self.grid.per_actuator();
         let mut f = 0.0;
@@ -216,47 +364,8 @@ impl Nlp for Reduced<'_> {
         jac: &mut [f64],
     ) -> Result<(), EvalError> {
         self.objective(x, Some(grad));
-        let n = x.len();
-        let results: Vec<Result<Vec<(usize, f64)>, SimError>> = self
-            .chunks
-            .par_iter()
-            .map(|cols| {
-                // Rows this chunk can affect; simulate up to the last of their samples.
-                let last = self
-                    .problem
-                    .constraints
-                    .iter()
-                    .enumerate()
-                    .filter(|(r, _)| cols.iter().any(|&j| self.slot[r * n + j].is_some()))
-                    .map(|(r, _)| self.row_sample[r] + 1)
-                    .max()
-                    .unwrap_or(0);
-                let mut out = Vec::new();
-                if last == 0 {
-                    return Ok(out);
-                }
-                let mut params: Vec<DualSVec64<CHUNK>> =
-                    x.iter().map(|&z| DualSVec64::from_re(z)).collect();
-                for (d, &j) in cols.iter().enumerate() {
-                    params[j] = params[j].derivative(d);
-                }
-                self.simulate(params, last, |r, v| {
-                    for (d, &j) in cols.iter().enumerate() {
-                        if let Some(s) = self.slot[r * n + j] {
-                            let eps = v.eps.0.as_ref().map_or(0.0, |e| e[d]);
-                            out.push((s, eps));
-                        }
-                    }
-                })?;
-                Ok(out)
-            })
-            .collect();
         jac.fill(0.0);
-        for r in results {
-            for (s, v) in r.map_err(domain)? {
-                jac[s] = v;
-            }
-        }
+        self.jacobian_by_parameter_duals(x, jac).map_err(domain)?;
         if grad.iter().chain(jac.iter()).all(|v| v.is_finite()) {
             Ok(())
         } else {
@@ -372,6 +481,16 @@ mod tests {
             let mut grad = vec![0.0; d.n];
             let mut jac = vec![0.0; d.jac_nnz];
             nlp.eval_derivatives(&x, &mut grad, &mut jac).unwrap();
+            // The two exact methods (parameter directions, tangent propagation) agree.
+            let mut by_tangents = vec![0.0; d.jac_nnz];
+            nlp.jacobian_by_tangents::<48>(&x, &mut by_tangents)
+                .unwrap();
+            let gap = jac
+                .iter()
+                .zip(&by_tangents)
+                .map(|(a, b)| (a - b).abs() / a.abs().max(1.0))
+                .fold(0.0, f64::max);
+            assert!(gap < 1e-9, "{name}: parameter duals vs tangents {gap}");
             let (mut rows, mut cols) = (vec![0; d.jac_nnz], vec![0; d.jac_nnz]);
             nlp.jacobian_structure(&mut rows, &mut cols);
             let mut dense = vec![0.0; d.m * d.n];
