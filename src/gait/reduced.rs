@@ -181,9 +181,9 @@ impl<'p> Reduced<'p> {
     /// `G_s = ∂x_{n+1}/∂u_s`; the sensitivities `S = dx/dp` follow
     /// `S_{n+1} = Φ·S_n + Σ_s G_s·W_s` with `W_s` the spline weights at stage time `s`, and a
     /// constraint row is `∂C/∂x · S` at its sample. The cost per step does not grow with the
-    /// number of parameters (apart from the small product), but num-dual's wider duals cost more
-    /// per direction than chunks of eight (Luxo: see BENCHMARKS.md), so this is the independent
-    /// cross-check rather than the default.
+    /// number of parameters (apart from the small product); on the Luxo leap it takes about as
+    /// long as the chunked method on one thread (BENCHMARKS.md), which also runs its chunks in
+    /// parallel, so this is the independent cross-check rather than the default.
     pub fn jacobian_by_tangents<const N: usize>(
         &self,
         x: &[f64],
