@@ -337,6 +337,14 @@ impl<'a> Sqp<'a> {
                 self.rho = (1.5 * required).max(2.0 * self.rho).min(required * 10.0);
             }
             let slope = gd - self.rho * reduction;
+            if self.options.verbosity >= 2 {
+                self.say(&format!(
+                    "      |d| = {:.3e}  g'd = {gd:.3e}  d'Hd = {dhd:.3e}  lin.red = {reduction:.3e}  rho = {:.3e}  slope = {slope:.3e}  qp = {:?}",
+                    d.iter().fold(0.0_f64, |a, v| a.max(v.abs())),
+                    self.rho,
+                    step.qp.status
+                ));
+            }
 
             match self.line_search(&point, &jac, d, slope) {
                 LineSearch::Accepted { point: next, alpha } => {
@@ -662,8 +670,22 @@ impl<'a> Sqp<'a> {
         };
         if n <= qp::DENSE_LIMIT {
             let h = hessian::assemble_dense(n, rows, cols, &values);
+            // Rows expected active: equalities and rows with a nonzero multiplier.
+            let active: Vec<usize> = (0..self.ev.dims.m)
+                .filter(|&i| self.ev.cl[i] == self.ev.cu[i] || self.lambda[i] != 0.0)
+                .collect();
+            let mut position = vec![usize::MAX; self.ev.dims.m];
+            for (k, &i) in active.iter().enumerate() {
+                position[i] = k;
+            }
+            let mut a = DMatrix::zeros(active.len(), n);
+            for (k, (&r, &c)) in self.jac_shape.0.iter().zip(&self.jac_shape.1).enumerate() {
+                if position[r] != usize::MAX {
+                    a[(position[r], c)] += point.derivatives.jac[k];
+                }
+            }
             let (m, _) = shift
-                .convexify(&h)
+                .convexify_with_rows(&h, &a)
                 .ok_or_else(|| EvalError::Domain("Hessian not finite".into()))?;
             *dense = Some(m);
         } else {

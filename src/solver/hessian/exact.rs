@@ -4,6 +4,14 @@
 //! δ schedule (Wächter & Biegler 2006, §3.1, "IPOPT"): try δ = 0; else start from
 //! `max(δ_min, κ⁻·δ_last)` (κ⁻ = 1/3), or δ₀ = 1e-4 when no shift was needed before, and
 //! grow by κ⁺ = 8 (κ̄⁺ = 100 the first time) until the Cholesky factorization succeeds.
+//! Shifts are relative to `max(1, maxᵢ|Hᵢᵢ|)`, and a factorization counts as successful only
+//! when every pivot exceeds 1e-10 of that scale, so a singular H is never passed on.
+//!
+//! Before shifting, the augmented-Lagrangian term `γ AᵀA` over the rows expected active
+//! (equalities and the previous QP's active inequalities) is tried (Debreu's lemma: if H is
+//! positive definite on the null space of A, `H + γAᵀA ≻ 0` for γ large enough). On the QP's
+//! feasible set `‖A d‖²` is constant for those rows, so when they stay active the QP step is
+//! the one of the unmodified H and the fast local convergence of the exact Hessian is kept.
 
 use nalgebra::DMatrix;
 use nalgebra_sparse::{CooMatrix, CscMatrix};
@@ -43,8 +51,25 @@ pub struct InertiaShift {
 }
 
 const DELTA_0: f64 = 1e-4;
-const DELTA_MIN: f64 = 1e-20;
+const DELTA_MIN: f64 = 1e-10;
 const DELTA_MAX: f64 = 1e40;
+/// Relative size of the smallest acceptable Cholesky pivot.
+const PIVOT_MIN: f64 = 1e-10;
+/// Augmentation weights tried, relative to the Hessian scale over the row scale.
+const GAMMAS: [f64; 3] = [1.0, 1e2, 1e4];
+
+/// `max(1, maxᵢ|Hᵢᵢ|)`.
+fn scale_of(h: &DMatrix<f64>) -> f64 {
+    h.diagonal().iter().fold(1.0_f64, |a, v| a.max(v.abs()))
+}
+
+/// Positive definite with every Cholesky pivot above `PIVOT_MIN·scale`.
+fn safely_definite(h: &DMatrix<f64>, scale: f64) -> bool {
+    match h.clone().cholesky() {
+        Some(c) => c.l().diagonal().iter().all(|p| p * p >= PIVOT_MIN * scale),
+        None => false,
+    }
+}
 
 impl InertiaShift {
     /// Last δ used (0 when none was needed).
@@ -55,12 +80,32 @@ impl InertiaShift {
     /// `h + δI` with the smallest δ of the schedule that makes it positive definite, or None
     /// when h is not finite.
     pub fn convexify(&mut self, h: &DMatrix<f64>) -> Option<(DMatrix<f64>, f64)> {
+        self.convexify_with_rows(h, &DMatrix::zeros(0, h.nrows()))
+    }
+
+    /// As [`InertiaShift::convexify`], trying `h + γ·rowsᵀrows` first (rows k×n).
+    pub fn convexify_with_rows(
+        &mut self,
+        h: &DMatrix<f64>,
+        rows: &DMatrix<f64>,
+    ) -> Option<(DMatrix<f64>, f64)> {
         if !h.iter().all(|v| v.is_finite()) {
             return None;
         }
-        if h.clone().cholesky().is_some() {
+        let scale = scale_of(h);
+        if safely_definite(h, scale) {
             self.last = 0.0;
             return Some((h.clone(), 0.0));
+        }
+        if rows.nrows() > 0 {
+            let gram = rows.tr_mul(rows);
+            let row_scale = gram.diagonal().amax().max(1e-12);
+            for g in GAMMAS {
+                let augmented = h + &gram * (g * scale / row_scale);
+                if safely_definite(&augmented, scale_of(&augmented)) {
+                    return Some((augmented, 0.0));
+                }
+            }
         }
         let first = self.last == 0.0;
         let mut delta = if first {
@@ -71,9 +116,9 @@ impl InertiaShift {
         while delta <= DELTA_MAX {
             let mut shifted = h.clone();
             for i in 0..h.nrows() {
-                shifted[(i, i)] += delta;
+                shifted[(i, i)] += delta * scale;
             }
-            if shifted.clone().cholesky().is_some() {
+            if safely_definite(&shifted, scale) {
                 self.last = delta;
                 return Some((shifted, delta));
             }
@@ -96,6 +141,11 @@ mod tests {
         assert!(d > 2.0 && m.cholesky().is_some());
         let (_, d2) = shift.convexify(&h).unwrap();
         assert!(d2 > 2.0 && d2 <= d * 8.0);
+        // Positive definite on the null space of the row (1, 0): augmentation, no shift.
+        let rows = DMatrix::from_row_slice(1, 2, &[0.0, 1.0]);
+        let (m, d3) = shift.convexify_with_rows(&h, &rows).unwrap();
+        assert_eq!(d3, 0.0);
+        assert!(m.cholesky().is_some());
         let pd = assemble_dense(2, &[0, 1], &[0, 1], &[1.0, 1.0]);
         assert_eq!(shift.convexify(&pd).unwrap().1, 0.0);
     }
