@@ -15,7 +15,7 @@
 use nalgebra::DMatrix;
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
-use super::merit::l1_violation;
+use super::merit::{l1_violation, weighted_violation};
 use super::qp::{self, QpHessian, QpProblem, QpSolution, QpStatus, WarmStart};
 
 /// Regularization of the slack variables (and of d in the feasibility subproblem).
@@ -47,25 +47,31 @@ impl Linearization<'_> {
         let zero = vec![0.0; self.a.nrows()];
         l1_violation(&zero, self.bl, self.bu)
     }
+
+    /// Weighted decrease of the linearized violation along d: `Σ wᵢ (vᵢ(0) − vᵢ(d))`.
+    pub fn weighted_reduction(&self, d: &[f64], w: &[f64]) -> f64 {
+        let ad = self.a * &nalgebra::DVector::from_column_slice(d);
+        let zero = vec![0.0; self.a.nrows()];
+        weighted_violation(&zero, self.bl, self.bu, w)
+            - weighted_violation(ad.as_slice(), self.bl, self.bu, w)
+    }
 }
 
-/// Solves the elastic subproblem with penalty `rho`; returns the solution restricted to d
-/// (length n) with the row multipliers of the original rows.
+/// Solves the elastic subproblem with penalty weight `rho[i]` on the slacks of row i; returns
+/// the solution restricted to d (length n) with the row multipliers of the original rows.
 pub fn solve_elastic(
     h: &DMatrix<f64>,
     g: &[f64],
     lin: &Linearization,
-    rho: f64,
+    rho: &[f64],
     warm: &mut WarmStart,
     tolerance: f64,
 ) -> QpSolution {
-    let mut slack_cost = Vec::new();
     let he = extended_hessian(h, lin, SLACK_REGULARIZATION * (1.0 + h.diagonal().amax()));
     let (ae, slack_count) = extended_rows(lin);
     let n = g.len();
     let mut ge = g.to_vec();
-    slack_cost.resize(slack_count, rho);
-    ge.extend_from_slice(&slack_cost);
+    ge.extend(slack_columns(lin).iter().map(|&(row, _)| rho[row]));
     let (dl, du) = extended_bounds(lin.dl, lin.du, slack_count);
     let problem = QpProblem {
         h: QpHessian::Dense(&he),
@@ -98,7 +104,8 @@ pub fn least_violation(lin: &Linearization, radius: f64, tolerance: f64) -> Opti
     };
     let g = vec![0.0; n];
     let mut warm = WarmStart::default();
-    let sol = solve_elastic(&h, &g, &boxed, 1.0, &mut warm, tolerance);
+    let ones = vec![1.0; lin.bl.len()];
+    let sol = solve_elastic(&h, &g, &boxed, &ones, &mut warm, tolerance);
     (sol.status == QpStatus::Optimal).then(|| (boxed.violation_after(&sol.d), sol.iterations))
 }
 

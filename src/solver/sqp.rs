@@ -35,7 +35,7 @@ use super::elastic::{self, Linearization};
 use super::evaluator::{Derivatives, Evaluator, Values};
 use super::hessian::{self, DenseBfgs, InertiaShift, Lbfgs};
 use super::log;
-use super::merit::{self, l1_violation};
+use super::merit;
 use super::qp::{self, QpHessian, QpProblem, QpSolution, QpStatus, WarmStart};
 use super::termination::{self, Kkt, KktInput};
 use super::{EvalError, HessianMode, IterationRecord, Nlp, Options, Solution, Status};
@@ -155,9 +155,8 @@ struct Point {
 /// What the QP phase of an iteration produced.
 struct StepChoice {
     qp: QpSolution,
-    /// Linearized ℓ1 violation before and after the step.
-    violation_now: f64,
-    violation_after: f64,
+    /// Whether the step came from the elastic subproblem.
+    elastic: bool,
     /// x is a stationary point of the violation while infeasible.
     infeasible_stationary: bool,
     qp_iterations: usize,
@@ -175,7 +174,8 @@ struct Sqp<'a> {
     started: Instant,
     log: Vec<IterationRecord>,
     model: Model,
-    rho: f64,
+    /// Penalty weights of the merit function, one per row.
+    rho: Vec<f64>,
     lambda: Vec<f64>,
     warm: WarmStart,
     elastic_warm: WarmStart,
@@ -204,6 +204,7 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
         _ => Model::Bfgs(DenseBfgs::new(n)),
     };
     let jac_shape = (ev.jac_rows.clone(), ev.jac_cols.clone());
+    let m = ev.dims.m;
     let mut sqp = Sqp {
         lambda: vec![0.0; ev.dims.m],
         ev,
@@ -211,7 +212,7 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
         started,
         log: Vec::new(),
         model,
-        rho: 1.0,
+        rho: vec![0.0; m],
         warm: WarmStart::default(),
         elastic_warm: WarmStart::default(),
         jac_shape,
@@ -240,7 +241,7 @@ impl<'a> Sqp<'a> {
     }
 
     fn merit(&self, v: &Values) -> f64 {
-        merit::merit(v.f, l1_violation(&v.c, &self.ev.cl, &self.ev.cu), self.rho)
+        v.f + merit::weighted_violation(&v.c, &self.ev.cl, &self.ev.cu, &self.rho)
     }
 
     /// The start: clamp into the bounds, choose scales, evaluate.
@@ -325,23 +326,30 @@ impl<'a> Sqp<'a> {
                 return self.finish(status, &point, Some(&lambda_qp));
             }
 
-            // Penalty so that d descends on the merit function.
+            // Penalty weights so that d descends on the merit function.
             let d = &step.qp.d;
-            let hd = self.model.times(d);
-            let gd: f64 = point.derivatives.grad.iter().zip(d).map(|(a, b)| a * b).sum();
-            let dhd: f64 = hd.iter().zip(d).map(|(a, b)| a * b).sum();
-            let reduction = step.violation_now - step.violation_after;
-            let lambda_max = lambda_qp.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
-            let required = merit::required_penalty(lambda_max, gd, dhd, reduction);
-            if required > self.rho {
-                self.rho = (1.5 * required).max(2.0 * self.rho).min(required * 10.0);
+            if !step.elastic {
+                merit::powell_update(&mut self.rho, &lambda_qp);
             }
-            let slope = gd - self.rho * reduction;
+            let gd: f64 = point.derivatives.grad.iter().zip(d).map(|(a, b)| a * b).sum();
+            let dhd: f64 = self.model.times(d).iter().zip(d).map(|(a, b)| a * b).sum();
+            let mut reduction = self.linear_reduction(&point, &jac, d);
+            let mut slope = gd - reduction;
+            for _ in 0..20 {
+                if slope < 0.0 || reduction <= 0.0 {
+                    break;
+                }
+                for w in &mut self.rho {
+                    *w = 2.0 * *w + 1e-8;
+                }
+                reduction = self.linear_reduction(&point, &jac, d);
+                slope = gd - reduction;
+            }
             if self.options.verbosity >= 2 {
                 self.say(&format!(
-                    "      |d| = {:.3e}  g'd = {gd:.3e}  d'Hd = {dhd:.3e}  lin.red = {reduction:.3e}  rho = {:.3e}  slope = {slope:.3e}  qp = {:?}",
+                    "      |d| = {:.3e}  g'd = {gd:.3e}  d'Hd = {dhd:.3e}  lin.red = {reduction:.3e}  max rho = {:.3e}  slope = {slope:.3e}  qp = {:?}",
                     d.iter().fold(0.0_f64, |a, v| a.max(v.abs())),
-                    self.rho,
+                    self.rho.iter().fold(0.0_f64, |a, v| a.max(*v)),
                     step.qp.status
                 ));
             }
@@ -468,12 +476,10 @@ impl<'a> Sqp<'a> {
         };
         let now = lin.violation_now();
         if qp.status == QpStatus::Optimal {
-            let after = lin.violation_after(&qp.d);
             let iterations = qp.iterations;
             return StepChoice {
                 qp,
-                violation_now: now,
-                violation_after: after,
+                elastic: false,
                 infeasible_stationary: false,
                 qp_iterations: iterations,
             };
@@ -486,10 +492,14 @@ impl<'a> Sqp<'a> {
             kkt.primal > self.options.constraint_tolerance
         };
         let h = self.model.dense(self.ev.dims.n);
-        let lambda_max = self.lambda.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
-        let mut rho = self.rho.max(lambda_max).max(1.0);
+        let floor = self
+            .rho
+            .iter()
+            .chain(self.lambda.iter())
+            .fold(1.0_f64, |a, v| a.max(v.abs()));
+        let mut rho: Vec<f64> = self.rho.iter().map(|w| w.max(floor)).collect();
         let best_reduction = (now - least).max(0.0);
-        let mut sol = elastic::solve_elastic(&h, g, &lin, rho, &mut self.elastic_warm, tol);
+        let mut sol = elastic::solve_elastic(&h, g, &lin, &rho, &mut self.elastic_warm, tol);
         iterations += sol.iterations;
         for _ in 0..MAX_STEERING {
             let after = lin.violation_after(&sol.d);
@@ -497,19 +507,32 @@ impl<'a> Sqp<'a> {
             if sol.status == QpStatus::Optimal && enough {
                 break;
             }
-            rho *= 10.0;
-            sol = elastic::solve_elastic(&h, g, &lin, rho, &mut self.elastic_warm, tol);
+            for w in &mut rho {
+                *w *= 10.0;
+            }
+            sol = elastic::solve_elastic(&h, g, &lin, &rho, &mut self.elastic_warm, tol);
             iterations += sol.iterations;
         }
-        self.rho = self.rho.max(rho);
-        let after = lin.violation_after(&sol.d);
+        self.rho = rho;
         StepChoice {
             qp: sol,
-            violation_now: now,
-            violation_after: after,
+            elastic: true,
             infeasible_stationary: stationary && primal_bad,
             qp_iterations: iterations,
         }
+    }
+
+    /// Weighted decrease of the linearized violation along d with the current weights.
+    fn linear_reduction(&self, point: &Point, jac: &CsrMatrix<f64>, d: &[f64]) -> f64 {
+        let (dl, du, bl, bu) = self.bounds_of_step(point);
+        let lin = Linearization {
+            a: jac,
+            dl: &dl,
+            du: &du,
+            bl: &bl,
+            bu: &bu,
+        };
+        lin.weighted_reduction(d, &self.rho)
     }
 
     fn kkt(&self, point: &Point, jac: &CsrMatrix<f64>, lambda: &[f64]) -> (Kkt, Vec<f64>) {
