@@ -707,9 +707,16 @@ impl<'a> Sqp<'a> {
                     a[(position[r], c)] += point.derivatives.jac[k];
                 }
             }
-            let (m, _) = shift
+            let (m, delta) = shift
                 .convexify_with_rows(&h, &a)
                 .ok_or_else(|| EvalError::Domain("Hessian not finite".into()))?;
+            if self.options.verbosity >= 2 {
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "      Hessian shift {delta:.2e} (augmented rows: {})",
+                    a.nrows()
+                );
+            }
             *dense = Some(m);
         } else {
             *sparse = Some(hessian::assemble_sparse_lower(n, rows, cols, &values));

@@ -98,10 +98,17 @@ impl InertiaShift {
             return Some((h.clone(), 0.0));
         }
         if rows.nrows() > 0 {
-            let gram = rows.tr_mul(rows);
-            let row_scale = gram.diagonal().amax().max(1e-12);
+            // Unit rows, so that a short row counts as much as a long one.
+            let mut unit = rows.clone();
+            for mut r in unit.row_iter_mut() {
+                let norm = r.norm();
+                if norm > 0.0 {
+                    r /= norm;
+                }
+            }
+            let gram = unit.tr_mul(&unit);
             for g in GAMMAS {
-                let augmented = h + &gram * (g * scale / row_scale);
+                let augmented = h + &gram * (g * scale);
                 if safely_definite(&augmented, scale_of(&augmented)) {
                     return Some((augmented, 0.0));
                 }
