@@ -331,7 +331,13 @@ impl<'a> Sqp<'a> {
             if !step.elastic {
                 merit::powell_update(&mut self.rho, &lambda_qp);
             }
-            let gd: f64 = point.derivatives.grad.iter().zip(d).map(|(a, b)| a * b).sum();
+            let gd: f64 = point
+                .derivatives
+                .grad
+                .iter()
+                .zip(d)
+                .map(|(a, b)| a * b)
+                .sum();
             let dhd: f64 = self.model.times(d).iter().zip(d).map(|(a, b)| a * b).sum();
             let mut reduction = self.linear_reduction(&point, &jac, d);
             let mut slope = gd - reduction;
@@ -377,8 +383,7 @@ impl<'a> Sqp<'a> {
                         alpha_in = 0.0;
                         qp_in = step.qp_iterations;
                     } else {
-                        let status = if kkt.primal <= 100.0 * ctol
-                            && kkt.optimality <= 100.0 * tol
+                        let status = if kkt.primal <= 100.0 * ctol && kkt.optimality <= 100.0 * tol
                         {
                             Status::Acceptable
                         } else {

@@ -73,12 +73,14 @@ pub fn measure(k: &KktInput) -> (Kkt, Vec<f64>) {
     }
     let mut z = vec![0.0; n];
     for j in 0..n {
-        if (on_bound(k.x[j], k.xl[j]) && r[j] > 0.0) || (on_bound(k.x[j], k.xu[j]) && r[j] < 0.0)
-        {
+        if (on_bound(k.x[j], k.xl[j]) && r[j] > 0.0) || (on_bound(k.x[j], k.xu[j]) && r[j] < 0.0) {
             z[j] = -r[j];
         }
     }
-    let dual = r.iter().zip(&z).fold(0.0_f64, |a, (ri, zi)| a.max((ri + zi).abs()));
+    let dual = r
+        .iter()
+        .zip(&z)
+        .fold(0.0_f64, |a, (ri, zi)| a.max((ri + zi).abs()));
     let mut comp = 0.0_f64;
     for i in 0..m {
         let l = k.lambda[i];
@@ -92,7 +94,8 @@ pub fn measure(k: &KktInput) -> (Kkt, Vec<f64>) {
         let gap = if gap.is_finite() { gap.abs() } else { 1.0 };
         comp = comp.max(l.abs() * gap);
     }
-    let l1: f64 = k.lambda.iter().map(|v| v.abs()).sum::<f64>() + z.iter().map(|v| v.abs()).sum::<f64>();
+    let l1: f64 =
+        k.lambda.iter().map(|v| v.abs()).sum::<f64>() + z.iter().map(|v| v.abs()).sum::<f64>();
     let s_d = (l1 / ((n + m).max(1) as f64)).max(100.0) / 100.0;
     (
         Kkt {

@@ -637,7 +637,10 @@ mod tests {
             bl: vec![1.0, f64::NEG_INFINITY],
             bu: vec![f64::INFINITY, 0.0],
         };
-        assert_eq!(solve(&p.h, &p.problem(), &[]).solution.status, QpStatus::Infeasible);
+        assert_eq!(
+            solve(&p.h, &p.problem(), &[]).solution.status,
+            QpStatus::Infeasible
+        );
     }
 
     #[test]
@@ -652,7 +655,10 @@ mod tests {
             bl: vec![3.0],
             bu: vec![3.0],
         };
-        assert_eq!(solve(&p.h, &p.problem(), &[]).solution.status, QpStatus::Infeasible);
+        assert_eq!(
+            solve(&p.h, &p.problem(), &[]).solution.status,
+            QpStatus::Infeasible
+        );
         // Dependent, inconsistent equalities.
         let q = Owned {
             a: csr(&DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 2.0, 2.0])),
@@ -662,7 +668,10 @@ mod tests {
             bu: vec![1.0, 3.0],
             ..p
         };
-        assert_eq!(solve(&q.h, &q.problem(), &[]).solution.status, QpStatus::Infeasible);
+        assert_eq!(
+            solve(&q.h, &q.problem(), &[]).solution.status,
+            QpStatus::Infeasible
+        );
     }
 
     #[test]
@@ -696,6 +705,9 @@ mod tests {
             bl: vec![],
             bu: vec![],
         };
-        assert_eq!(solve(&p.h, &p.problem(), &[]).solution.status, QpStatus::Numerical);
+        assert_eq!(
+            solve(&p.h, &p.problem(), &[]).solution.status,
+            QpStatus::Numerical
+        );
     }
 }
