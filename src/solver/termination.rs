@@ -5,12 +5,17 @@
 //!   hold exactly at every iterate), so a constraint with right-hand side 0 is held to the
 //!   absolute tolerance;
 //! - dual: `‖∇f̃ + J̃ᵀλ̃ + z‖∞ / s_d` where z is the least-squares bound multiplier for the
-//!   bounds x sits on, and `s_d = max(100, (‖λ̃‖₁ + ‖z‖₁)/(m+n))/100`;
+//!   bounds x sits on, and `s_d = min(S_D_MAX, max(100, (‖λ̃‖₁ + ‖z‖₁)/(m+n))/100)`: IPOPT's
+//!   scaling, capped so that multipliers diverging towards a point without KKT multipliers
+//!   (a cusp, as in HS13) cannot make any residual look small;
 //! - complementarity: `maxᵢ |λ̃ᵢ|·|c̃ᵢ − bound| / s_d` over the side λ̃ᵢ's sign selects.
 
 use nalgebra_sparse::CsrMatrix;
 
 use super::merit::row_violation;
+
+/// Largest divisor of the dual residual from the multiplier size.
+const S_D_MAX: f64 = 100.0;
 
 /// The measures at one point.
 #[derive(Debug, Clone, Copy)]
@@ -96,7 +101,7 @@ pub fn measure(k: &KktInput) -> (Kkt, Vec<f64>) {
     }
     let l1: f64 =
         k.lambda.iter().map(|v| v.abs()).sum::<f64>() + z.iter().map(|v| v.abs()).sum::<f64>();
-    let s_d = (l1 / ((n + m).max(1) as f64)).max(100.0) / 100.0;
+    let s_d = ((l1 / ((n + m).max(1) as f64)).max(100.0) / 100.0).min(S_D_MAX);
     (
         Kkt {
             primal,
