@@ -47,6 +47,15 @@ pub const DENSE_BFGS_LIMIT: usize = 500;
 const ARMIJO: f64 = 1e-4;
 /// Smallest step length tried before the line search gives up.
 const MIN_STEP: f64 = 1e-12;
+/// Largest constraint force `|λᵢ|·‖∇cᵢ‖∞`, relative to `max(1, ‖∇f‖∞)`, accepted from the
+/// ordinary QP; beyond it the linearization is treated as nearly inconsistent and the elastic
+/// subproblem is solved instead (SNOPT switches on large multipliers likewise). At a regular
+/// point the forces balance the objective gradient, so this only happens near degenerate or
+/// infeasible points. Also the cap of the elastic weights.
+const ELASTIC_WEIGHT: f64 = 1e4;
+/// Largest step `‖αd‖∞` relative to `1 + ‖x‖∞` tried by the line search (SNOPT's major step
+/// limit), so that a huge QP step cannot throw the iterate far away in one go.
+const STEP_LIMIT: f64 = 2.0;
 /// Elastic-penalty increases per iteration.
 const MAX_STEERING: usize = 8;
 /// Consecutive iterations within 100× the tolerances before `Acceptable`.
@@ -438,8 +447,9 @@ impl<'a> Sqp<'a> {
     }
 
     /// Whether x is a stationary point of the ℓ1 violation: the least linearized violation
-    /// within a box of radius Δ = max(1, ‖x‖∞) improves on the current one by no more than
-    /// `tolerance·Δ`. Also returns the least linearized violation.
+    /// within a box of radius Δ = max(1, ‖x‖∞) improves on the current one v by no more than
+    /// `tolerance·v` (invariant under scaling of c; near a stationary point the reduction
+    /// vanishes to first order). Also returns the least linearized violation.
     fn violation_stationary(&self, point: &Point, jac: &CsrMatrix<f64>) -> (bool, f64) {
         let (dl, du, bl, bu) = self.bounds_of_step(point);
         let lin = Linearization {
@@ -452,7 +462,7 @@ impl<'a> Sqp<'a> {
         let now = lin.violation_now();
         let radius = point.x.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
         match elastic::least_violation(&lin, radius, self.options.tolerance) {
-            Some((least, _)) => (now - least <= self.options.tolerance * radius, least),
+            Some((least, _)) => (now - least <= self.options.tolerance * now, least),
             None => (false, now),
         }
     }
@@ -480,7 +490,14 @@ impl<'a> Sqp<'a> {
             bu: &bu,
         };
         let now = lin.violation_now();
-        if qp.status == QpStatus::Optimal {
+        // Size of the constraint forces λᵢ∇cᵢ against the objective's gradient.
+        let mut force = 0.0_f64;
+        for (i, row) in jac.row_iter().enumerate() {
+            let norm = row.values().iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+            force = force.max(qp.lambda[i].abs() * norm);
+        }
+        let gmax = g.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
+        if qp.status == QpStatus::Optimal && force <= ELASTIC_WEIGHT * gmax {
             let iterations = qp.iterations;
             return StepChoice {
                 qp,
@@ -501,8 +518,13 @@ impl<'a> Sqp<'a> {
             .rho
             .iter()
             .chain(self.lambda.iter())
-            .fold(1.0_f64, |a, v| a.max(v.abs()));
-        let mut rho: Vec<f64> = self.rho.iter().map(|w| w.max(floor)).collect();
+            .fold(1.0_f64, |a, v| a.max(v.abs()))
+            .min(ELASTIC_WEIGHT);
+        let mut rho: Vec<f64> = self
+            .rho
+            .iter()
+            .map(|w| w.clamp(floor, ELASTIC_WEIGHT.max(floor)))
+            .collect();
         let best_reduction = (now - least).max(0.0);
         let mut sol = elastic::solve_elastic(&h, g, &lin, &rho, &mut self.elastic_warm, tol);
         iterations += sol.iterations;
@@ -596,7 +618,7 @@ impl<'a> Sqp<'a> {
         if dnorm <= 1e-15 * xnorm {
             return LineSearch::Failed;
         }
-        let mut alpha = 1.0;
+        let mut alpha = (STEP_LIMIT * (1.0 + xnorm) / dnorm).min(1.0);
         let mut soc_tried = false;
         while alpha >= MIN_STEP {
             let x = self.trial(&point.x, d, alpha);
