@@ -7,6 +7,8 @@
 //! Entry point: [`solve`]`(&nlp, &options) -> Solution`. Not converging is a [`Status`] in the
 //! [`Solution`], never an `Err`.
 
+pub mod derivatives;
+pub mod global;
 mod nlp;
 mod options;
 pub mod qp;
