@@ -199,7 +199,7 @@ impl GlobalSpec {
             ));
         }
         if let Some(v) = self.cost_precision
-            && !(v >= 0.0 && v < 1.0)
+            && !(0.0..1.0).contains(&v)
         {
             return Err(at(
                 "cost_precision",

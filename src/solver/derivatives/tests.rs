@@ -446,3 +446,63 @@ fn grouped_check_for_large_problems_agrees() {
     assert!(report.passed(), "{report}");
     assert_eq!(report.jacobian.checked, 3 * 48);
 }
+
+#[test]
+fn forward_then_central_restarts_from_the_first_result() {
+    use crate::solver::{Evaluations, IterationRecord, Solution, Status};
+    use std::sync::Mutex;
+    // A stand-in local solver: records the scheme's accuracy and the start it was given, and
+    // "moves" the start by +0.1 in every coordinate.
+    let nlp = Small { flaw: Flaw::None };
+    let wrapped = FiniteDifferenceNlp::new(&nlp, FiniteDifferenceOptions::default());
+    let seen = Mutex::new(Vec::new());
+    let local = |p: &dyn Nlp| {
+        let mut x = vec![0.0; 3];
+        p.start(&mut x);
+        let (g, _) = exact(p, &x);
+        let (g_exact, _) = exact(&nlp, &x);
+        seen.lock()
+            .unwrap()
+            .push((x.clone(), max_error(&g_exact, &g)));
+        let x: Vec<f64> = x.iter().map(|v| v + 0.1).collect();
+        Solution {
+            status: Status::Optimal,
+            x,
+            lambda: vec![0.0; 2],
+            z: vec![0.0; 3],
+            objective: 0.0,
+            constraints: vec![0.0; 2],
+            max_violation: 0.0,
+            optimality: 0.0,
+            iterations: 2,
+            evaluations: Evaluations {
+                functions: 3,
+                derivatives: 1,
+                hessians: 0,
+            },
+            seconds: 0.5,
+            log: vec![IterationRecord {
+                iter: 0,
+                objective: 0.0,
+                infeasibility: 0.0,
+                optimality: 0.0,
+                step: 0.0,
+                merit: 0.0,
+                qp_iterations: 0,
+                elapsed: 0.0,
+            }],
+        }
+    };
+    let s = solve_forward_then_central(&wrapped, local);
+    let seen = seen.into_inner().unwrap();
+    assert_eq!(seen[0].0, vec![1.0, 0.5, 0.3]);
+    assert_eq!(seen[1].0, vec![1.1, 0.6, 0.4]);
+    // Central differences are markedly more accurate in the second solve.
+    assert!(seen[1].1 < seen[0].1 / 10.0, "{seen:?}");
+    assert_eq!(wrapped.scheme(), DifferenceScheme::Central);
+    assert_eq!(
+        (s.iterations, s.evaluations.functions, s.log.len()),
+        (4, 6, 2)
+    );
+    assert_eq!(s.seconds, 1.0);
+}
