@@ -14,7 +14,10 @@
 //! the estimate outside the declared pattern is reported too (a missing pattern entry is a
 //! common bug). Larger problems use column groups (only pattern entries are checked). The
 //! Hessian of `L = f + Σ λᵢ cᵢ` is checked by central differences of the analytic ∇L, with
-//! multipliers λᵢ = (−1)ⁱ·(1 + (i mod 3)/2) unless given, lower triangle only.
+//! multipliers λᵢ = (−1)ⁱ·(1 + (i mod 3)/2) unless given, lower triangle only; one column at a
+//! time (finding entries outside the pattern) when n ≤ `scan_limit`, else with columns grouped
+//! by the symmetric Hessian pattern. The Hessian check uses the problem's Jacobian, so a wrong
+//! Jacobian entry also shows up as Hessian errors.
 //!
 //! Stencils respect the variable bounds (see [`super::interval`]).
 
@@ -23,6 +26,7 @@ use std::fmt;
 
 use rayon::prelude::*;
 
+use super::coloring::ColumnGroups;
 use super::engine::FiniteDifferences;
 use super::interval::{DifferenceScheme, FiniteDifferenceOptions, Stencil};
 use crate::solver::{EvalError, Nlp};
@@ -545,38 +549,69 @@ fn hessian_entries_at(
     for (&(r, c), &v) in &analytic {
         by_col[c].push((r, v));
     }
+    // One column per group when scanning; otherwise columns grouped so that no row of the
+    // symmetric pattern meets two columns of a group.
+    let groups = if scan {
+        ColumnGroups::singletons(setup.n)
+    } else {
+        let mut pattern: Vec<Vec<usize>> = vec![Vec::new(); setup.n];
+        for &(r, c) in analytic.keys() {
+            pattern[r].push(c);
+            if r != c {
+                pattern[c].push(r);
+            }
+        }
+        ColumnGroups::greedy(setup.n, &pattern)
+    };
     let g0 = lagrangian_gradient(nlp, setup, x, &lambda)?;
-    let columns: Vec<Result<(Vec<EntryCheck>, usize), EvalError>> = (0..setup.n)
-        .into_par_iter()
-        .map(|j| {
-            let s = setup.stencil(&options.differences, x, j);
-            let (a, b) = s.offsets();
-            let moved = |offset: f64| {
-                let mut xm = x.to_vec();
-                xm[j] = x[j] + offset;
-                lagrangian_gradient(nlp, setup, &xm, &lambda)
-            };
-            let ga = moved(a)?;
-            let gb = match b {
-                Some(b) => moved(b)?,
-                None => g0.clone(),
-            };
-            let mut out = Vec::new();
-            let mut declared = by_col[j].iter().peekable();
-            for r in j..setup.n {
-                let d = s.derivative(g0[r], ga[r], gb[r]);
-                match declared.peek() {
-                    Some(&&(row, v)) if row == r => {
-                        declared.next();
-                        out.push(entry(nlp, Block::Hessian, Some(r), j, v, d, true));
-                    }
-                    _ if scan && relative_error(0.0, d) > options.tolerance => {
-                        out.push(entry(nlp, Block::Hessian, Some(r), j, 0.0, d, false));
-                    }
-                    _ => {}
+    let columns: Vec<Result<(Vec<EntryCheck>, usize), EvalError>> = groups
+        .groups()
+        .par_iter()
+        .map(|group| {
+            let stencils: Vec<Stencil> = group
+                .iter()
+                .map(|&j| setup.stencil(&options.differences, x, j))
+                .collect();
+            let mut xa = x.to_vec();
+            let mut xb = x.to_vec();
+            let mut second = false;
+            for (&j, s) in group.iter().zip(&stencils) {
+                let (a, b) = s.offsets();
+                xa[j] = x[j] + a;
+                if let Some(b) = b {
+                    xb[j] = x[j] + b;
+                    second = true;
                 }
             }
-            Ok((out, 1 + usize::from(b.is_some())))
+            let ga = lagrangian_gradient(nlp, setup, &xa, &lambda)?;
+            let gb = if second {
+                lagrangian_gradient(nlp, setup, &xb, &lambda)?
+            } else {
+                g0.clone()
+            };
+            let mut out = Vec::new();
+            for (&j, s) in group.iter().zip(&stencils) {
+                let mut declared = by_col[j].iter().peekable();
+                let rows: Box<dyn Iterator<Item = usize>> = if scan {
+                    Box::new(j..setup.n)
+                } else {
+                    Box::new(by_col[j].iter().map(|&(r, _)| r))
+                };
+                for r in rows {
+                    let d = s.derivative(g0[r], ga[r], gb[r]);
+                    match declared.peek() {
+                        Some(&&(row, v)) if row == r => {
+                            declared.next();
+                            out.push(entry(nlp, Block::Hessian, Some(r), j, v, d, true));
+                        }
+                        _ if relative_error(0.0, d) > options.tolerance => {
+                            out.push(entry(nlp, Block::Hessian, Some(r), j, 0.0, d, false));
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            Ok((out, 1 + usize::from(second)))
         })
         .collect();
     let mut entries = Vec::new();

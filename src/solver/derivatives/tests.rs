@@ -118,7 +118,7 @@ impl Nlp for Chain {
             n: self.n,
             m: self.n - 2,
             jac_nnz: 3 * (self.n - 2),
-            hess_nnz: 0,
+            hess_nnz: self.n + 1,
         }
     }
     fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
@@ -157,6 +157,31 @@ impl Nlp for Chain {
             j[3 * i + 1] = -1.0;
             j[3 * i + 2] = 0.5 * x[i + 2].cos();
         }
+        Ok(())
+    }
+    /// The diagonal, then (n − 1, 0).
+    fn hessian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
+        for j in 0..self.n {
+            rows[j] = j;
+            cols[j] = j;
+        }
+        rows[self.n] = self.n - 1;
+        cols[self.n] = 0;
+    }
+    fn eval_hessian(
+        &self,
+        x: &[f64],
+        sigma: f64,
+        lambda: &[f64],
+        h: &mut [f64],
+    ) -> Result<(), EvalError> {
+        h.fill(0.0);
+        h[0] = 2.0 * sigma;
+        for (i, &l) in lambda.iter().enumerate() {
+            h[i] += 2.0 * l;
+            h[i + 2] -= 0.5 * l * x[i + 2].sin();
+        }
+        h[self.n] = sigma;
         Ok(())
     }
 }
@@ -445,6 +470,11 @@ fn grouped_check_for_large_problems_agrees() {
     assert!(!report.scanned_outside_pattern);
     assert!(report.passed(), "{report}");
     assert_eq!(report.jacobian.checked, 3 * 48);
+    assert_eq!(report.hessian.as_ref().unwrap().checked, 51);
+    // The gradient check costs 1 + 2·50 evaluations (the objective is taken as dense) plus one
+    // at x. The Hessian (diagonal plus one corner entry) needs two groups: 1 + 2·2 gradient
+    // evaluations instead of 1 + 2·50 column by column.
+    assert_eq!(report.evaluations, 102 + 5);
 }
 
 #[test]
@@ -505,4 +535,26 @@ fn forward_then_central_restarts_from_the_first_result() {
         (4, 6, 2)
     );
     assert_eq!(s.seconds, 1.0);
+}
+
+#[test]
+fn grouped_hessian_check_agrees_with_the_scan() {
+    let grouped = CheckOptions {
+        scan_limit: 0,
+        ..Default::default()
+    };
+    let x = [0.8, -0.3, 1.1];
+    let exact_report = check_derivatives(&Small { flaw: Flaw::None }, &x, &grouped).unwrap();
+    assert!(exact_report.passed(), "{exact_report}");
+    assert_eq!(exact_report.hessian.as_ref().unwrap().checked, 5);
+    let flawed = Small {
+        flaw: Flaw::WrongHessian(2),
+    };
+    let report = check_derivatives(&flawed, &x, &grouped).unwrap();
+    assert_eq!(report.hessian.as_ref().unwrap().failed, 1);
+    let worst = &report.worst_per_function[0];
+    assert_eq!(
+        (worst.block, worst.row, worst.col),
+        (Block::Hessian, Some(1), 1)
+    );
 }
