@@ -184,7 +184,7 @@ impl fmt::Display for DerivativeReport {
             )?;
             for e in listed {
                 let function = match (e.block, e.row) {
-                    (Block::Hessian, Some(r)) => format!("{} row {r}", e.name),
+                    (Block::Hessian, Some(r)) => format!("Hessian (row {r})"),
                     (_, Some(r)) => format!("{} (row {r})", e.name),
                     (_, None) => e.name.clone(),
                 };

@@ -138,7 +138,8 @@ fn add(a: Evaluations, b: Evaluations) -> Evaluations {
     }
 }
 
-/// Multistart with the SQP solver [`solve`] and options `local` (see the module header).
+/// Multistart with the SQP solver [`crate::solver::solve`] and options `local` (see the module
+/// header).
 /// Annealing runs in hybrid mode also stop on `local.interrupt` unless they have their own.
 pub fn multistart(nlp: &dyn Nlp, settings: &MultistartOptions, local: &Options) -> GlobalResult {
     super::optimize(
