@@ -492,3 +492,37 @@ fn anneal_method_wraps_its_run() {
     assert_eq!(result.anneal.len(), 1);
     assert_eq!(result.solution.iterations, 100);
 }
+
+/// 2-D Rastrigin: 20 + Σ (x² − 10·cos 2πx), global minimum 0 at the origin, a local minimum
+/// near every integer point.
+fn rastrigin(x: &[f64]) -> f64 {
+    use std::f64::consts::TAU;
+    20.0 + x
+        .iter()
+        .map(|v| v * v - 10.0 * (TAU * v).cos())
+        .sum::<f64>()
+}
+
+#[test]
+fn annealing_finds_the_rastrigin_origin_for_every_seed_tried() {
+    let problem = BoxProblem {
+        f: rastrigin,
+        grad: |_, _| unreachable!("annealing uses values only"),
+        xl: vec![-5.12; 2],
+        xu: vec![5.12; 2],
+        x0: vec![4.5, -4.5],
+    };
+    for seed in 0..8 {
+        let run = anneal(
+            &problem,
+            &AnnealOptions {
+                seed,
+                max_evaluations: 20_000,
+                ..Default::default()
+            },
+        );
+        let s = &run.solution;
+        assert!(s.objective < 1e-9, "seed {seed}: f = {:e}", s.objective);
+        assert!(s.x.iter().all(|v| v.abs() < 1e-6), "seed {seed}: {:?}", s.x);
+    }
+}
