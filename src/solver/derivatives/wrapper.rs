@@ -6,6 +6,10 @@
 //! [`FiniteDifferenceNlp::set_scheme`] (an atomic, so it can be flipped through a shared
 //! reference between solves); [`solve_forward_then_central`] packages the usual strategy:
 //! a forward-difference solve, then a central-difference solve from its result.
+//!
+//! The scheme is shared state of one wrapper: concurrent solves that switch schemes (e.g. the
+//! starts of a multistart) should each build their own wrapper around the problem they are
+//! given, `|p| solve_forward_then_central(&FiniteDifferenceNlp::new(p, options), local)`.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
