@@ -25,6 +25,7 @@ use std::collections::BTreeMap;
 use std::fmt;
 
 use rayon::prelude::*;
+use serde::Serialize;
 
 use super::coloring::ColumnGroups;
 use super::engine::FiniteDifferences;
@@ -61,7 +62,7 @@ impl Default for CheckOptions {
 }
 
 /// Which derivative block an entry belongs to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
 pub enum Block {
     /// ∂f/∂x_col.
     Gradient,
@@ -72,7 +73,7 @@ pub enum Block {
 }
 
 /// One compared entry.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct EntryCheck {
     /// The block.
     pub block: Block,
@@ -93,7 +94,7 @@ pub struct EntryCheck {
 }
 
 /// Summary of one block.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct BlockCheck {
     /// Entries compared (pattern entries, plus failing ones outside the pattern).
     pub checked: usize,
@@ -103,8 +104,9 @@ pub struct BlockCheck {
     pub max_error: f64,
 }
 
-/// What a derivative check found. `Display` prints a short table.
-#[derive(Debug, Clone, PartialEq)]
+/// What a derivative check found. `Display` prints a short table; `Serialize` lets a module
+/// put it in `result.json`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct DerivativeReport {
     /// Variables.
     pub n: usize,
