@@ -18,7 +18,7 @@
 //!     y = sgn(u − ½)·T·[(1 + 1/T)^|2u − 1| − 1] ∈ [−1, 1],     x'_j = x_j + y·r_j
 //! ```
 //! where r_j is the variable's range (xu − xl, or max(1, |x₀_j|) when a bound is infinite);
-//! a value outside the bounds is drawn again (up to 100 times, then clamped).
+//! a value outside the bounds is drawn again (after 100 failed draws the variable keeps its value).
 //!
 //! **Schedules** (D = n). After k generated states and k_a accepted ones
 //!
