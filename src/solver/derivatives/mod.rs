@@ -39,7 +39,8 @@
 //!         c[0] = x[0] * x[0] + x[1] * x[1];
 //!         Ok(())
 //!     }
-//!     fn eval_derivatives(&self, x: &[f64], g: &mut [f64], j: &mut [f64]) -> Result<(), EvalError> {
+//!     fn eval_derivatives(&self, x: &[f64], g: &mut [f64], j: &mut [f64])
+//!         -> Result<(), EvalError> {
 //!         g.copy_from_slice(&[x[1], x[0]]);
 //!         j.copy_from_slice(&[2.0 * x[0], x[1]]); // should be 2·x1
 //!         Ok(())

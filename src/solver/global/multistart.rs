@@ -9,9 +9,9 @@
 //!
 //! Ranking: a result is feasible when its largest violation is at most `feasibility_tolerance`.
 //! Feasible results beat infeasible ones; feasible ones are ranked by objective, infeasible ones
-//! by violation; a NaN objective or violation ranks last; exact ties go to the lower start index. Every start runs to
-//! completion and the ranking is applied after, so the choice never depends on the number of
-//! threads or their timing.
+//! by violation; a NaN objective or violation ranks last; exact ties go to the lower start
+//! index. Every start runs to completion and the ranking is applied after, so the choice never
+//! depends on the number of threads or their timing.
 
 use std::time::Instant;
 
