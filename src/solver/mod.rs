@@ -7,8 +7,10 @@
 //! Entry point: [`solve`]`(&nlp, &options) -> Solution`. Not converging is a [`Status`] in the
 //! [`Solution`], never an `Err`.
 
+pub mod derivatives;
 mod elastic;
 mod evaluator;
+pub mod global;
 pub mod hessian;
 mod log;
 mod merit;
