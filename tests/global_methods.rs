@@ -1,6 +1,5 @@
 //! End-to-end checks of the global methods and the finite-difference fallback with the real
-//! SQP solver. Ignored until `solver::solve` lands; run them with
-//! `cargo test --release --test global_methods -- --include-ignored`.
+//! SQP solver.
 
 use optimize::solver::derivatives::{
     FiniteDifferenceNlp, FiniteDifferenceOptions, solve_forward_then_central,
