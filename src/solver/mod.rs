@@ -7,6 +7,7 @@
 //! Entry point: [`solve`]`(&nlp, &options) -> Solution`. Not converging is a [`Status`] in the
 //! [`Solution`], never an `Err`.
 
+pub mod kkt;
 mod nlp;
 mod options;
 pub mod qp;
