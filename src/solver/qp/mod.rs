@@ -79,3 +79,5 @@ pub struct QpSolution {
     /// Inner iterations.
     pub iterations: usize,
 }
+
+pub mod sparse;

@@ -1,0 +1,762 @@
+//! Sparse convex QP by a primal-dual interior-point method (Mehrotra predictor–corrector).
+//!
+//! ```text
+//!     min ½ dᵀH d + gᵀd   s.t.   dl ≤ d ≤ du,   bl ≤ A d ≤ bu
+//! ```
+//! Inequality rows get a slack s = A d with bl ≤ s ≤ bu; every finite, non-fixed bound is a
+//! complementarity pair (t, z) with t > 0 its distance to the bound, z ≥ 0 its multiplier:
+//! ```text
+//!     H d + g + Aᵀy − z_l + z_u = 0          (dual residual r_d)
+//!     A d − s = 0  /  A_E d − b_E = 0        (primal residual r_p)
+//!     −y − w_l + w_u = 0                     (inequality rows: y = w_u − w_l)
+//!     t ∘ z = σμ                              (complementarity, μ = tᵀz / #pairs)
+//! ```
+//! so that the reported multipliers λ = y and z = z_u − z_l follow [`QpSolution`]'s convention
+//! `Hd + g + Aᵀλ + z = 0`, λ ≤ 0 at an active lower bound, ≥ 0 at an active upper one.
+//! Eliminating the slacks and bound multipliers leaves the quasi-definite system of
+//! [`newton`] (Nocedal & Wright, *Numerical Optimization* 2nd ed., §16.6; Mehrotra 1992; the
+//! bound handling of Gertz & Wright 2003, OOQP). Fixed variables (dl = du) stay at their value
+//! with a free multiplier; free rows get λ = 0. Primal and dual iterates take a common step
+//! (a QP's dual residual involves d), at 0.995 of the distance to the boundary.
+//!
+//! Termination (`tolerance` ε, relative):
+//! `‖r_p‖∞ ≤ ε(1 + max(‖Ad‖∞, ‖s‖∞, ‖b_E‖∞))`, `‖r_d‖∞ ≤ ε(1 + max(‖Hd‖∞, ‖g‖∞, ‖Aᵀy‖∞, ‖z‖∞))`
+//! and `tᵀz ≤ ε(1 + |½dᵀHd + gᵀd|)`.
+//!
+//! Infeasibility: the dual iterates are tested every iteration as a Farkas certificate. With
+//! `S = dlᵀz_l − duᵀz_u + blᵀw_l − buᵀw_u − b_Eᵀy_E` (finite bounds; fixed variables add
+//! `dl_j (Aᵀy)_j`) and `R = ‖Aᵀy − z_l + z_u‖∞` (fixed variables excluded), every feasible d
+//! satisfies `S ≤ ‖d‖₁ R`; so `S > 10⁶ (1 + ‖d_k‖₁) R` proves that no feasible point lies within
+//! that ℓ₁ radius, and the QP is reported [`QpStatus::Infeasible`]. Unboundedness: when
+//! ‖d‖∞ exceeds 10⁸ times the data scale, the normalized d̂ is tested as a direction of
+//! recession with `gᵀd̂ < 0` and `d̂ᵀH d̂ ≈ 0`.
+//!
+//! Indefinite H is convexified first ([`newton`]: IPOPT-style inertia correction); the shift
+//! δ_c actually used is reported in [`SparseQpInfo::convexification`] — the QP solved is then
+//! the one with H + δ_c I.
+
+mod layout;
+mod newton;
+mod operators;
+#[cfg(test)]
+mod tests;
+
+use layout::{Layout, RowKind};
+use newton::NewtonSystem;
+use operators::{a_times, a_transpose_times, dot, hessian_times, inf_norm};
+
+use super::{QpHessian, QpProblem, QpSolution, QpStatus};
+
+/// Fraction of the distance to the boundary taken by a step.
+const STEP_TO_BOUNDARY: f64 = 0.995;
+/// Radius factor of the infeasibility certificate (see the module header).
+const CERTIFICATE_RADIUS: f64 = 1e6;
+/// ‖d‖∞ relative to the data scale beyond which unboundedness is tested.
+const DIVERGENCE: f64 = 1e8;
+
+/// Default iteration limit.
+pub const DEFAULT_MAX_ITERATIONS: usize = 200;
+
+/// What one solve did besides the [`QpSolution`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SparseQpInfo {
+    /// The shift δ_c ≥ 0 added to H to make the QP convex (0 when H already was).
+    pub convexification: f64,
+    /// Numeric KKT factorizations performed (convexification trials included).
+    pub factorizations: usize,
+    /// True when the symbolic analysis of the previous solve was reused.
+    pub reused_symbolic: bool,
+    /// Final relative primal residual.
+    pub primal_residual: f64,
+    /// Final relative dual residual.
+    pub dual_residual: f64,
+    /// Final relative complementarity tᵀz / (1 + |objective|).
+    pub complementarity: f64,
+}
+
+/// Solves one QP with a fresh workspace. `tolerance` is the relative KKT tolerance ε of the
+/// module header (e.g. 1e-8). The sparse [`QpHessian::SparseLower`] form may be indefinite.
+pub fn solve(problem: &QpProblem<'_>, tolerance: f64) -> QpSolution {
+    SparseQp::new().solve(problem, tolerance).0
+}
+
+/// A reusable solver: keeps the symbolic analysis across QPs with the same sparsity pattern
+/// (as successive SQP subproblems have) and all iteration workspaces.
+pub struct SparseQp {
+    /// Iteration limit.
+    pub max_iterations: usize,
+    system: Option<NewtonSystem>,
+    layout: Layout,
+    ws: Workspace,
+}
+
+impl Default for SparseQp {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Primal-dual variables (or a direction in them).
+#[derive(Default)]
+struct Point {
+    d: Vec<f64>,
+    s: Vec<f64>,
+    y: Vec<f64>,
+    zl: Vec<f64>,
+    zu: Vec<f64>,
+    wl: Vec<f64>,
+    wu: Vec<f64>,
+}
+
+impl Point {
+    fn resize(&mut self, n: usize, m: usize) {
+        for v in [&mut self.d, &mut self.zl, &mut self.zu] {
+            v.clear();
+            v.resize(n, 0.0);
+        }
+        for v in [&mut self.s, &mut self.y, &mut self.wl, &mut self.wu] {
+            v.clear();
+            v.resize(m, 0.0);
+        }
+    }
+}
+
+/// Everything an iteration touches, allocated once per problem size.
+#[derive(Default)]
+struct Workspace {
+    x: Point,
+    dir: Point,
+    aff: Point,
+    hd: Vec<f64>,
+    aty: Vec<f64>,
+    ad: Vec<f64>,
+    rd: Vec<f64>,
+    rp: Vec<f64>,
+    rs: Vec<f64>,
+    sig_d: Vec<f64>,
+    sig_s: Vec<f64>,
+    dual_diag: Vec<f64>,
+    rcl: Vec<f64>,
+    rcu: Vec<f64>,
+    rcwl: Vec<f64>,
+    rcwu: Vec<f64>,
+    rhs: Vec<f64>,
+    tmp: Vec<f64>,
+}
+
+impl Workspace {
+    fn resize(&mut self, n: usize, m: usize, p: usize) {
+        self.x.resize(n, m);
+        self.dir.resize(n, m);
+        self.aff.resize(n, m);
+        for v in [
+            &mut self.hd,
+            &mut self.aty,
+            &mut self.rd,
+            &mut self.sig_d,
+            &mut self.rcl,
+            &mut self.rcu,
+        ] {
+            v.clear();
+            v.resize(n, 0.0);
+        }
+        for v in [
+            &mut self.ad,
+            &mut self.rp,
+            &mut self.rs,
+            &mut self.sig_s,
+            &mut self.dual_diag,
+            &mut self.rcwl,
+            &mut self.rcwu,
+        ] {
+            v.clear();
+            v.resize(m, 0.0);
+        }
+        self.rhs.clear();
+        self.rhs.resize(n + m, 0.0);
+        self.tmp.clear();
+        self.tmp.resize(2 * p, 0.0);
+    }
+}
+
+/// Convergence measures of the current iterate.
+#[derive(Debug, Clone, Copy)]
+struct Measures {
+    primal: f64,
+    dual: f64,
+    gap: f64,
+    mu: f64,
+}
+
+impl SparseQp {
+    /// An empty solver; buffers grow on the first solve.
+    pub fn new() -> Self {
+        SparseQp {
+            max_iterations: DEFAULT_MAX_ITERATIONS,
+            system: None,
+            layout: Layout::default(),
+            ws: Workspace::default(),
+        }
+    }
+
+    /// Solves `problem` to relative tolerance `tolerance`; see the module header.
+    pub fn solve(&mut self, qp: &QpProblem<'_>, tolerance: f64) -> (QpSolution, SparseQpInfo) {
+        let (n, m) = (qp.g.len(), qp.a.nrows());
+        let mut info = SparseQpInfo::default();
+        let fail = |status| QpSolution {
+            status,
+            d: vec![0.0; n],
+            lambda: vec![0.0; m],
+            z: vec![0.0; n],
+            iterations: 0,
+        };
+        if !dimensions_agree(qp) {
+            return (fail(QpStatus::Numerical), info);
+        }
+        if self.layout.classify(qp).is_err() {
+            return (fail(QpStatus::Infeasible), info);
+        }
+        info.reused_symbolic = self.system.as_ref().is_some_and(|s| s.matches(qp));
+        if !info.reused_symbolic {
+            self.system = None;
+            match NewtonSystem::new(qp) {
+                Ok(system) => self.system = Some(system),
+                Err(_) => return (fail(QpStatus::Numerical), info),
+            }
+        }
+        let Some(system) = self.system.as_mut() else {
+            return (fail(QpStatus::Numerical), info);
+        };
+        let factorizations_before = system.factorizations;
+        let p = match qp.h {
+            QpHessian::LowRank { w, .. } => w.ncols(),
+            _ => 0,
+        };
+        let ws = &mut self.ws;
+        let layout = &self.layout;
+        ws.resize(n, m, p);
+        let shift = match system.convexify(qp, layout, &mut ws.sig_d, &mut ws.dual_diag) {
+            Ok(Some(shift)) => shift,
+            _ => return (fail(QpStatus::Numerical), info),
+        };
+        info.convexification = shift;
+        initial_point(qp, layout, ws);
+        let mut status = QpStatus::IterationLimit;
+        let mut iterations = 0;
+        while iterations <= self.max_iterations {
+            let measures = residuals(qp, layout, ws, shift);
+            info.primal_residual = measures.primal;
+            info.dual_residual = measures.dual;
+            info.complementarity = measures.gap;
+            if !(measures.primal.is_finite() && measures.dual.is_finite() && measures.gap.is_finite())
+            {
+                status = QpStatus::Numerical;
+                break;
+            }
+            if measures.primal <= tolerance && measures.dual <= tolerance && measures.gap <= tolerance
+            {
+                status = QpStatus::Optimal;
+                break;
+            }
+            if measures.primal > tolerance && infeasibility_certified(qp, layout, ws) {
+                status = QpStatus::Infeasible;
+                break;
+            }
+            if unboundedness_detected(qp, layout, ws, shift) {
+                status = QpStatus::Unbounded;
+                break;
+            }
+            if iterations == self.max_iterations {
+                break;
+            }
+            iterations += 1;
+            if iterate(qp, layout, ws, system, shift, measures.mu).is_err() {
+                status = QpStatus::Numerical;
+                break;
+            }
+        }
+        info.factorizations = system.factorizations - factorizations_before;
+        (solution(qp, layout, ws, status, iterations), info)
+    }
+}
+
+fn dimensions_agree(qp: &QpProblem<'_>) -> bool {
+    let (n, m) = (qp.g.len(), qp.a.nrows());
+    let h_ok = match qp.h {
+        QpHessian::Dense(h) => h.nrows() == n && h.ncols() == n,
+        QpHessian::SparseLower(h) => h.nrows() == n && h.ncols() == n,
+        QpHessian::LowRank { w, m: mm, .. } => {
+            w.nrows() == n && mm.nrows() == w.ncols() && mm.ncols() == w.ncols()
+        }
+    };
+    h_ok && qp.a.ncols() == n
+        && qp.dl.len() == n
+        && qp.du.len() == n
+        && qp.bl.len() == m
+        && qp.bu.len() == m
+}
+
+/// Interior value inside [l, u] at least `margin` (shrunk for narrow intervals) from each
+/// finite bound, as close to `v` as possible.
+fn push_inside(v: f64, l: f64, u: f64) -> f64 {
+    let margin = if l.is_finite() && u.is_finite() { (0.25 * (u - l)).min(1.0) } else { 1.0 };
+    let mut v = v;
+    if l.is_finite() {
+        v = v.max(l + margin);
+    }
+    if u.is_finite() {
+        v = v.min(u - margin);
+    }
+    v
+}
+
+fn initial_point(qp: &QpProblem<'_>, layout: &Layout, ws: &mut Workspace) {
+    let x = &mut ws.x;
+    for j in 0..qp.g.len() {
+        x.d[j] = if layout.fixed[j] { qp.dl[j] } else { push_inside(0.0, qp.dl[j], qp.du[j]) };
+        x.zl[j] = if layout.var_lower[j] { 1.0 } else { 0.0 };
+        x.zu[j] = if layout.var_upper[j] { 1.0 } else { 0.0 };
+    }
+    a_times(qp.a, &x.d, &mut ws.ad);
+    for i in 0..qp.a.nrows() {
+        x.s[i] = if layout.row[i] == RowKind::Inequality {
+            push_inside(ws.ad[i], qp.bl[i], qp.bu[i])
+        } else {
+            ws.ad[i]
+        };
+        x.wl[i] = if layout.row_lower[i] { 1.0 } else { 0.0 };
+        x.wu[i] = if layout.row_upper[i] { 1.0 } else { 0.0 };
+        x.y[i] = x.wu[i] - x.wl[i];
+    }
+}
+
+/// Computes the residuals into the workspace and returns the relative measures.
+fn residuals(qp: &QpProblem<'_>, layout: &Layout, ws: &mut Workspace, shift: f64) -> Measures {
+    let x = &ws.x;
+    hessian_times(&qp.h, &x.d, &mut ws.hd, &mut ws.tmp);
+    for (hd, d) in ws.hd.iter_mut().zip(&x.d) {
+        *hd += shift * d;
+    }
+    a_transpose_times(qp.a, &x.y, &mut ws.aty);
+    a_times(qp.a, &x.d, &mut ws.ad);
+    let mut dual_scale = inf_norm(qp.g);
+    for j in 0..qp.g.len() {
+        ws.rd[j] = if layout.fixed[j] {
+            0.0
+        } else {
+            dual_scale = dual_scale.max(ws.hd[j].abs()).max(ws.aty[j].abs());
+            dual_scale = dual_scale.max(x.zl[j]).max(x.zu[j]);
+            ws.hd[j] + qp.g[j] + ws.aty[j] - x.zl[j] + x.zu[j]
+        };
+    }
+    let mut primal_scale = inf_norm(&ws.ad);
+    let mut gap = 0.0;
+    for i in 0..qp.a.nrows() {
+        ws.rs[i] = 0.0;
+        ws.rp[i] = match layout.row[i] {
+            RowKind::Free => 0.0,
+            RowKind::Equality => {
+                primal_scale = primal_scale.max(qp.bl[i].abs());
+                ws.ad[i] - qp.bl[i]
+            }
+            RowKind::Inequality => {
+                primal_scale = primal_scale.max(x.s[i].abs());
+                ws.rs[i] = -x.y[i] - x.wl[i] + x.wu[i];
+                if layout.row_lower[i] {
+                    gap += (x.s[i] - qp.bl[i]) * x.wl[i];
+                }
+                if layout.row_upper[i] {
+                    gap += (qp.bu[i] - x.s[i]) * x.wu[i];
+                }
+                ws.ad[i] - x.s[i]
+            }
+        };
+    }
+    for j in 0..qp.g.len() {
+        if layout.var_lower[j] {
+            gap += (x.d[j] - qp.dl[j]) * x.zl[j];
+        }
+        if layout.var_upper[j] {
+            gap += (qp.du[j] - x.d[j]) * x.zu[j];
+        }
+    }
+    let objective = 0.5 * dot(&x.d, &ws.hd) + dot(qp.g, &x.d);
+    Measures {
+        primal: inf_norm(&ws.rp) / (1.0 + primal_scale),
+        dual: inf_norm(&ws.rd) / (1.0 + dual_scale),
+        gap: gap / (1.0 + objective.abs()),
+        mu: if layout.pairs > 0 { gap / layout.pairs as f64 } else { 0.0 },
+    }
+}
+
+/// One predictor–corrector iteration.
+fn iterate(
+    qp: &QpProblem<'_>,
+    layout: &Layout,
+    ws: &mut Workspace,
+    system: &mut NewtonSystem,
+    shift: f64,
+    mu: f64,
+) -> Result<(), crate::solver::kkt::KktError> {
+    let (n, m) = (qp.g.len(), qp.a.nrows());
+    // Barrier Hessian terms.
+    for j in 0..n {
+        let x = &ws.x;
+        let mut sigma = shift;
+        if layout.var_lower[j] {
+            sigma += x.zl[j] / (x.d[j] - qp.dl[j]);
+        }
+        if layout.var_upper[j] {
+            sigma += x.zu[j] / (qp.du[j] - x.d[j]);
+        }
+        ws.sig_d[j] = sigma;
+    }
+    for i in 0..m {
+        let x = &ws.x;
+        let mut sigma = 0.0;
+        if layout.row_lower[i] {
+            sigma += x.wl[i] / (x.s[i] - qp.bl[i]);
+        }
+        if layout.row_upper[i] {
+            sigma += x.wu[i] / (qp.bu[i] - x.s[i]);
+        }
+        ws.sig_s[i] = sigma;
+        ws.dual_diag[i] = match layout.row[i] {
+            RowKind::Free => -1.0,
+            RowKind::Equality => 0.0,
+            RowKind::Inequality => -1.0 / sigma,
+        };
+    }
+    system.assemble(qp, layout, &ws.sig_d, |_| true, &ws.dual_diag);
+    system.factor(qp, layout)?;
+
+    // Predictor (affine scaling): complementarity target 0.
+    complementarity_targets(qp, layout, ws, 0.0, false);
+    direction(qp, layout, ws, system)?;
+    std::mem::swap(&mut ws.aff, &mut ws.dir);
+    let alpha_aff = max_step(qp, layout, &ws.x, &ws.aff);
+    let sigma = if layout.pairs > 0 && mu > 0.0 {
+        let mu_aff = complementarity_after(qp, layout, &ws.x, &ws.aff, alpha_aff)
+            / layout.pairs as f64;
+        (mu_aff / mu).clamp(0.0, 1.0).powi(3)
+    } else {
+        0.0
+    };
+    // Corrector: centring plus the second-order term of the predictor.
+    complementarity_targets(qp, layout, ws, sigma * mu, true);
+    direction(qp, layout, ws, system)?;
+    let alpha = (STEP_TO_BOUNDARY * max_step(qp, layout, &ws.x, &ws.dir)).min(1.0);
+    let (x, dir) = (&mut ws.x, &ws.dir);
+    for (a, b) in [
+        (&mut x.d, &dir.d),
+        (&mut x.s, &dir.s),
+        (&mut x.y, &dir.y),
+        (&mut x.zl, &dir.zl),
+        (&mut x.zu, &dir.zu),
+        (&mut x.wl, &dir.wl),
+        (&mut x.wu, &dir.wu),
+    ] {
+        for (ai, bi) in a.iter_mut().zip(b.iter()) {
+            *ai += alpha * bi;
+        }
+    }
+    Ok(())
+}
+
+/// Complementarity right-hand sides `target − t∘z (− Δt_aff∘Δz_aff when corrected)`.
+fn complementarity_targets(
+    qp: &QpProblem<'_>,
+    layout: &Layout,
+    ws: &mut Workspace,
+    target: f64,
+    corrected: bool,
+) {
+    let (x, aff) = (&ws.x, &ws.aff);
+    let c = if corrected { 1.0 } else { 0.0 };
+    for j in 0..qp.g.len() {
+        ws.rcl[j] = if layout.var_lower[j] {
+            target - (x.d[j] - qp.dl[j]) * x.zl[j] - c * aff.d[j] * aff.zl[j]
+        } else {
+            0.0
+        };
+        ws.rcu[j] = if layout.var_upper[j] {
+            target - (qp.du[j] - x.d[j]) * x.zu[j] + c * aff.d[j] * aff.zu[j]
+        } else {
+            0.0
+        };
+    }
+    for i in 0..qp.a.nrows() {
+        ws.rcwl[i] = if layout.row_lower[i] {
+            target - (x.s[i] - qp.bl[i]) * x.wl[i] - c * aff.s[i] * aff.wl[i]
+        } else {
+            0.0
+        };
+        ws.rcwu[i] = if layout.row_upper[i] {
+            target - (qp.bu[i] - x.s[i]) * x.wu[i] + c * aff.s[i] * aff.wu[i]
+        } else {
+            0.0
+        };
+    }
+}
+
+/// Solves the Newton system for the current complementarity targets into `ws.dir`.
+fn direction(
+    qp: &QpProblem<'_>,
+    layout: &Layout,
+    ws: &mut Workspace,
+    system: &mut NewtonSystem,
+) -> Result<(), crate::solver::kkt::KktError> {
+    let (n, m) = (qp.g.len(), qp.a.nrows());
+    let x = &ws.x;
+    for j in 0..n {
+        ws.rhs[j] = if layout.fixed[j] {
+            0.0
+        } else {
+            let mut rho = -ws.rd[j];
+            if layout.var_lower[j] {
+                rho += ws.rcl[j] / (x.d[j] - qp.dl[j]);
+            }
+            if layout.var_upper[j] {
+                rho -= ws.rcu[j] / (qp.du[j] - x.d[j]);
+            }
+            rho
+        };
+    }
+    for i in 0..m {
+        ws.rhs[n + i] = match layout.row[i] {
+            RowKind::Free => 0.0,
+            RowKind::Equality => -ws.rp[i],
+            RowKind::Inequality => -ws.rp[i] + slack_rho(qp, layout, ws, i) / ws.sig_s[i],
+        };
+    }
+    system.solve(qp, layout, &mut ws.rhs)?;
+    let x = &ws.x;
+    let dir = &mut ws.dir;
+    dir.d.copy_from_slice(&ws.rhs[..n]);
+    dir.y.copy_from_slice(&ws.rhs[n..]);
+    for j in 0..n {
+        dir.zl[j] = if layout.var_lower[j] {
+            (ws.rcl[j] - x.zl[j] * dir.d[j]) / (x.d[j] - qp.dl[j])
+        } else {
+            0.0
+        };
+        dir.zu[j] = if layout.var_upper[j] {
+            (ws.rcu[j] + x.zu[j] * dir.d[j]) / (qp.du[j] - x.d[j])
+        } else {
+            0.0
+        };
+    }
+    for i in 0..m {
+        if layout.row[i] != RowKind::Inequality {
+            let dir = &mut ws.dir;
+            dir.s[i] = 0.0;
+            dir.wl[i] = 0.0;
+            dir.wu[i] = 0.0;
+            continue;
+        }
+        let ds = (slack_rho(qp, layout, ws, i) + ws.rhs[n + i]) / ws.sig_s[i];
+        let (x, dir) = (&ws.x, &mut ws.dir);
+        dir.s[i] = ds;
+        dir.wl[i] = if layout.row_lower[i] {
+            (ws.rcwl[i] - x.wl[i] * ds) / (x.s[i] - qp.bl[i])
+        } else {
+            0.0
+        };
+        dir.wu[i] = if layout.row_upper[i] {
+            (ws.rcwu[i] + x.wu[i] * ds) / (qp.bu[i] - x.s[i])
+        } else {
+            0.0
+        };
+    }
+    Ok(())
+}
+
+/// ρ_s of inequality row i: `−r_s + rcw_l/u_l − rcw_u/u_u`.
+fn slack_rho(qp: &QpProblem<'_>, layout: &Layout, ws: &Workspace, i: usize) -> f64 {
+    let x = &ws.x;
+    let mut rho = -ws.rs[i];
+    if layout.row_lower[i] {
+        rho += ws.rcwl[i] / (x.s[i] - qp.bl[i]);
+    }
+    if layout.row_upper[i] {
+        rho -= ws.rcwu[i] / (qp.bu[i] - x.s[i]);
+    }
+    rho
+}
+
+/// Largest α ≤ ∞ keeping every slack and multiplier nonnegative along `dir`.
+fn max_step(qp: &QpProblem<'_>, layout: &Layout, x: &Point, dir: &Point) -> f64 {
+    let mut alpha = f64::INFINITY;
+    let mut limit = |value: f64, change: f64| {
+        if change < 0.0 {
+            alpha = alpha.min(-value / change);
+        }
+    };
+    for j in 0..qp.g.len() {
+        if layout.var_lower[j] {
+            limit(x.d[j] - qp.dl[j], dir.d[j]);
+            limit(x.zl[j], dir.zl[j]);
+        }
+        if layout.var_upper[j] {
+            limit(qp.du[j] - x.d[j], -dir.d[j]);
+            limit(x.zu[j], dir.zu[j]);
+        }
+    }
+    for i in 0..qp.a.nrows() {
+        if layout.row_lower[i] {
+            limit(x.s[i] - qp.bl[i], dir.s[i]);
+            limit(x.wl[i], dir.wl[i]);
+        }
+        if layout.row_upper[i] {
+            limit(qp.bu[i] - x.s[i], -dir.s[i]);
+            limit(x.wu[i], dir.wu[i]);
+        }
+    }
+    alpha.min(1.0)
+}
+
+/// tᵀz after a step α along `dir`.
+fn complementarity_after(
+    qp: &QpProblem<'_>,
+    layout: &Layout,
+    x: &Point,
+    dir: &Point,
+    alpha: f64,
+) -> f64 {
+    let mut gap = 0.0;
+    for j in 0..qp.g.len() {
+        let d = x.d[j] + alpha * dir.d[j];
+        if layout.var_lower[j] {
+            gap += (d - qp.dl[j]) * (x.zl[j] + alpha * dir.zl[j]);
+        }
+        if layout.var_upper[j] {
+            gap += (qp.du[j] - d) * (x.zu[j] + alpha * dir.zu[j]);
+        }
+    }
+    for i in 0..qp.a.nrows() {
+        let s = x.s[i] + alpha * dir.s[i];
+        if layout.row_lower[i] {
+            gap += (s - qp.bl[i]) * (x.wl[i] + alpha * dir.wl[i]);
+        }
+        if layout.row_upper[i] {
+            gap += (qp.bu[i] - s) * (x.wu[i] + alpha * dir.wu[i]);
+        }
+    }
+    gap
+}
+
+/// The Farkas test of the module header on the current dual iterate (uses `ws.aty`).
+fn infeasibility_certified(qp: &QpProblem<'_>, layout: &Layout, ws: &Workspace) -> bool {
+    let x = &ws.x;
+    let mut support = 0.0;
+    let mut residual = 0.0f64;
+    let mut d_norm1 = 0.0;
+    for j in 0..qp.g.len() {
+        d_norm1 += x.d[j].abs();
+        if layout.fixed[j] {
+            support += qp.dl[j] * ws.aty[j];
+            continue;
+        }
+        if layout.var_lower[j] {
+            support += qp.dl[j] * x.zl[j];
+        }
+        if layout.var_upper[j] {
+            support -= qp.du[j] * x.zu[j];
+        }
+        residual = residual.max((ws.aty[j] - x.zl[j] + x.zu[j]).abs());
+    }
+    for i in 0..qp.a.nrows() {
+        match layout.row[i] {
+            RowKind::Free => {}
+            RowKind::Equality => support -= qp.bl[i] * x.y[i],
+            RowKind::Inequality => {
+                if layout.row_lower[i] {
+                    support += qp.bl[i] * x.wl[i];
+                }
+                if layout.row_upper[i] {
+                    support -= qp.bu[i] * x.wu[i];
+                }
+            }
+        }
+    }
+    support > 0.0 && support > CERTIFICATE_RADIUS * (1.0 + d_norm1) * residual
+}
+
+/// Tests whether the (diverging) iterate d points along a direction of unbounded descent.
+fn unboundedness_detected(
+    qp: &QpProblem<'_>,
+    layout: &Layout,
+    ws: &Workspace,
+    shift: f64,
+) -> bool {
+    let d = &ws.x.d;
+    let norm = inf_norm(d);
+    let mut scale = 1.0f64.max(inf_norm(qp.g));
+    for v in qp.dl.iter().chain(qp.du).chain(qp.bl).chain(qp.bu) {
+        if v.is_finite() {
+            scale = scale.max(v.abs());
+        }
+    }
+    if norm <= DIVERGENCE * scale {
+        return false;
+    }
+    let slope = dot(qp.g, d) / norm;
+    // ws.hd already includes the convexification shift.
+    let curvature = dot(d, &ws.hd) / (norm * norm);
+    let _ = shift;
+    let eps = 1e-6;
+    if slope >= 0.0 || curvature > eps * slope.abs() {
+        return false;
+    }
+    for j in 0..qp.g.len() {
+        let v = d[j] / norm;
+        if layout.fixed[j] && v.abs() > eps
+            || layout.var_lower[j] && v < -eps
+            || layout.var_upper[j] && v > eps
+        {
+            return false;
+        }
+    }
+    for i in 0..qp.a.nrows() {
+        let v = ws.ad[i] / norm;
+        let bad = match layout.row[i] {
+            RowKind::Free => false,
+            RowKind::Equality => v.abs() > eps,
+            RowKind::Inequality => {
+                layout.row_lower[i] && v < -eps || layout.row_upper[i] && v > eps
+            }
+        };
+        if bad {
+            return false;
+        }
+    }
+    true
+}
+
+/// Packs the iterate into a [`QpSolution`] with the shared sign convention.
+fn solution(
+    qp: &QpProblem<'_>,
+    layout: &Layout,
+    ws: &Workspace,
+    status: QpStatus,
+    iterations: usize,
+) -> QpSolution {
+    let x = &ws.x;
+    let z = (0..qp.g.len())
+        .map(|j| {
+            if layout.fixed[j] {
+                // Free multiplier of d_j = dl_j: closes the stationarity row exactly.
+                -(ws.hd[j] + qp.g[j] + ws.aty[j])
+            } else {
+                x.zu[j] - x.zl[j]
+            }
+        })
+        .collect();
+    QpSolution {
+        status,
+        d: x.d.clone(),
+        lambda: x.y.clone(),
+        z,
+        iterations,
+    }
+}
