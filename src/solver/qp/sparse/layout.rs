@@ -72,10 +72,15 @@ impl Layout {
             self.row_lower.push(ineq && l.is_finite());
             self.row_upper.push(ineq && u.is_finite());
         }
-        self.pairs = [&self.var_lower, &self.var_upper, &self.row_lower, &self.row_upper]
-            .iter()
-            .map(|flags| flags.iter().filter(|&&b| b).count())
-            .sum();
+        self.pairs = [
+            &self.var_lower,
+            &self.var_upper,
+            &self.row_lower,
+            &self.row_upper,
+        ]
+        .iter()
+        .map(|flags| flags.iter().filter(|&&b| b).count())
+        .sum();
         Ok(())
     }
 }

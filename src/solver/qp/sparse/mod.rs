@@ -20,7 +20,7 @@
 //! (a QP's dual residual involves d), at 0.995 of the distance to the boundary.
 //!
 //! Termination (`tolerance` ε, relative):
-//! `‖r_p‖∞ ≤ ε(1 + max(‖Ad‖∞, ‖s‖∞, ‖b_E‖∞))`, `‖r_d‖∞ ≤ ε(1 + max(‖Hd‖∞, ‖g‖∞, ‖Aᵀy‖∞, ‖z‖∞))`
+//! `|r_p,i| ≤ ε(1 + max(|(Ad)_i|, |s_i| or |b_i|))` row by row, `‖r_d‖∞ ≤ ε(1 + max(‖Hd‖∞, ‖g‖∞, ‖Aᵀy‖∞, ‖z‖∞))`
 //! and `tᵀz ≤ ε(1 + |½dᵀHd + gᵀd|)`.
 //!
 //! Infeasibility: the dual iterates are tested every iteration as a Farkas certificate. With
@@ -53,6 +53,9 @@ const STEP_TO_BOUNDARY: f64 = 0.995;
 const CERTIFICATE_RADIUS: f64 = 1e6;
 /// ‖d‖∞ relative to the data scale beyond which unboundedness is tested.
 const DIVERGENCE: f64 = 1e8;
+
+/// Iterations over which a primal residual that fails to halve counts as stalled.
+const STALL_WINDOW: usize = 5;
 
 /// Default iteration limit.
 pub const DEFAULT_MAX_ITERATIONS: usize = 200;
@@ -109,6 +112,16 @@ struct Point {
 }
 
 impl Point {
+    fn copy_from(&mut self, other: &Point) {
+        self.d.copy_from_slice(&other.d);
+        self.s.copy_from_slice(&other.s);
+        self.y.copy_from_slice(&other.y);
+        self.zl.copy_from_slice(&other.zl);
+        self.zu.copy_from_slice(&other.zu);
+        self.wl.copy_from_slice(&other.wl);
+        self.wu.copy_from_slice(&other.wu);
+    }
+
     fn resize(&mut self, n: usize, m: usize) {
         for v in [&mut self.d, &mut self.zl, &mut self.zu] {
             v.clear();
@@ -125,6 +138,7 @@ impl Point {
 #[derive(Default)]
 struct Workspace {
     x: Point,
+    backup: Point,
     dir: Point,
     aff: Point,
     hd: Vec<f64>,
@@ -147,6 +161,7 @@ struct Workspace {
 impl Workspace {
     fn resize(&mut self, n: usize, m: usize, p: usize) {
         self.x.resize(n, m);
+        self.backup.resize(n, m);
         self.dir.resize(n, m);
         self.aff.resize(n, m);
         for v in [
@@ -243,26 +258,43 @@ impl SparseQp {
         initial_point(qp, layout, ws);
         let mut status = QpStatus::IterationLimit;
         let mut iterations = 0;
+        // Relative primal residuals of the last STALL_WINDOW + 1 iterations (ring buffer).
+        let mut primal_history = [f64::INFINITY; STALL_WINDOW + 1];
+        let mut previous: Option<Measures> = None;
+        let mut stalled = false;
         while iterations <= self.max_iterations {
             let measures = residuals(qp, layout, ws, shift);
+            if !(measures.primal.is_finite()
+                && measures.dual.is_finite()
+                && measures.gap.is_finite())
+            {
+                // Return the last finite iterate (slacks rounding to zero end here).
+                std::mem::swap(&mut ws.x, &mut ws.backup);
+                residuals(qp, layout, ws, shift);
+                status = breakdown_status(previous, stalled, tolerance);
+                break;
+            }
             info.primal_residual = measures.primal;
             info.dual_residual = measures.dual;
             info.complementarity = measures.gap;
-            if !(measures.primal.is_finite() && measures.dual.is_finite() && measures.gap.is_finite())
-            {
-                status = QpStatus::Numerical;
-                break;
-            }
-            if measures.primal <= tolerance && measures.dual <= tolerance && measures.gap <= tolerance
+            if measures.primal <= tolerance
+                && measures.dual <= tolerance
+                && measures.gap <= tolerance
             {
                 status = QpStatus::Optimal;
                 break;
             }
-            if measures.primal > tolerance && infeasibility_certified(qp, layout, ws) {
+            primal_history[iterations % (STALL_WINDOW + 1)] = measures.primal;
+            let window_start = primal_history[(iterations + 1) % (STALL_WINDOW + 1)];
+            stalled = iterations >= STALL_WINDOW && measures.primal > 0.5 * window_start;
+            if measures.primal > tolerance
+                && (infeasibility_certified(qp, layout, ws)
+                    || stalled && converged_except_feasibility(measures, tolerance))
+            {
                 status = QpStatus::Infeasible;
                 break;
             }
-            if unboundedness_detected(qp, layout, ws, shift) {
+            if unboundedness_detected(qp, layout, ws) {
                 status = QpStatus::Unbounded;
                 break;
             }
@@ -270,13 +302,39 @@ impl SparseQp {
                 break;
             }
             iterations += 1;
+            previous = Some(measures);
+            ws.backup.copy_from(&ws.x);
             if iterate(qp, layout, ws, system, shift, measures.mu).is_err() {
-                status = QpStatus::Numerical;
+                status = breakdown_status(previous, stalled, tolerance);
                 break;
             }
         }
         info.factorizations = system.factorizations - factorizations_before;
         (solution(qp, layout, ws, status, iterations), info)
+    }
+}
+
+/// Dual feasibility and complementarity reached while the primal residual is larger than the
+/// complementarity: the iterates approach a least-infeasible point, the signature of an
+/// infeasible QP when the primal residual has also stopped decreasing.
+fn converged_except_feasibility(measures: Measures, tolerance: f64) -> bool {
+    measures.primal > tolerance && measures.dual <= tolerance && measures.gap <= measures.primal
+}
+
+/// Status after a factorization breakdown or a non-finite iterate. The duals of an infeasible
+/// QP diverge and its slacks shrink until they round to zero, so a breakdown after a dual
+/// feasible iterate whose primal residual had converged except for feasibility, or had
+/// stalled, means infeasible; anything else is a numerical failure.
+fn breakdown_status(previous: Option<Measures>, stalled: bool, tolerance: f64) -> QpStatus {
+    match previous {
+        Some(m)
+            if m.primal > tolerance
+                && m.dual <= tolerance
+                && (stalled || converged_except_feasibility(m, tolerance)) =>
+        {
+            QpStatus::Infeasible
+        }
+        _ => QpStatus::Numerical,
     }
 }
 
@@ -299,7 +357,11 @@ fn dimensions_agree(qp: &QpProblem<'_>) -> bool {
 /// Interior value inside [l, u] at least `margin` (shrunk for narrow intervals) from each
 /// finite bound, as close to `v` as possible.
 fn push_inside(v: f64, l: f64, u: f64) -> f64 {
-    let margin = if l.is_finite() && u.is_finite() { (0.25 * (u - l)).min(1.0) } else { 1.0 };
+    let margin = if l.is_finite() && u.is_finite() {
+        (0.25 * (u - l)).min(1.0)
+    } else {
+        1.0
+    };
     let mut v = v;
     if l.is_finite() {
         v = v.max(l + margin);
@@ -313,7 +375,11 @@ fn push_inside(v: f64, l: f64, u: f64) -> f64 {
 fn initial_point(qp: &QpProblem<'_>, layout: &Layout, ws: &mut Workspace) {
     let x = &mut ws.x;
     for j in 0..qp.g.len() {
-        x.d[j] = if layout.fixed[j] { qp.dl[j] } else { push_inside(0.0, qp.dl[j], qp.du[j]) };
+        x.d[j] = if layout.fixed[j] {
+            qp.dl[j]
+        } else {
+            push_inside(0.0, qp.dl[j], qp.du[j])
+        };
         x.zl[j] = if layout.var_lower[j] { 1.0 } else { 0.0 };
         x.zu[j] = if layout.var_upper[j] { 1.0 } else { 0.0 };
     }
@@ -349,18 +415,15 @@ fn residuals(qp: &QpProblem<'_>, layout: &Layout, ws: &mut Workspace, shift: f64
             ws.hd[j] + qp.g[j] + ws.aty[j] - x.zl[j] + x.zu[j]
         };
     }
-    let mut primal_scale = inf_norm(&ws.ad);
+    // Row-wise relative primal residual, so that one large row does not mask another.
+    let mut primal = 0.0f64;
     let mut gap = 0.0;
     for i in 0..qp.a.nrows() {
         ws.rs[i] = 0.0;
         ws.rp[i] = match layout.row[i] {
             RowKind::Free => 0.0,
-            RowKind::Equality => {
-                primal_scale = primal_scale.max(qp.bl[i].abs());
-                ws.ad[i] - qp.bl[i]
-            }
+            RowKind::Equality => ws.ad[i] - qp.bl[i],
             RowKind::Inequality => {
-                primal_scale = primal_scale.max(x.s[i].abs());
                 ws.rs[i] = -x.y[i] - x.wl[i] + x.wu[i];
                 if layout.row_lower[i] {
                     gap += (x.s[i] - qp.bl[i]) * x.wl[i];
@@ -371,6 +434,12 @@ fn residuals(qp: &QpProblem<'_>, layout: &Layout, ws: &mut Workspace, shift: f64
                 ws.ad[i] - x.s[i]
             }
         };
+        let target = if layout.row[i] == RowKind::Equality {
+            qp.bl[i]
+        } else {
+            x.s[i]
+        };
+        primal = primal.max(ws.rp[i].abs() / (1.0 + ws.ad[i].abs().max(target.abs())));
     }
     for j in 0..qp.g.len() {
         if layout.var_lower[j] {
@@ -382,10 +451,14 @@ fn residuals(qp: &QpProblem<'_>, layout: &Layout, ws: &mut Workspace, shift: f64
     }
     let objective = 0.5 * dot(&x.d, &ws.hd) + dot(qp.g, &x.d);
     Measures {
-        primal: inf_norm(&ws.rp) / (1.0 + primal_scale),
+        primal,
         dual: inf_norm(&ws.rd) / (1.0 + dual_scale),
         gap: gap / (1.0 + objective.abs()),
-        mu: if layout.pairs > 0 { gap / layout.pairs as f64 } else { 0.0 },
+        mu: if layout.pairs > 0 {
+            gap / layout.pairs as f64
+        } else {
+            0.0
+        },
     }
 }
 
@@ -436,8 +509,8 @@ fn iterate(
     std::mem::swap(&mut ws.aff, &mut ws.dir);
     let alpha_aff = max_step(qp, layout, &ws.x, &ws.aff);
     let sigma = if layout.pairs > 0 && mu > 0.0 {
-        let mu_aff = complementarity_after(qp, layout, &ws.x, &ws.aff, alpha_aff)
-            / layout.pairs as f64;
+        let mu_aff =
+            complementarity_after(qp, layout, &ws.x, &ws.aff, alpha_aff) / layout.pairs as f64;
         (mu_aff / mu).clamp(0.0, 1.0).powi(3)
     } else {
         0.0
@@ -683,12 +756,7 @@ fn infeasibility_certified(qp: &QpProblem<'_>, layout: &Layout, ws: &Workspace) 
 }
 
 /// Tests whether the (diverging) iterate d points along a direction of unbounded descent.
-fn unboundedness_detected(
-    qp: &QpProblem<'_>,
-    layout: &Layout,
-    ws: &Workspace,
-    shift: f64,
-) -> bool {
+fn unboundedness_detected(qp: &QpProblem<'_>, layout: &Layout, ws: &Workspace) -> bool {
     let d = &ws.x.d;
     let norm = inf_norm(d);
     let mut scale = 1.0f64.max(inf_norm(qp.g));
@@ -703,7 +771,6 @@ fn unboundedness_detected(
     let slope = dot(qp.g, d) / norm;
     // ws.hd already includes the convexification shift.
     let curvature = dot(d, &ws.hd) / (norm * norm);
-    let _ = shift;
     let eps = 1e-6;
     if slope >= 0.0 || curvature > eps * slope.abs() {
         return false;

@@ -39,7 +39,10 @@ const REFINEMENT_TOL: f64 = 1e-14;
 /// The sparsity that determines the KKT pattern.
 #[derive(Debug, PartialEq)]
 enum HessianPattern {
-    Sparse { offsets: Vec<usize>, rows: Vec<usize> },
+    Sparse {
+        offsets: Vec<usize>,
+        rows: Vec<usize>,
+    },
     Dense,
     LowRank,
 }
@@ -228,12 +231,16 @@ impl NewtonSystem {
                         column[j] = w[(j, k)];
                     }
                 }
-                self.kkt.solve_refined(column, REFINEMENT_STEPS, REFINEMENT_TOL)?;
+                self.kkt
+                    .solve_refined(column, REFINEMENT_STEPS, REFINEMENT_TOL)?;
             }
             // C = I − M (Uᵀ V), p×p.
             let utv = DMatrix::from_fn(p, p, |a, b| {
                 let column = &self.v[b * dim..(b + 1) * dim];
-                (0..self.n).filter(|&j| !layout.fixed[j]).map(|j| w[(j, a)] * column[j]).sum()
+                (0..self.n)
+                    .filter(|&j| !layout.fixed[j])
+                    .map(|j| w[(j, a)] * column[j])
+                    .sum()
             });
             let capacitance = DMatrix::identity(p, p) - m * utv;
             self.capacitance = Some(capacitance.lu());
@@ -249,7 +256,8 @@ impl NewtonSystem {
         rhs: &mut [f64],
     ) -> Result<(), KktError> {
         if !matches!(qp.h, QpHessian::LowRank { .. }) {
-            self.kkt.solve_refined(rhs, REFINEMENT_STEPS, REFINEMENT_TOL)?;
+            self.kkt
+                .solve_refined(rhs, REFINEMENT_STEPS, REFINEMENT_TOL)?;
             return Ok(());
         }
         let mut b = std::mem::take(&mut self.work_rhs);
@@ -279,14 +287,18 @@ impl NewtonSystem {
         layout: &Layout,
         x: &mut [f64],
     ) -> Result<(), KktError> {
-        self.kkt.solve_refined(x, REFINEMENT_STEPS, REFINEMENT_TOL)?;
+        self.kkt
+            .solve_refined(x, REFINEMENT_STEPS, REFINEMENT_TOL)?;
         let QpHessian::LowRank { w, m, .. } = qp.h else {
             return Ok(());
         };
         let (dim, p) = (self.dim(), w.ncols());
         let (utx, rhs) = self.small.split_at_mut(p);
         for (k, slot) in utx.iter_mut().enumerate() {
-            *slot = (0..self.n).filter(|&j| !layout.fixed[j]).map(|j| w[(j, k)] * x[j]).sum();
+            *slot = (0..self.n)
+                .filter(|&j| !layout.fixed[j])
+                .map(|j| w[(j, k)] * x[j])
+                .sum();
         }
         for (a, slot) in rhs.iter_mut().enumerate() {
             *slot = (0..p).map(|b| m[(a, b)] * utx[b]).sum();
@@ -318,7 +330,10 @@ impl NewtonSystem {
             let p = w.ncols();
             let (utx, mutx) = self.small.split_at_mut(p);
             for (k, slot) in utx.iter_mut().enumerate() {
-                *slot = (0..self.n).filter(|&j| !layout.fixed[j]).map(|j| w[(j, k)] * x[j]).sum();
+                *slot = (0..self.n)
+                    .filter(|&j| !layout.fixed[j])
+                    .map(|j| w[(j, k)] * x[j])
+                    .sum();
             }
             for (a, slot) in mutx.iter_mut().enumerate() {
                 *slot = (0..p).map(|c| m[(a, c)] * utx[c]).sum();
@@ -348,7 +363,11 @@ impl NewtonSystem {
             return Ok(Some(low_rank_shift(delta, w, m)));
         }
         for (i, slot) in scratch_m.iter_mut().enumerate() {
-            *slot = if layout.row[i] == RowKind::Equality { 0.0 } else { -1.0 };
+            *slot = if layout.row[i] == RowKind::Equality {
+                0.0
+            } else {
+                -1.0
+            };
         }
         let diag_scale = (0..self.n)
             .map(|j| self.diagonal_of_h(qp, j).abs())
@@ -356,12 +375,22 @@ impl NewtonSystem {
         let mut shift = 0.0;
         while shift <= 1e20 * diag_scale {
             scratch_n.fill(shift);
-            self.assemble(qp, layout, scratch_n, |i| layout.row[i] == RowKind::Equality, scratch_m);
+            self.assemble(
+                qp,
+                layout,
+                scratch_n,
+                |i| layout.row[i] == RowKind::Equality,
+                scratch_m,
+            );
             let inertia = self.factor(qp, layout)?;
             if inertia.is_quasi_definite_like(self.n, self.m) {
                 return Ok(Some(shift));
             }
-            shift = if shift == 0.0 { 1e-4 * diag_scale } else { 10.0 * shift };
+            shift = if shift == 0.0 {
+                1e-4 * diag_scale
+            } else {
+                10.0 * shift
+            };
         }
         Ok(None)
     }

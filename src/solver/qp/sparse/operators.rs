@@ -57,7 +57,9 @@ pub fn hessian_times(h: &QpHessian<'_>, x: &[f64], y: &mut [f64], tmp: &mut [f64
 pub fn a_times(a: &CsrMatrix<f64>, x: &[f64], y: &mut [f64]) {
     let (offsets, cols, values) = a.csr_data();
     for (i, yi) in y.iter_mut().enumerate() {
-        *yi = (offsets[i]..offsets[i + 1]).map(|p| values[p] * x[cols[p]]).sum();
+        *yi = (offsets[i]..offsets[i + 1])
+            .map(|p| values[p] * x[cols[p]])
+            .sum();
     }
 }
 

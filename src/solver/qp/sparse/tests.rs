@@ -153,21 +153,38 @@ fn assert_kkt(qp: &QpProblem<'_>, shift: f64, sol: &QpSolution, tol: f64) {
             continue;
         }
         if z < 0.0 {
-            assert!((-z) * (d - qp.dl[j]) <= tol, "complementarity lower {j}: z={z:e}");
+            assert!(
+                (-z) * (d - qp.dl[j]) <= tol,
+                "complementarity lower {j}: z={z:e}"
+            );
         } else if z > 0.0 {
-            assert!(z * (qp.du[j] - d) <= tol, "complementarity upper {j}: z={z:e}");
+            assert!(
+                z * (qp.du[j] - d) <= tol,
+                "complementarity upper {j}: z={z:e}"
+            );
         }
     }
     for i in 0..m {
         let (v, l) = (ad[i], sol.lambda[i]);
-        assert!(v >= qp.bl[i] - tol && v <= qp.bu[i] + tol, "row {i}: {v} ∉ [{}, {}]", qp.bl[i], qp.bu[i]);
+        assert!(
+            v >= qp.bl[i] - tol && v <= qp.bu[i] + tol,
+            "row {i}: {v} ∉ [{}, {}]",
+            qp.bl[i],
+            qp.bu[i]
+        );
         if qp.bl[i] == qp.bu[i] {
             continue;
         }
         if l < 0.0 {
-            assert!((-l) * (v - qp.bl[i]) <= tol, "row complementarity lower {i}: λ={l:e}");
+            assert!(
+                (-l) * (v - qp.bl[i]) <= tol,
+                "row complementarity lower {i}: λ={l:e}"
+            );
         } else if l > 0.0 {
-            assert!(l * (qp.bu[i] - v) <= tol, "row complementarity upper {i}: λ={l:e}");
+            assert!(
+                l * (qp.bu[i] - v) <= tol,
+                "row complementarity upper {i}: λ={l:e}"
+            );
         }
     }
 }
@@ -176,13 +193,26 @@ fn assert_kkt(qp: &QpProblem<'_>, shift: f64, sol: &QpSolution, tol: f64) {
 fn random_sparse_convex_qps_satisfy_kkt() {
     let mut rng = ChaCha8Rng::seed_from_u64(2024);
     let mut solver = SparseQp::new();
-    for &(n, m) in &[(1, 0), (5, 2), (12, 20), (40, 15), (100, 60), (250, 100), (300, 0), (60, 150)] {
+    for &(n, m) in &[
+        (1, 0),
+        (5, 2),
+        (12, 20),
+        (40, 15),
+        (100, 60),
+        (250, 100),
+        (300, 0),
+        (60, 150),
+    ] {
         for _ in 0..3 {
             let data = random_qp(&mut rng, n, m);
             let (sol, info) = solver.solve(&data.problem(), 1e-11);
             assert_eq!(sol.status, QpStatus::Optimal, "n={n} m={m} {info:?}");
             assert_eq!(info.convexification, 0.0);
-            assert!(sol.iterations < 60, "n={n} m={m}: {} iterations", sol.iterations);
+            assert!(
+                sol.iterations < 60,
+                "n={n} m={m}: {} iterations",
+                sol.iterations
+            );
             assert_kkt(&data.problem(), 0.0, &sol, 1e-8);
         }
     }
@@ -210,17 +240,30 @@ fn dense_sparse_and_low_rank_hessians_agree() {
     let (n, p) = (30, 4);
     let w = DMatrix::from_fn(n, p, |_, _| rng.random_range(-1.0..1.0));
     // Mixed-sign M, with δ large enough that H = δI − W M Wᵀ stays positive definite.
-    let m_small = DMatrix::from_fn(p, p, |i, j| if i == j { [-1.0, 0.4, -0.3, 0.2][i] } else { 0.0 });
+    let m_small = DMatrix::from_fn(p, p, |i, j| {
+        if i == j {
+            [-1.0, 0.4, -0.3, 0.2][i]
+        } else {
+            0.0
+        }
+    });
     let delta = 8.0;
     let dense = DMatrix::identity(n, n) * delta - &w * &m_small * w.transpose();
     assert!(dense.clone().symmetric_eigenvalues().min() > 0.1);
     let mut data = random_qp(&mut rng, n, 12);
     data.h = lower_csc(&dense);
     let sparse_sol = super::solve(&data.problem(), 1e-11);
-    let dense_problem = QpProblem { h: QpHessian::Dense(&dense), ..data.problem() };
+    let dense_problem = QpProblem {
+        h: QpHessian::Dense(&dense),
+        ..data.problem()
+    };
     let dense_sol = super::solve(&dense_problem, 1e-11);
     let low_rank_problem = QpProblem {
-        h: QpHessian::LowRank { delta, w: &w, m: &m_small },
+        h: QpHessian::LowRank {
+            delta,
+            w: &w,
+            m: &m_small,
+        },
         ..data.problem()
     };
     let (low_rank_sol, info) = SparseQp::new().solve(&low_rank_problem, 1e-11);
@@ -235,7 +278,13 @@ fn dense_sparse_and_low_rank_hessians_agree() {
     }
 }
 
-fn small_qp(h: DMatrix<f64>, g: Vec<f64>, rows: &[(Vec<f64>, f64, f64)], dl: Vec<f64>, du: Vec<f64>) -> Data {
+fn small_qp(
+    h: DMatrix<f64>,
+    g: Vec<f64>,
+    rows: &[(Vec<f64>, f64, f64)],
+    dl: Vec<f64>,
+    du: Vec<f64>,
+) -> Data {
     let n = g.len();
     let mut coo = CooMatrix::new(rows.len(), n);
     for (i, (coefficients, _, _)) in rows.iter().enumerate() {
@@ -261,7 +310,13 @@ fn infeasible_qps_are_detected() {
     let identity = DMatrix::<f64>::identity(2, 2);
     let cases = [
         // Bounds 0 ≤ d ≤ 1 cannot reach d₁ + d₂ ≥ 3.
-        small_qp(identity.clone(), vec![1.0, -1.0], &[(vec![1.0, 1.0], 3.0, INF)], vec![0.0; 2], vec![1.0; 2]),
+        small_qp(
+            identity.clone(),
+            vec![1.0, -1.0],
+            &[(vec![1.0, 1.0], 3.0, INF)],
+            vec![0.0; 2],
+            vec![1.0; 2],
+        ),
         // Inconsistent equalities on dependent rows.
         small_qp(
             identity.clone(),
@@ -279,11 +334,22 @@ fn infeasible_qps_are_detected() {
             vec![INF; 2],
         ),
         // A fixed variable against a row.
-        small_qp(identity, vec![0.0, 0.0], &[(vec![1.0, 0.0], -INF, -1.0)], vec![0.0, -INF], vec![0.0, INF]),
+        small_qp(
+            identity,
+            vec![0.0, 0.0],
+            &[(vec![1.0, 0.0], -INF, -1.0)],
+            vec![0.0, -INF],
+            vec![0.0, INF],
+        ),
     ];
     for (k, data) in cases.iter().enumerate() {
         let sol = super::solve(&data.problem(), 1e-9);
-        assert_eq!(sol.status, QpStatus::Infeasible, "case {k}: after {} iterations", sol.iterations);
+        assert_eq!(
+            sol.status,
+            QpStatus::Infeasible,
+            "case {k}: after {} iterations",
+            sol.iterations
+        );
     }
     // A large random QP made infeasible by one row bound beyond what the variable bounds allow.
     let mut rng = ChaCha8Rng::seed_from_u64(77);
@@ -305,7 +371,12 @@ fn infeasible_qps_are_detected() {
     data.bl[last] = reach + 1.0;
     data.bu[last] = INF;
     let sol = super::solve(&data.problem(), 1e-9);
-    assert_eq!(sol.status, QpStatus::Infeasible, "after {} iterations", sol.iterations);
+    assert_eq!(
+        sol.status,
+        QpStatus::Infeasible,
+        "after {} iterations",
+        sol.iterations
+    );
 }
 
 #[test]
@@ -343,7 +414,13 @@ fn unbounded_qp_is_detected() {
 fn indefinite_hessian_is_convexified_only_when_needed() {
     // H = diag(1, −1) is convex on the null space of the equality d₂ = 0.5: no shift.
     let h = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![1.0, -1.0]));
-    let data = small_qp(h.clone(), vec![-1.0, 0.0], &[(vec![0.0, 1.0], 0.5, 0.5)], vec![-INF; 2], vec![INF; 2]);
+    let data = small_qp(
+        h.clone(),
+        vec![-1.0, 0.0],
+        &[(vec![0.0, 1.0], 0.5, 0.5)],
+        vec![-INF; 2],
+        vec![INF; 2],
+    );
     let (sol, info) = SparseQp::new().solve(&data.problem(), 1e-10);
     assert_eq!(sol.status, QpStatus::Optimal);
     assert_eq!(info.convexification, 0.0);
@@ -355,14 +432,30 @@ fn indefinite_hessian_is_convexified_only_when_needed() {
     let data = small_qp(h, vec![-1.0, 0.1], &[], vec![-1.0; 2], vec![1.0; 2]);
     let (sol, info) = SparseQp::new().solve(&data.problem(), 1e-10);
     assert_eq!(sol.status, QpStatus::Optimal);
-    assert!(info.convexification >= 1.0 && info.convexification < 20.0, "{info:?}");
+    assert!(
+        info.convexification >= 1.0 && info.convexification < 20.0,
+        "{info:?}"
+    );
     assert_kkt(&data.problem(), info.convexification, &sol, 1e-8);
 
     // A low-rank H = δI − W M Wᵀ with a negative eigenvalue gets the closed-form shift.
     let w = DMatrix::from_column_slice(3, 1, &[1.0, 1.0, 0.0]);
     let m = DMatrix::from_element(1, 1, 1.0);
-    let data = small_qp(DMatrix::zeros(3, 3), vec![1.0, -1.0, 0.5], &[], vec![-2.0; 3], vec![2.0; 3]);
-    let qp = QpProblem { h: QpHessian::LowRank { delta: 0.5, w: &w, m: &m }, ..data.problem() };
+    let data = small_qp(
+        DMatrix::zeros(3, 3),
+        vec![1.0, -1.0, 0.5],
+        &[],
+        vec![-2.0; 3],
+        vec![2.0; 3],
+    );
+    let qp = QpProblem {
+        h: QpHessian::LowRank {
+            delta: 0.5,
+            w: &w,
+            m: &m,
+        },
+        ..data.problem()
+    };
     let (sol, info) = SparseQp::new().solve(&qp, 1e-10);
     // Eigenvalues of 0.5 I − w wᵀ: 0.5 − 2 = −1.5 → shift just above 1.5.
     assert!((info.convexification - 1.5).abs() < 1e-6, "{info:?}");
@@ -372,8 +465,140 @@ fn indefinite_hessian_is_convexified_only_when_needed() {
 
 #[test]
 fn inconsistent_bounds_are_infeasible_and_bad_dimensions_numerical() {
-    let data = small_qp(DMatrix::identity(1, 1), vec![0.0], &[], vec![1.0], vec![0.0]);
-    assert_eq!(super::solve(&data.problem(), 1e-8).status, QpStatus::Infeasible);
-    let data = small_qp(DMatrix::identity(1, 1), vec![0.0, 1.0], &[], vec![1.0], vec![0.0]);
-    assert_eq!(super::solve(&data.problem(), 1e-8).status, QpStatus::Numerical);
+    let data = small_qp(
+        DMatrix::identity(1, 1),
+        vec![0.0],
+        &[],
+        vec![1.0],
+        vec![0.0],
+    );
+    assert_eq!(
+        super::solve(&data.problem(), 1e-8).status,
+        QpStatus::Infeasible
+    );
+    let data = small_qp(
+        DMatrix::identity(1, 1),
+        vec![0.0, 1.0],
+        &[],
+        vec![1.0],
+        vec![0.0],
+    );
+    assert_eq!(
+        super::solve(&data.problem(), 1e-8).status,
+        QpStatus::Numerical
+    );
+}
+
+/// The ways `feasibility_classification_is_reliable` perturbs a random feasible QP.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Perturbation {
+    None,
+    RowBeyondReach,
+    OverdeterminedEqualities,
+    ContradictoryRowPair,
+    RowNearReach,
+    RowExactlyAtReach,
+}
+
+fn perturb(rng: &mut ChaCha8Rng, data: &mut Data, kind: Perturbation) {
+    let (n, m) = (data.g.len(), data.a.nrows());
+    match kind {
+        Perturbation::None => {}
+        Perturbation::RowBeyondReach
+        | Perturbation::RowNearReach
+        | Perturbation::RowExactlyAtReach => {
+            for j in 0..n {
+                if !data.dl[j].is_finite() {
+                    data.dl[j] = -1.0 - rng.random::<f64>();
+                }
+                if !data.du[j].is_finite() {
+                    data.du[j] = 1.0 + rng.random::<f64>();
+                }
+                data.dl[j] = data.dl[j].min(data.du[j]);
+            }
+            let i = rng.random_range(0..m);
+            let (offsets, cols, values) = data.a.csr_data();
+            let reach: f64 = (offsets[i]..offsets[i + 1])
+                .map(|k| (values[k] * data.dl[cols[k]]).max(values[k] * data.du[cols[k]]))
+                .sum();
+            if kind != Perturbation::RowBeyondReach {
+                // Only row i and the box remain, so these stay feasible.
+                for r in (0..m).filter(|&r| r != i) {
+                    data.bl[r] = -INF;
+                    data.bu[r] = INF;
+                }
+            }
+            data.bl[i] = match kind {
+                Perturbation::RowBeyondReach => reach + 1e-5 * reach.abs() + 1e-6,
+                Perturbation::RowNearReach => reach - 1e-5 * reach.abs() - 1e-6,
+                _ => reach,
+            };
+            data.bu[i] = INF;
+        }
+        Perturbation::OverdeterminedEqualities => {
+            let mut coo = CooMatrix::new(n + 2, n);
+            for i in 0..n + 2 {
+                for j in 0..n {
+                    if i == j || rng.random::<f64>() < 0.5 {
+                        coo.push(i, j, rng.random_range(-1.0..1.0));
+                    }
+                }
+            }
+            data.a = CsrMatrix::from(&coo);
+            data.bl = (0..n + 2).map(|_| rng.random_range(-1.0..1.0)).collect();
+            data.bu = data.bl.clone();
+        }
+        Perturbation::ContradictoryRowPair => {
+            // Row i ≥ 0.5 and its negation ≥ −0.5 + 1e-4, i.e. row i ≤ 0.5 − 1e-4.
+            let i = rng.random_range(0..m);
+            let (offsets, cols, values) = data.a.csr_data();
+            let mut coo = CooMatrix::new(m + 1, n);
+            for r in 0..m {
+                for k in offsets[r]..offsets[r + 1] {
+                    coo.push(r, cols[k], values[k]);
+                }
+            }
+            for k in offsets[i]..offsets[i + 1] {
+                coo.push(m, cols[k], -values[k]);
+            }
+            data.a = CsrMatrix::from(&coo);
+            data.bl[i] = 0.5;
+            data.bu[i] = INF;
+            data.bl.push(-0.5 + 1e-4);
+            data.bu.push(INF);
+        }
+    }
+}
+
+#[test]
+fn feasibility_classification_is_reliable() {
+    use Perturbation::*;
+    let mut rng = ChaCha8Rng::seed_from_u64(99);
+    let kinds = [
+        None,
+        RowBeyondReach,
+        OverdeterminedEqualities,
+        ContradictoryRowPair,
+        RowNearReach,
+        RowExactlyAtReach,
+    ];
+    let mut wrong = Vec::new();
+    for trial in 0..600 {
+        let (n, m) = (rng.random_range(2..60), rng.random_range(1..40));
+        let mut data = random_qp(&mut rng, n, m);
+        let kind = kinds[trial % kinds.len()];
+        perturb(&mut rng, &mut data, kind);
+        let tolerance = [1e-6, 1e-9][trial % 2];
+        let sol = super::solve(&data.problem(), tolerance);
+        let feasible = matches!(kind, None | RowNearReach | RowExactlyAtReach);
+        let expected = if feasible {
+            QpStatus::Optimal
+        } else {
+            QpStatus::Infeasible
+        };
+        if sol.status != expected {
+            wrong.push((trial, kind, sol.status));
+        }
+    }
+    assert!(wrong.is_empty(), "misclassified: {wrong:?}");
 }
