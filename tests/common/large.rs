@@ -46,10 +46,10 @@ fn triple_start(k: usize) -> usize {
 /// sin(b − c) sin(b + c) is evaluated as (cos 2c − cos 2b)/2.
 fn phi(a: f64, b: f64, c: f64) -> (f64, [f64; 3], [f64; 4]) {
     let e = (a - b).exp();
-    let value = 3.0 * b.powi(3) + 2.0 * c - 5.0 + 0.5 * ((2.0 * c).cos() - (2.0 * b).cos())
-        + 4.0 * b
-        - a * e
-        - 3.0;
+    let value =
+        3.0 * b.powi(3) + 2.0 * c - 5.0 + 0.5 * ((2.0 * c).cos() - (2.0 * b).cos()) + 4.0 * b
+            - a * e
+            - 3.0;
     let grad = [
         -(1.0 + a) * e,
         9.0 * b * b + 4.0 + (2.0 * b).sin() + a * e,
@@ -85,7 +85,13 @@ impl ChainedRosenbrock {
         let x_star: Vec<f64> = (0..n).map(|j| 1.0 + 0.1 * (j as f64).sin()).collect();
         let lambda_star: Vec<f64> = (0..m).map(|k| 0.5 * (k as f64).cos()).collect();
         let z_star: Vec<f64> = (0..n)
-            .map(|j| if j % 7 == 3 { 1.0 + 0.5 * (j as f64).sin().powi(2) } else { 0.0 })
+            .map(|j| {
+                if j % 7 == 3 {
+                    1.0 + 0.5 * (j as f64).sin().powi(2)
+                } else {
+                    0.0
+                }
+            })
             .collect();
         let mut q = vec![0.0; n];
         rosenbrock(&x_star, &mut q);
@@ -101,7 +107,15 @@ impl ChainedRosenbrock {
         for (qj, zj) in q.iter_mut().zip(&z_star) {
             *qj = -(*qj + zj);
         }
-        ChainedRosenbrock { n, m, x_star, lambda_star, z_star, q, rhs }
+        ChainedRosenbrock {
+            n,
+            m,
+            x_star,
+            lambda_star,
+            z_star,
+            q,
+            rhs,
+        }
     }
 
     /// The manufactured solution x*.
@@ -123,7 +137,8 @@ impl ChainedRosenbrock {
     pub fn optimal_objective(&self) -> f64 {
         let mut f = 0.0;
         let mut c = vec![0.0; self.m];
-        self.eval(&self.x_star, &mut f, &mut c).expect("x* is in the domain");
+        self.eval(&self.x_star, &mut f, &mut c)
+            .expect("x* is in the domain");
         f
     }
 
@@ -134,14 +149,17 @@ impl ChainedRosenbrock {
         let (n, m) = (dims.n, dims.m);
         let mut x = vec![0.0; n];
         self.start(&mut x);
-        let (mut xl, mut xu, mut cl, mut cu) = (vec![0.0; n], vec![0.0; n], vec![0.0; m], vec![0.0; m]);
+        let (mut xl, mut xu, mut cl, mut cu) =
+            (vec![0.0; n], vec![0.0; n], vec![0.0; m], vec![0.0; m]);
         self.bounds(&mut xl, &mut xu, &mut cl, &mut cu);
         let mut f = 0.0;
         let mut c = vec![0.0; m];
-        self.eval(&x, &mut f, &mut c).expect("the start is in the domain");
+        self.eval(&x, &mut f, &mut c)
+            .expect("the start is in the domain");
         let mut g = vec![0.0; n];
         let mut jac = vec![0.0; dims.jac_nnz];
-        self.eval_derivatives(&x, &mut g, &mut jac).expect("the start is in the domain");
+        self.eval_derivatives(&x, &mut g, &mut jac)
+            .expect("the start is in the domain");
         let (mut jr, mut jc) = (vec![0; dims.jac_nnz], vec![0; dims.jac_nnz]);
         self.jacobian_structure(&mut jr, &mut jc);
         let a = CsrMatrix::from(
@@ -150,7 +168,8 @@ impl ChainedRosenbrock {
         let (mut hr, mut hc) = (vec![0; dims.hess_nnz], vec![0; dims.hess_nnz]);
         self.hessian_structure(&mut hr, &mut hc);
         let mut hv = vec![0.0; dims.hess_nnz];
-        self.eval_hessian(&x, 1.0, &vec![0.0; m], &mut hv).expect("the start is in the domain");
+        self.eval_hessian(&x, 1.0, &vec![0.0; m], &mut hv)
+            .expect("the start is in the domain");
         let h = CscMatrix::from(
             &CooMatrix::try_from_triplets(n, n, hr, hc, hv).expect("valid Hessian pattern"),
         );
@@ -186,13 +205,22 @@ pub struct FirstQp {
 
 impl Nlp for ChainedRosenbrock {
     fn dims(&self) -> Dims {
-        Dims { n: self.n, m: self.m, jac_nnz: 3 * self.m, hess_nnz: 2 * self.n - 1 }
+        Dims {
+            n: self.n,
+            m: self.m,
+            jac_nnz: 3 * self.m,
+            hess_nnz: 2 * self.n - 1,
+        }
     }
 
     fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
         for j in 0..self.n {
             xl[j] = -5.0;
-            xu[j] = if self.z_star[j] > 0.0 { self.x_star[j] } else { 5.0 };
+            xu[j] = if self.z_star[j] > 0.0 {
+                self.x_star[j]
+            } else {
+                5.0
+            };
         }
         cl.copy_from_slice(&self.rhs);
         cu.copy_from_slice(&self.rhs);
@@ -223,11 +251,18 @@ impl Nlp for ChainedRosenbrock {
         if f.is_finite() && c.iter().all(|v| v.is_finite()) {
             Ok(())
         } else {
-            Err(EvalError::Domain("overflow in the chained functions".into()))
+            Err(EvalError::Domain(
+                "overflow in the chained functions".into(),
+            ))
         }
     }
 
-    fn eval_derivatives(&self, x: &[f64], grad: &mut [f64], jac: &mut [f64]) -> Result<(), EvalError> {
+    fn eval_derivatives(
+        &self,
+        x: &[f64],
+        grad: &mut [f64],
+        jac: &mut [f64],
+    ) -> Result<(), EvalError> {
         rosenbrock(x, grad);
         for (g, q) in grad.iter_mut().zip(&self.q) {
             *g += q;
@@ -240,7 +275,9 @@ impl Nlp for ChainedRosenbrock {
         if grad.iter().chain(jac.iter()).all(|v| v.is_finite()) {
             Ok(())
         } else {
-            Err(EvalError::Domain("overflow in the chained derivatives".into()))
+            Err(EvalError::Domain(
+                "overflow in the chained derivatives".into(),
+            ))
         }
     }
 
@@ -256,7 +293,13 @@ impl Nlp for ChainedRosenbrock {
         }
     }
 
-    fn eval_hessian(&self, x: &[f64], sigma: f64, lambda: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+    fn eval_hessian(
+        &self,
+        x: &[f64],
+        sigma: f64,
+        lambda: &[f64],
+        values: &mut [f64],
+    ) -> Result<(), EvalError> {
         let n = self.n;
         values.fill(0.0);
         let (diag, sub) = values.split_at_mut(n);

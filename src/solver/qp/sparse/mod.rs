@@ -775,8 +775,8 @@ fn unboundedness_detected(qp: &QpProblem<'_>, layout: &Layout, ws: &Workspace) -
     if slope >= 0.0 || curvature > eps * slope.abs() {
         return false;
     }
-    for j in 0..qp.g.len() {
-        let v = d[j] / norm;
+    for (j, dj) in d.iter().enumerate() {
+        let v = dj / norm;
         if layout.fixed[j] && v.abs() > eps
             || layout.var_lower[j] && v < -eps
             || layout.var_upper[j] && v > eps

@@ -191,13 +191,13 @@ impl NewtonSystem {
             QpHessian::LowRank { delta, .. } => delta,
             _ => 0.0,
         };
-        for j in 0..n {
+        for (j, shift) in primal_shift.iter().enumerate().take(n) {
             let p = self.kkt.diagonal_position(j);
             let values = self.kkt.values_mut();
             if layout.fixed[j] {
                 values[p] = 1.0;
             } else {
-                values[p] += base + primal_shift[j];
+                values[p] += base + shift;
             }
         }
         let (offsets, cols, a_values) = qp.a.csr_data();
@@ -211,9 +211,9 @@ impl NewtonSystem {
                 }
             }
         }
-        for i in 0..self.m {
+        for (i, &value) in dual_diag.iter().enumerate().take(self.m) {
             let p = self.kkt.diagonal_position(n + i);
-            self.kkt.values_mut()[p] = dual_diag[i];
+            self.kkt.values_mut()[p] = value;
         }
     }
 

@@ -164,8 +164,8 @@ fn assert_kkt(qp: &QpProblem<'_>, shift: f64, sol: &QpSolution, tol: f64) {
             );
         }
     }
-    for i in 0..m {
-        let (v, l) = (ad[i], sol.lambda[i]);
+    for (i, &v) in ad.iter().enumerate() {
+        let l = sol.lambda[i];
         assert!(
             v >= qp.bl[i] - tol && v <= qp.bu[i] + tol,
             "row {i}: {v} ∉ [{}, {}]",
