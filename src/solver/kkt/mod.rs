@@ -19,8 +19,8 @@
 //! to the signs of K's eigenvalues by Sylvester's law) is reported for IPOPT-style inertia
 //! correction (Wächter & Biegler 2006, §3.1).
 //!
-//! Split by verb: construction and symbolic analysis here, [`factor`] the numeric
-//! factorization and inertia, [`solve`] the refined solves and the product with K.
+//! Split by verb: construction and symbolic analysis here, `factor.rs` the numeric
+//! factorization and inertia, `solve.rs` the refined solves and the product with K.
 
 mod factor;
 mod solve;

@@ -14,7 +14,7 @@
 //! so that the reported multipliers λ = y and z = z_u − z_l follow [`QpSolution`]'s convention
 //! `Hd + g + Aᵀλ + z = 0`, λ ≤ 0 at an active lower bound, ≥ 0 at an active upper one.
 //! Eliminating the slacks and bound multipliers leaves the quasi-definite system of
-//! [`newton`] (Nocedal & Wright, *Numerical Optimization* 2nd ed., §16.6; Mehrotra 1992; the
+//! `newton.rs` (Nocedal & Wright, *Numerical Optimization* 2nd ed., §16.6; Mehrotra 1992; the
 //! bound handling of Gertz & Wright 2003, OOQP). Fixed variables (dl = du) stay at their value
 //! with a free multiplier; free rows get λ = 0. Primal and dual iterates take a common step
 //! (a QP's dual residual involves d), at 0.995 of the distance to the boundary.
@@ -31,9 +31,18 @@
 //! ‖d‖∞ exceeds 10⁸ times the data scale, the normalized d̂ is tested as a direction of
 //! recession with `gᵀd̂ < 0` and `d̂ᵀH d̂ ≈ 0`.
 //!
-//! Indefinite H is convexified first ([`newton`]: IPOPT-style inertia correction); the shift
+//! Indefinite H is convexified first (`newton.rs`: IPOPT-style inertia correction); the shift
 //! δ_c actually used is reported in [`SparseQpInfo::convexification`] — the QP solved is then
 //! the one with H + δ_c I.
+//!
+//! Use from an SQP: keep one [`SparseQp`] for the whole NLP solve and call
+//! [`SparseQp::solve`] each major iteration; the symbolic analysis is redone only when the
+//! sparsity of H or A changes (bound values and the infinite/finite/fixed pattern of the bounds
+//! may change freely). There is no warm start: an interior-point method starts from its own
+//! interior point (d = 0 pushed at least min(1, ¼ width) inside finite bounds), and typically
+//! needs 10–30 iterations whatever the previous working set was. On `Infeasible` the returned
+//! d is the last iterate (not a least-infeasible point): an elastic QP must be solved instead.
+//! On `Numerical` and `IterationLimit` the last finite iterate is returned.
 
 mod layout;
 mod newton;
@@ -79,6 +88,29 @@ pub struct SparseQpInfo {
 
 /// Solves one QP with a fresh workspace. `tolerance` is the relative KKT tolerance ε of the
 /// module header (e.g. 1e-8). The sparse [`QpHessian::SparseLower`] form may be indefinite.
+///
+/// ```
+/// use nalgebra_sparse::{CooMatrix, CscMatrix, CsrMatrix};
+/// use optimize::solver::qp::{QpHessian, QpProblem, QpStatus, sparse};
+///
+/// // min ½(d₀² + d₁²) − 2d₀  s.t.  d₀ + d₁ = 1,  d ≥ 0:  d = (1, 0), λ = 1, z = (0, −1).
+/// let h = CscMatrix::identity(2);
+/// let a = CsrMatrix::from(&CooMatrix::try_from_triplets(1, 2, vec![0, 0], vec![0, 1], vec![1.0, 1.0]).unwrap());
+/// let inf = f64::INFINITY;
+/// let qp = QpProblem {
+///     h: QpHessian::SparseLower(&h),
+///     g: &[-2.0, 0.0],
+///     a: &a,
+///     dl: &[0.0, 0.0],
+///     du: &[inf, inf],
+///     bl: &[1.0],
+///     bu: &[1.0],
+/// };
+/// let sol = sparse::solve(&qp, 1e-10);
+/// assert_eq!(sol.status, QpStatus::Optimal);
+/// assert!((sol.d[0] - 1.0).abs() < 1e-8 && sol.d[1].abs() < 1e-8);
+/// assert!((sol.lambda[0] - 1.0).abs() < 1e-8 && (sol.z[1] + 1.0).abs() < 1e-8);
+/// ```
 pub fn solve(problem: &QpProblem<'_>, tolerance: f64) -> QpSolution {
     SparseQp::new().solve(problem, tolerance).0
 }
