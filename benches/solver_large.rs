@@ -5,7 +5,9 @@
 //! - `kkt_solve`: one solve with iterative refinement;
 //! - `qp_first_subproblem`: one full interior-point solve of the first SQP subproblem
 //!   (fresh solver, symbolic analysis included), and `..._reused_symbolic` with a solver that
-//!   already analysed the pattern (the situation of SQP iterations after the first).
+//!   already analysed the pattern (the situation of SQP iterations after the first);
+//! - `qp_first_subproblem_lowrank p=20`: the same QP with the compact limited-memory Hessian
+//!   `H = δI − W M Wᵀ` (p = 20 columns, as L-BFGS with 10 pairs) instead of the exact one.
 //!
 //! Run: `cargo bench --bench solver_large` (size via `LARGE_N`, default 50000).
 
@@ -18,6 +20,7 @@ use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use large::{ChainedRosenbrock, FirstQp};
+use nalgebra::DMatrix;
 use optimize::solver::kkt::{KktSolver, Regularization};
 use optimize::solver::qp::sparse::SparseQp;
 use optimize::solver::qp::{QpHessian, QpProblem, QpStatus};
@@ -124,9 +127,51 @@ fn bench_large(c: &mut Criterion) {
     );
 }
 
+/// A deterministic compact limited-memory Hessian: unit-scale columns of W, M with both signs,
+/// δ large enough that H = δI − W M Wᵀ is positive definite (‖W M Wᵀ‖ ≤ 0.3·δ·‖W‖²).
+fn low_rank(n: usize, p: usize) -> (f64, DMatrix<f64>, DMatrix<f64>) {
+    let scale = (2.0 / n as f64).sqrt();
+    let w = DMatrix::from_fn(n, p, |j, k| {
+        scale * (0.37 * (j * (k + 1)) as f64 + k as f64).sin()
+    });
+    let delta = 300.0;
+    let m = DMatrix::from_fn(p, p, |a, b| {
+        if a == b {
+            if a % 2 == 0 { -delta } else { 0.3 * delta }
+        } else {
+            0.0
+        }
+    });
+    (delta, w, m)
+}
+
+fn bench_low_rank(c: &mut Criterion) {
+    let n = size();
+    let nlp = ChainedRosenbrock::new(n);
+    let qp = nlp.first_qp();
+    let m_rows = qp.a.nrows();
+    let (delta, w, m) = low_rank(n, 20);
+    let problem = QpProblem {
+        h: QpHessian::LowRank {
+            delta,
+            w: &w,
+            m: &m,
+        },
+        ..problem(&qp)
+    };
+    let (sol, info) = SparseQp::new().solve(&problem, 1e-8);
+    assert_eq!(sol.status, QpStatus::Optimal);
+    eprintln!("low-rank QP: {} iterations, {info:?}", sol.iterations);
+    let mut solver = SparseQp::new();
+    c.bench_function(
+        &format!("qp_first_subproblem_lowrank p=20 n={n} m={m_rows}"),
+        |b| b.iter(|| black_box(solver.solve(&problem, 1e-8))),
+    );
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().sample_size(10).measurement_time(Duration::from_secs(10));
-    targets = bench_large
+    targets = bench_large, bench_low_rank
 }
 criterion_main!(benches);

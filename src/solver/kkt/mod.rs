@@ -70,6 +70,8 @@ pub struct KktSolver {
     l_values: Vec<f64>,
     factor_mem: MemBuffer,
     solve_mem: MemBuffer,
+    /// Right-hand-side columns `solve_mem` is sized for.
+    solve_columns: usize,
     /// Residual and correction buffers of iterative refinement.
     residual: Vec<f64>,
     rhs_copy: Vec<f64>,
@@ -116,6 +118,7 @@ impl KktSolver {
             l_values: vec![0.0; l_len],
             factor_mem: MemBuffer::new(factor_req),
             solve_mem: MemBuffer::new(StackReq::any_of(&[solve_req])),
+            solve_columns: 1,
             residual: vec![0.0; dim],
             rhs_copy: vec![0.0; dim],
             factored: false,

@@ -6,7 +6,7 @@
 //! Refinement stops when ‖r_k‖∞ ≤ tol·(1 + ‖b‖∞) or when a step fails to halve the residual
 //! (refinement has stagnated at the accuracy the factors allow).
 
-use faer::dyn_stack::MemStack;
+use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::cholesky::LdltRef;
 use faer::{Conj, MatMut, Par};
 
@@ -69,6 +69,27 @@ impl KktSolver {
         factor.solve_in_place_with_conj(
             Conj::No,
             MatMut::from_column_major_slice_mut(rhs, n, 1),
+            Par::Seq,
+            stack,
+        );
+    }
+
+    /// Solves `(K + reg) X = B` in place for `columns` right-hand sides stored column-major in
+    /// `rhs` (length dim × columns), with the factors only. The workspace grows on the first
+    /// call with more columns than before, and is reused afterwards.
+    pub fn solve_factored_columns(&mut self, rhs: &mut [f64], columns: usize) {
+        if columns > self.solve_columns {
+            self.solve_mem = MemBuffer::new(
+                self.symbolic
+                    .solve_in_place_scratch::<f64>(columns, Par::Seq),
+            );
+            self.solve_columns = columns;
+        }
+        let factor = LdltRef::new(&self.symbolic, &self.l_values);
+        let stack = MemStack::new(&mut self.solve_mem);
+        factor.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(rhs, self.dim, columns),
             Par::Seq,
             stack,
         );

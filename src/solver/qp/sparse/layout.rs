@@ -1,7 +1,22 @@
 //! Classification of the QP's bounds: which variables and rows have finite lower / upper
 //! bounds, which variables are fixed (dl = du) and which rows are equalities or free.
+//! Bounds of magnitude ≥ [`INFINITE_BOUND`] count as infinite (as in IPOPT, whose default
+//! `nlp_upper_bound_inf` is 1e19), since a barrier on them would only slow convergence.
 
 use crate::solver::qp::QpProblem;
+
+/// Bound magnitude from which a bound is treated as absent.
+pub const INFINITE_BOUND: f64 = 1e20;
+
+/// True for a bound value that constrains anything.
+pub fn is_finite_bound(v: f64) -> bool {
+    v.abs() < INFINITE_BOUND
+}
+
+/// Lower/upper pair that no point satisfies (or NaN).
+fn inconsistent(l: f64, u: f64) -> bool {
+    l.is_nan() || u.is_nan() || l > u || l >= INFINITE_BOUND || u <= -INFINITE_BOUND
+}
 
 /// How a row of `bl ≤ A d ≤ bu` enters the interior-point method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -47,30 +62,30 @@ impl Layout {
         self.pairs = 0;
         for j in 0..n {
             let (l, u) = (qp.dl[j], qp.du[j]);
-            if l.is_nan() || u.is_nan() || l > u || l == f64::INFINITY || u == f64::NEG_INFINITY {
+            if inconsistent(l, u) {
                 return Err(());
             }
             let fixed = l == u;
             self.fixed.push(fixed);
-            self.var_lower.push(!fixed && l.is_finite());
-            self.var_upper.push(!fixed && u.is_finite());
+            self.var_lower.push(!fixed && is_finite_bound(l));
+            self.var_upper.push(!fixed && is_finite_bound(u));
         }
         for i in 0..m {
             let (l, u) = (qp.bl[i], qp.bu[i]);
-            if l.is_nan() || u.is_nan() || l > u || l == f64::INFINITY || u == f64::NEG_INFINITY {
+            if inconsistent(l, u) {
                 return Err(());
             }
             let kind = if l == u {
                 RowKind::Equality
-            } else if l.is_finite() || u.is_finite() {
+            } else if is_finite_bound(l) || is_finite_bound(u) {
                 RowKind::Inequality
             } else {
                 RowKind::Free
             };
             self.row.push(kind);
             let ineq = kind == RowKind::Inequality;
-            self.row_lower.push(ineq && l.is_finite());
-            self.row_upper.push(ineq && u.is_finite());
+            self.row_lower.push(ineq && is_finite_bound(l));
+            self.row_upper.push(ineq && is_finite_bound(u));
         }
         self.pairs = [
             &self.var_lower,

@@ -50,7 +50,7 @@ mod operators;
 #[cfg(test)]
 mod tests;
 
-use layout::{Layout, RowKind};
+use layout::{Layout, RowKind, is_finite_bound};
 use newton::NewtonSystem;
 use operators::{a_times, a_transpose_times, dot, hessian_times, inf_norm};
 
@@ -389,16 +389,17 @@ fn dimensions_agree(qp: &QpProblem<'_>) -> bool {
 /// Interior value inside [l, u] at least `margin` (shrunk for narrow intervals) from each
 /// finite bound, as close to `v` as possible.
 fn push_inside(v: f64, l: f64, u: f64) -> f64 {
-    let margin = if l.is_finite() && u.is_finite() {
+    let (has_l, has_u) = (is_finite_bound(l), is_finite_bound(u));
+    let margin = if has_l && has_u {
         (0.25 * (u - l)).min(1.0)
     } else {
         1.0
     };
     let mut v = v;
-    if l.is_finite() {
+    if has_l {
         v = v.max(l + margin);
     }
-    if u.is_finite() {
+    if has_u {
         v = v.min(u - margin);
     }
     v
@@ -634,7 +635,7 @@ fn direction(
             RowKind::Inequality => -ws.rp[i] + slack_rho(qp, layout, ws, i) / ws.sig_s[i],
         };
     }
-    system.solve(qp, layout, &mut ws.rhs)?;
+    system.solve(qp, &mut ws.rhs)?;
     let x = &ws.x;
     let dir = &mut ws.dir;
     dir.d.copy_from_slice(&ws.rhs[..n]);
@@ -793,7 +794,7 @@ fn unboundedness_detected(qp: &QpProblem<'_>, layout: &Layout, ws: &Workspace) -
     let norm = inf_norm(d);
     let mut scale = 1.0f64.max(inf_norm(qp.g));
     for v in qp.dl.iter().chain(qp.du).chain(qp.bl).chain(qp.bu) {
-        if v.is_finite() {
+        if is_finite_bound(*v) {
             scale = scale.max(v.abs());
         }
     }

@@ -28,6 +28,7 @@
 use nalgebra::DMatrix;
 
 use super::layout::{Layout, RowKind};
+use super::operators::dot;
 use crate::solver::kkt::{Inertia, KktError, KktSolver, Regularization};
 use crate::solver::qp::{QpHessian, QpProblem};
 
@@ -60,7 +61,9 @@ pub struct NewtonSystem {
     h_pos: Vec<usize>,
     /// KKT value position of each A entry (CSR order).
     a_pos: Vec<usize>,
-    /// Low-rank correction: V = K₀⁻¹U column-major (dim × p), and the LU of I − M UᵀV.
+    /// Low-rank correction: U = [W; 0] with fixed rows zeroed (its n leading rows, n × p
+    /// column-major), V = K₀⁻¹U column-major (dim × p), and the LU of I − M UᵀV.
+    u: Vec<f64>,
     v: Vec<f64>,
     capacitance: Option<nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>>,
     /// Scratch of length dim and 2p.
@@ -117,6 +120,7 @@ impl NewtonSystem {
             a_cols: a_cols.to_vec(),
             h_pos: positions,
             a_pos,
+            u: vec![0.0; n * p],
             v: vec![0.0; (n + m) * p],
             capacitance: None,
             work: vec![0.0; n + m],
@@ -222,26 +226,26 @@ impl NewtonSystem {
         self.factorizations += 1;
         let inertia = self.kkt.factor(Regularization::default())?;
         if let QpHessian::LowRank { w, m, .. } = qp.h {
-            let (dim, p) = (self.dim(), w.ncols());
+            let (n, dim, p) = (self.n, self.dim(), w.ncols());
+            // U = W with the rows of fixed variables zeroed, then V = K₀⁻¹U in one
+            // multi-column solve; its error is removed by the refinement in `solve`.
             for k in 0..p {
-                let column = &mut self.v[k * dim..(k + 1) * dim];
-                column.fill(0.0);
-                for j in 0..self.n {
-                    if !layout.fixed[j] {
-                        column[j] = w[(j, k)];
+                let u_column = &mut self.u[k * n..(k + 1) * n];
+                u_column.copy_from_slice(w.column(k).as_slice());
+                for (u, &fixed) in u_column.iter_mut().zip(&layout.fixed) {
+                    if fixed {
+                        *u = 0.0;
                     }
                 }
-                self.kkt
-                    .solve_refined(column, REFINEMENT_STEPS, REFINEMENT_TOL)?;
+                let v_column = &mut self.v[k * dim..(k + 1) * dim];
+                v_column[..n].copy_from_slice(u_column);
+                v_column[n..].fill(0.0);
             }
-            // C = I − M (Uᵀ V), p×p.
-            let utv = DMatrix::from_fn(p, p, |a, b| {
-                let column = &self.v[b * dim..(b + 1) * dim];
-                (0..self.n)
-                    .filter(|&j| !layout.fixed[j])
-                    .map(|j| w[(j, a)] * column[j])
-                    .sum()
-            });
+            self.kkt.solve_factored_columns(&mut self.v, p);
+            // C = I − M (Uᵀ V), p×p, with a blocked matrix product over the n primal rows.
+            let u = nalgebra::DMatrixView::from_slice(&self.u, n, p);
+            let v_primal = nalgebra::DMatrixView::from_slice_with_strides(&self.v, n, p, 1, dim);
+            let utv = u.transpose() * v_primal;
             let capacitance = DMatrix::identity(p, p) - m * utv;
             self.capacitance = Some(capacitance.lu());
         }
@@ -249,12 +253,7 @@ impl NewtonSystem {
     }
 
     /// Solves the Newton system in place (`rhs` of length n + m).
-    pub fn solve(
-        &mut self,
-        qp: &QpProblem<'_>,
-        layout: &Layout,
-        rhs: &mut [f64],
-    ) -> Result<(), KktError> {
+    pub fn solve(&mut self, qp: &QpProblem<'_>, rhs: &mut [f64]) -> Result<(), KktError> {
         if !matches!(qp.h, QpHessian::LowRank { .. }) {
             self.kkt
                 .solve_refined(rhs, REFINEMENT_STEPS, REFINEMENT_TOL)?;
@@ -263,14 +262,14 @@ impl NewtonSystem {
         let mut b = std::mem::take(&mut self.work_rhs);
         let mut r = std::mem::take(&mut self.work);
         b.copy_from_slice(rhs);
-        self.apply_inverse(qp, layout, rhs)?;
+        self.apply_inverse(qp, rhs)?;
         let b_norm = b.iter().fold(0.0f64, |a, x| a.max(x.abs()));
         for _ in 0..REFINEMENT_STEPS {
-            let norm = self.full_residual(qp, layout, &b, rhs, &mut r);
+            let norm = self.full_residual(qp, &b, rhs, &mut r);
             if norm <= REFINEMENT_TOL * (1.0 + b_norm) {
                 break;
             }
-            self.apply_inverse(qp, layout, &mut r)?;
+            self.apply_inverse(qp, &mut r)?;
             for (x, dx) in rhs.iter_mut().zip(&r) {
                 *x += dx;
             }
@@ -280,25 +279,18 @@ impl NewtonSystem {
         Ok(())
     }
 
-    /// `x ← (K₀ − U M Uᵀ)⁻¹ x` by Woodbury.
-    fn apply_inverse(
-        &mut self,
-        qp: &QpProblem<'_>,
-        layout: &Layout,
-        x: &mut [f64],
-    ) -> Result<(), KktError> {
-        self.kkt
-            .solve_refined(x, REFINEMENT_STEPS, REFINEMENT_TOL)?;
-        let QpHessian::LowRank { w, m, .. } = qp.h else {
+    /// `x ← (K₀ − U M Uᵀ)⁻¹ x` by Woodbury, with the factors of K₀ only (the caller refines
+    /// against the full operator).
+    fn apply_inverse(&mut self, qp: &QpProblem<'_>, x: &mut [f64]) -> Result<(), KktError> {
+        self.kkt.solve_factored(x);
+        let QpHessian::LowRank { m, .. } = qp.h else {
             return Ok(());
         };
-        let (dim, p) = (self.dim(), w.ncols());
+        let (n, dim) = (self.n, self.dim());
+        let p = m.nrows();
         let (utx, rhs) = self.small.split_at_mut(p);
         for (k, slot) in utx.iter_mut().enumerate() {
-            *slot = (0..self.n)
-                .filter(|&j| !layout.fixed[j])
-                .map(|j| w[(j, k)] * x[j])
-                .sum();
+            *slot = dot(&self.u[k * n..(k + 1) * n], &x[..n]);
         }
         for (a, slot) in rhs.iter_mut().enumerate() {
             *slot = (0..p).map(|b| m[(a, b)] * utx[b]).sum();
@@ -317,29 +309,22 @@ impl NewtonSystem {
     }
 
     /// `r ← b − (K₀ − U M Uᵀ) x`, returning ‖r‖∞.
-    fn full_residual(
-        &mut self,
-        qp: &QpProblem<'_>,
-        layout: &Layout,
-        b: &[f64],
-        x: &[f64],
-        r: &mut [f64],
-    ) -> f64 {
+    fn full_residual(&mut self, qp: &QpProblem<'_>, b: &[f64], x: &[f64], r: &mut [f64]) -> f64 {
         self.kkt.multiply(x, r);
-        if let QpHessian::LowRank { w, m, .. } = qp.h {
-            let p = w.ncols();
+        if let QpHessian::LowRank { m, .. } = qp.h {
+            let n = self.n;
+            let p = m.nrows();
             let (utx, mutx) = self.small.split_at_mut(p);
             for (k, slot) in utx.iter_mut().enumerate() {
-                *slot = (0..self.n)
-                    .filter(|&j| !layout.fixed[j])
-                    .map(|j| w[(j, k)] * x[j])
-                    .sum();
+                *slot = dot(&self.u[k * n..(k + 1) * n], &x[..n]);
             }
             for (a, slot) in mutx.iter_mut().enumerate() {
                 *slot = (0..p).map(|c| m[(a, c)] * utx[c]).sum();
             }
-            for j in (0..self.n).filter(|&j| !layout.fixed[j]) {
-                r[j] -= (0..p).map(|k| w[(j, k)] * mutx[k]).sum::<f64>();
+            for (k, coefficient) in mutx.iter().enumerate() {
+                for (ri, ui) in r[..n].iter_mut().zip(&self.u[k * n..(k + 1) * n]) {
+                    *ri -= coefficient * ui;
+                }
             }
         }
         let mut norm = 0.0f64;

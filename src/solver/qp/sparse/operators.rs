@@ -37,17 +37,18 @@ pub fn hessian_times(h: &QpHessian<'_>, x: &[f64], y: &mut [f64], tmp: &mut [f64
             let p = w.ncols();
             let (wtx, mwtx) = tmp[..2 * p].split_at_mut(p);
             for (k, slot) in wtx.iter_mut().enumerate() {
-                *slot = w.column(k).iter().zip(x).map(|(a, b)| a * b).sum();
+                *slot = dot(w.column(k).as_slice(), x);
             }
             for (i, slot) in mwtx.iter_mut().enumerate() {
                 *slot = (0..p).map(|k| m[(i, k)] * wtx[k]).sum();
             }
-            for (i, yi) in y.iter_mut().enumerate() {
-                let mut acc = delta * x[i];
-                for k in 0..p {
-                    acc -= w[(i, k)] * mwtx[k];
+            for (yi, xi) in y.iter_mut().zip(x) {
+                *yi = delta * xi;
+            }
+            for (k, coefficient) in mwtx.iter().enumerate() {
+                for (yi, wi) in y.iter_mut().zip(w.column(k).iter()) {
+                    *yi -= coefficient * wi;
                 }
-                *yi = acc;
             }
         }
     }

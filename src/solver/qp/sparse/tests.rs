@@ -602,3 +602,19 @@ fn feasibility_classification_is_reliable() {
     }
     assert!(wrong.is_empty(), "misclassified: {wrong:?}");
 }
+
+#[test]
+fn bounds_beyond_1e20_count_as_infinite() {
+    // min ½d² − d with "bounds" ±1e30 and a row bound 1e25: the optimum d = 1 is unaffected.
+    let data = small_qp(
+        DMatrix::identity(1, 1),
+        vec![-1.0],
+        &[(vec![1.0], -1e25, 1e25)],
+        vec![-1e30],
+        vec![1e30],
+    );
+    let sol = super::solve(&data.problem(), 1e-10);
+    assert_eq!(sol.status, QpStatus::Optimal);
+    assert!((sol.d[0] - 1.0).abs() < 1e-9);
+    assert!(sol.z[0].abs() < 1e-12 && sol.lambda[0].abs() < 1e-12);
+}
