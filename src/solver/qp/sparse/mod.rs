@@ -263,6 +263,16 @@ impl SparseQp {
         if self.layout.classify(qp).is_err() {
             return (fail(QpStatus::Infeasible), info);
         }
+        if n == 0 {
+            // Nothing to optimize: A d = 0 either satisfies every row or none can.
+            let feasible = (0..m).all(|i| qp.bl[i] <= 0.0 && 0.0 <= qp.bu[i]);
+            let status = if feasible {
+                QpStatus::Optimal
+            } else {
+                QpStatus::Infeasible
+            };
+            return (fail(status), info);
+        }
         info.reused_symbolic = self.system.as_ref().is_some_and(|s| s.matches(qp));
         if !info.reused_symbolic {
             self.system = None;

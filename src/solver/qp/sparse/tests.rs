@@ -604,6 +604,47 @@ fn feasibility_classification_is_reliable() {
 }
 
 #[test]
+fn empty_problems_are_handled() {
+    let none = small_qp(DMatrix::zeros(0, 0), vec![], &[], vec![], vec![]);
+    assert_eq!(
+        super::solve(&none.problem(), 1e-8).status,
+        QpStatus::Optimal
+    );
+    let rows = small_qp(
+        DMatrix::zeros(0, 0),
+        vec![],
+        &[(vec![], 1.0, 2.0)],
+        vec![],
+        vec![],
+    );
+    assert_eq!(
+        super::solve(&rows.problem(), 1e-8).status,
+        QpStatus::Infeasible
+    );
+    // Variables but no rows, and an all-fixed problem.
+    let box_only = small_qp(
+        DMatrix::identity(2, 2),
+        vec![1.0, -1.0],
+        &[],
+        vec![0.0; 2],
+        vec![0.5; 2],
+    );
+    let sol = super::solve(&box_only.problem(), 1e-10);
+    assert_eq!(sol.status, QpStatus::Optimal);
+    assert!(sol.d[0].abs() < 1e-9 && (sol.d[1] - 0.5).abs() < 1e-9);
+    let fixed = small_qp(
+        DMatrix::identity(2, 2),
+        vec![1.0, -1.0],
+        &[(vec![1.0, 1.0], 0.0, 1.0)],
+        vec![0.25; 2],
+        vec![0.25; 2],
+    );
+    let sol = super::solve(&fixed.problem(), 1e-10);
+    assert_eq!(sol.status, QpStatus::Optimal);
+    assert_kkt(&fixed.problem(), 0.0, &sol, 1e-9);
+}
+
+#[test]
 fn bounds_beyond_1e20_count_as_infinite() {
     // min ½d² − d with "bounds" ±1e30 and a row bound 1e25: the optimum d = 1 is unaffected.
     let data = small_qp(
