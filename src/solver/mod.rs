@@ -12,6 +12,7 @@ mod elastic;
 mod evaluator;
 pub mod global;
 pub mod hessian;
+pub mod kkt;
 mod log;
 mod merit;
 mod nlp;

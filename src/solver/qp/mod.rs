@@ -84,3 +84,5 @@ pub struct QpSolution {
     /// Inner iterations.
     pub iterations: usize,
 }
+
+pub mod sparse;
