@@ -11,6 +11,7 @@ fn main() {
     let iters: usize = args.get(3).map(|s| s.parse().unwrap()).unwrap_or(60);
     for p in hs::all() {
         if p.name == args[1] {
+            let p = if args.len() > 4 { p.with_start(args[4].split(',').map(|v| v.parse().unwrap()).collect()) } else { p.clone() };
             let o = Options {
                 hessian: mode,
                 verbosity: 2,

@@ -243,3 +243,62 @@ fn hs_lagrangian_hessians_match_central_differences() {
         }
     }
 }
+
+/// From perturbed starts the solver may end anywhere, but a success status must be true:
+/// every Optimal or Acceptable ending is checked independently for feasibility and the KKT
+/// conditions. Also exercises starts where the functions are undefined (NaN). The KKT bound
+/// is 10× looser than for the standard starts: the objective scale is fixed from the
+/// gradient at the start, and a start near a pole (HS64 at x ≈ 0.6: ‖∇f‖ ≈ 1e5) turns the
+/// scaled tolerance into a larger unscaled one.
+#[test]
+fn hs_random_starts_never_report_false_success() {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2003);
+    let mut tally = std::collections::BTreeMap::new();
+    for p in hs::all() {
+        for _ in 0..3 {
+            let x0: Vec<f64> = (0..p.n())
+                .map(|j| {
+                    let scale = p.x0[j].abs().max(1.0);
+                    (p.x0[j] + scale * rng.random_range(-0.5..0.5)).clamp(p.xl[j], p.xu[j])
+                })
+                .collect();
+            let moved = p.with_start(x0);
+            let s = solve(&moved.nlp(false), &options(HessianMode::Bfgs));
+            *tally.entry(format!("{:?}", s.status)).or_insert(0) += 1;
+            if !s.status.is_success() {
+                println!("{} from {:?}: {:?}", p.name, moved.x0, s.status);
+            }
+            if s.status.is_success() {
+                let loose = if s.status == optimize::solver::Status::Acceptable {
+                    100.0
+                } else {
+                    1.0
+                };
+                assert!(
+                    moved.violation(&s.x)
+                        <= 1e-6
+                            * loose
+                            * moved
+                                .cl
+                                .iter()
+                                .chain(&moved.cu)
+                                .filter(|v| v.is_finite())
+                                .fold(1.0_f64, |a, v| a.max(v.abs())),
+                    "{} from {:?}: violation {}",
+                    p.name,
+                    moved.x0,
+                    moved.violation(&s.x)
+                );
+                assert!(
+                    kkt_error(&moved, &s) <= 10.0 * KKT_TOLERANCE * loose,
+                    "{} from {:?}: KKT error {}",
+                    p.name,
+                    moved.x0,
+                    kkt_error(&moved, &s)
+                );
+            }
+        }
+    }
+    println!("outcomes from perturbed starts: {tally:?}");
+}

@@ -348,18 +348,23 @@ impl<'a> Sqp<'a> {
                 .map(|(a, b)| a * b)
                 .sum();
             let dhd: f64 = self.model.times(d).iter().zip(d).map(|(a, b)| a * b).sum();
-            let mut reduction = self.linear_reduction(&point, &jac, d);
-            let mut slope = gd - reduction;
-            for _ in 0..20 {
-                if slope < 0.0 || reduction <= 0.0 {
-                    break;
+            // Byrd–Nocedal safeguard: the weighted linearized violation decrease must pay for
+            // a tenth more than the model's objective change, or the weights of the rows that
+            // decrease are raised uniformly (Powell's rule decays the excess later).
+            let rows = self.row_reductions(&point, &jac, d);
+            let needed = gd + 0.5 * dhd.max(0.0);
+            let have: f64 = 0.9 * rows.iter().zip(&self.rho).map(|(r, w)| r * w).sum::<f64>();
+            let positive: f64 = rows.iter().filter(|&&r| r > 0.0).sum();
+            if positive > 0.0 && needed > have {
+                let tau = (needed - have) / (0.9 * positive);
+                for (w, r) in self.rho.iter_mut().zip(&rows) {
+                    if *r > 0.0 {
+                        *w += tau;
+                    }
                 }
-                for w in &mut self.rho {
-                    *w = 2.0 * *w + 1e-8;
-                }
-                reduction = self.linear_reduction(&point, &jac, d);
-                slope = gd - reduction;
             }
+            let reduction: f64 = rows.iter().zip(&self.rho).map(|(r, w)| r * w).sum();
+            let slope = gd - reduction;
             if self.options.verbosity >= 2 {
                 self.say(&format!(
                     "      |d| = {:.3e}  g'd = {gd:.3e}  d'Hd = {dhd:.3e}  lin.red = {reduction:.3e}  max rho = {:.3e}  slope = {slope:.3e}  qp = {:?}",
@@ -549,8 +554,8 @@ impl<'a> Sqp<'a> {
         }
     }
 
-    /// Weighted decrease of the linearized violation along d with the current weights.
-    fn linear_reduction(&self, point: &Point, jac: &CsrMatrix<f64>, d: &[f64]) -> f64 {
+    /// Decrease of each row's linearized violation along d.
+    fn row_reductions(&self, point: &Point, jac: &CsrMatrix<f64>, d: &[f64]) -> Vec<f64> {
         let (dl, du, bl, bu) = self.bounds_of_step(point);
         let lin = Linearization {
             a: jac,
@@ -559,7 +564,7 @@ impl<'a> Sqp<'a> {
             bl: &bl,
             bu: &bu,
         };
-        lin.weighted_reduction(d, &self.rho)
+        lin.row_reductions(d)
     }
 
     fn kkt(&self, point: &Point, jac: &CsrMatrix<f64>, lambda: &[f64]) -> (Kkt, Vec<f64>) {

@@ -18,6 +18,7 @@ use optimize::solver::{Dims, EvalError, Nlp};
 pub type Fun<T> = fn(&[T], &mut [T]) -> T;
 
 /// One test problem.
+#[derive(Clone)]
 pub struct Hs {
     /// "HS71" etc.
     pub name: &'static str,
@@ -76,6 +77,11 @@ impl Hs {
             f1,
             f2,
         }
+    }
+
+    /// The same problem from another start.
+    pub fn with_start(&self, x0: Vec<f64>) -> Hs {
+        Hs { x0, ..self.clone() }
     }
 
     /// Number of variables.
