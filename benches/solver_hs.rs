@@ -61,7 +61,9 @@ fn print_table() {
         }
         println!("{line}");
     }
-    println!("total ms: BFGS {total_bfgs:.2}, exact {total_exact:.2}   (* = not the book's optimum)");
+    println!(
+        "total ms: BFGS {total_bfgs:.2}, exact {total_exact:.2}   (* = not the book's optimum)"
+    );
 }
 
 fn bench_hs(c: &mut Criterion) {

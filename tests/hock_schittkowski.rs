@@ -55,9 +55,9 @@ fn kkt_error(p: &hs::Hs, s: &Solution) -> f64 {
         }
     }
     let mut err = 0.0_f64;
-    for j in 0..d.n {
-        r[j] += s.z[j];
-        err = err.max(r[j].abs() / size);
+    for (rj, zj) in r.iter_mut().zip(&s.z) {
+        *rj += zj;
+        err = err.max(rj.abs() / size);
     }
     let (_, c) = p.values(&s.x);
     let side_error = |mult: f64, value: f64, lo: f64, hi: f64| {
@@ -74,11 +74,11 @@ fn kkt_error(p: &hs::Hs, s: &Solution) -> f64 {
             mult.abs()
         }
     };
-    for i in 0..d.m {
-        err = err.max(side_error(s.lambda[i], c[i], p.cl[i], p.cu[i]));
+    for (i, &ci) in c.iter().enumerate() {
+        err = err.max(side_error(s.lambda[i], ci, p.cl[i], p.cu[i]));
     }
-    for j in 0..d.n {
-        err = err.max(side_error(s.z[j], s.x[j], p.xl[j], p.xu[j]));
+    for (j, &xj) in s.x.iter().enumerate() {
+        err = err.max(side_error(s.z[j], xj, p.xl[j], p.xu[j]));
     }
     err
 }

@@ -256,8 +256,8 @@ impl<'a> Sqp<'a> {
     /// The start: clamp into the bounds, choose scales, evaluate.
     fn initial_point(&mut self) -> Result<Point, (Status, Vec<f64>)> {
         let mut x = self.ev.start();
-        for j in 0..x.len() {
-            x[j] = x[j].clamp(self.ev.xl[j], self.ev.xu[j]);
+        for ((x, &l), &u) in x.iter_mut().zip(&self.ev.xl).zip(&self.ev.xu) {
+            *x = x.clamp(l, u);
         }
         let raw = self
             .ev
@@ -811,7 +811,10 @@ impl<'a> Sqp<'a> {
             .collect();
         let z = z_scaled.iter().map(|v| v / sf).collect();
         if self.options.verbosity >= 1 {
-            self.say(&format!("{}", status.sentence()));
+            self.say(status.sentence());
+            if status == Status::Infeasible {
+                self.say(&self.worst_rows(&point.values.c));
+            }
         }
         Solution {
             status,
@@ -827,6 +830,24 @@ impl<'a> Sqp<'a> {
             seconds: self.elapsed(),
             log: std::mem::take(&mut self.log),
         }
+    }
+
+    /// The most violated constraints by name, for infeasibility reports.
+    fn worst_rows(&self, c_scaled: &[f64]) -> String {
+        let mut rows: Vec<(usize, f64)> = (0..c_scaled.len())
+            .map(|i| {
+                let v = merit::row_violation(c_scaled[i], self.ev.cl[i], self.ev.cu[i]);
+                (i, v / self.ev.scale_c[i])
+            })
+            .filter(|&(_, v)| v > self.options.constraint_tolerance)
+            .collect();
+        rows.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let list: Vec<String> = rows
+            .iter()
+            .take(5)
+            .map(|&(i, v)| format!("{} by {v:.3e}", self.ev.constraint_name(i)))
+            .collect();
+        format!("most violated: {}", list.join(", "))
     }
 
     /// The result when the start cannot be evaluated.

@@ -105,11 +105,11 @@ impl Hs {
     pub fn violation(&self, x: &[f64]) -> f64 {
         let (_, c) = self.values(x);
         let mut v = 0.0_f64;
-        for j in 0..self.n() {
-            v = v.max(self.xl[j] - x[j]).max(x[j] - self.xu[j]);
+        for ((&x, &l), &u) in x.iter().zip(&self.xl).zip(&self.xu) {
+            v = v.max(l - x).max(x - u);
         }
-        for i in 0..self.m() {
-            v = v.max(self.cl[i] - c[i]).max(c[i] - self.cu[i]);
+        for ((&c, &l), &u) in c.iter().zip(&self.cl).zip(&self.cu) {
+            v = v.max(l - c).max(c - u);
         }
         v
     }
