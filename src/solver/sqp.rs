@@ -56,6 +56,10 @@ const ELASTIC_WEIGHT: f64 = 1e4;
 /// Largest step `‖αd‖∞` relative to `1 + ‖x‖∞` tried by the line search (SNOPT's major step
 /// limit), so that a huge QP step cannot throw the iterate far away in one go.
 const STEP_LIMIT: f64 = 2.0;
+/// Returns to the least violated iterate before `Infeasible` is declared elsewhere.
+const MAX_RETREATS: usize = 3;
+/// Factor on the quasi-Newton matrix and the penalty weights after such a return.
+const RETREAT_STIFFNESS: f64 = 10.0;
 /// Elastic-penalty increases per iteration.
 const MAX_STEERING: usize = 8;
 /// Consecutive iterations within 100× the tolerances before `Acceptable`.
@@ -148,6 +152,16 @@ impl Model {
         match self {
             Model::Bfgs(b) => b.reset(),
             Model::Lbfgs(l) => l.reset(),
+            Model::Exact { .. } => {}
+        }
+    }
+
+    /// Restarts a quasi-Newton model at `factor·I` (shorter first steps); the exact Hessian
+    /// is kept.
+    fn reset_stiffer(&mut self, factor: f64) {
+        match self {
+            Model::Bfgs(b) => b.reset_scaled(factor),
+            Model::Lbfgs(l) => l.reset_scaled(factor),
             Model::Exact { .. } => {}
         }
     }
@@ -300,6 +314,8 @@ impl<'a> Sqp<'a> {
         let mut qp_in = 0;
         let mut acceptable_run = 0;
         let mut reset_done = false;
+        let mut retreats_left = MAX_RETREATS;
+        let mut least_violated = point.clone();
         let mut iteration = 0;
         loop {
             let jac = self.jacobian(&point.derivatives.jac);
@@ -313,7 +329,16 @@ impl<'a> Sqp<'a> {
             if kkt.primal <= ctol && kkt.optimality <= tol {
                 return self.finish(Status::Optimal, &point, Some(&lambda_qp));
             }
-            if step.infeasible_stationary {
+            let infeasible = step.infeasible_stationary
+                || (step.qp.status != QpStatus::Optimal
+                    && self.stalled_status(kkt, &point, &jac) == Status::Infeasible);
+            if infeasible {
+                if self.retreat(&mut point, &least_violated, &mut retreats_left) {
+                    alpha_in = 0.0;
+                    qp_in = step.qp_iterations;
+                    iteration += 1;
+                    continue;
+                }
                 return self.finish(Status::Infeasible, &point, Some(&lambda_qp));
             }
             if kkt.primal <= ctol && point.values.f / self.ev.scale_f < -1e20 {
@@ -374,7 +399,14 @@ impl<'a> Sqp<'a> {
                 ));
             }
 
-            match self.line_search(&point, &jac, d, slope) {
+            // A step whose predicted merit decrease comes mostly from the violation (and every
+            // elastic step) must reduce the violation in fact: otherwise a step into a region
+            // where the linearization is poor can pass the Armijo test on the objective alone.
+            let predicted: f64 = rows.iter().sum();
+            let violation_slope = (predicted > 0.0
+                && (step.elastic || reduction >= -0.5 * slope))
+                .then_some(-predicted);
+            match self.line_search(&point, &jac, d, slope, violation_slope) {
                 LineSearch::Accepted { point: next, alpha } => {
                     reset_done = false;
                     self.lambda = lambda_qp;
@@ -383,6 +415,9 @@ impl<'a> Sqp<'a> {
                         return self.finish(status, &next, Some(&self.lambda.clone()));
                     }
                     point = next;
+                    if self.violation(&point) < self.violation(&least_violated) {
+                        least_violated = point.clone();
+                    }
                     alpha_in = alpha;
                     qp_in = step.qp_iterations;
                 }
@@ -403,12 +438,46 @@ impl<'a> Sqp<'a> {
                         } else {
                             self.stalled_status(kkt, &point, &jac)
                         };
+                        if status == Status::Infeasible
+                            && self.retreat(&mut point, &least_violated, &mut retreats_left)
+                        {
+                            alpha_in = 0.0;
+                            qp_in = step.qp_iterations;
+                            iteration += 1;
+                            continue;
+                        }
                         return self.finish(status, &point, Some(&lambda_qp));
                     }
                 }
             }
             iteration += 1;
         }
+    }
+
+    /// Before `Infeasible` is declared at a stationary point of the violation that is clearly
+    /// worse than an earlier iterate (reached by a long step into a region where the
+    /// linearization misled), goes back to the least violated iterate with a stiffer
+    /// quasi-Newton model (shorter steps) and heavier penalty weights. Returns whether it did.
+    fn retreat(&mut self, point: &mut Point, least: &Point, left: &mut usize) -> bool {
+        if *left == 0 || self.violation(least) >= 0.9 * self.violation(point) {
+            return false;
+        }
+        *left -= 1;
+        *point = least.clone();
+        self.model.reset_stiffer(RETREAT_STIFFNESS);
+        for w in &mut self.rho {
+            *w = (*w * RETREAT_STIFFNESS).max(1.0);
+        }
+        self.warm.clear();
+        if let Err(e) = self.update_exact(point) {
+            self.say(&format!("exact Hessian failed after a retreat: {e}"));
+        }
+        true
+    }
+
+    /// Unweighted ℓ1 violation of the scaled constraints at a point.
+    fn violation(&self, p: &Point) -> f64 {
+        merit::l1_violation(&p.values.c, &self.ev.cl, &self.ev.cu)
     }
 
     /// Stalled, unless x is infeasible and stationary for the violation (then Infeasible).
@@ -616,8 +685,10 @@ impl<'a> Sqp<'a> {
         jac: &CsrMatrix<f64>,
         d: &[f64],
         slope: f64,
+        violation_slope: Option<f64>,
     ) -> LineSearch {
         let phi0 = self.merit(&point.values);
+        let v0 = merit::l1_violation(&point.values.c, &self.ev.cl, &self.ev.cu);
         let dnorm = d.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
         let xnorm = point.x.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
         if dnorm <= 1e-15 * xnorm {
@@ -635,7 +706,10 @@ impl<'a> Sqp<'a> {
                 continue;
             };
             let phi = self.merit(&values);
-            if phi <= phi0 + ARMIJO * alpha * slope {
+            let violation_ok = violation_slope.is_none_or(|vs| {
+                merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu) <= v0 + ARMIJO * alpha * vs
+            });
+            if phi <= phi0 + ARMIJO * alpha * slope && violation_ok {
                 match self.complete(x, values) {
                     Err(()) => return LineSearch::Fatal,
                     Ok(Some(next)) => return LineSearch::Accepted { point: next, alpha },
@@ -647,7 +721,8 @@ impl<'a> Sqp<'a> {
             }
             if alpha == 1.0 && !soc_tried {
                 soc_tried = true;
-                match self.second_order_correction(point, jac, d, &values, phi0, slope) {
+                let target = violation_slope.map(|vs| v0 + ARMIJO * vs);
+                match self.second_order_correction(point, jac, d, &values, phi0, slope, target) {
                     Err(()) => return LineSearch::Fatal,
                     Ok(Some(next)) => return LineSearch::Accepted { point: next, alpha },
                     Ok(None) => {}
@@ -675,6 +750,7 @@ impl<'a> Sqp<'a> {
         trial_values: &Values,
         phi0: f64,
         slope: f64,
+        violation_target: Option<f64>,
     ) -> Result<Option<Point>, ()> {
         let (dl, du, mut bl, mut bu) = self.bounds_of_step(point);
         let jd = jac * &DVector::from_column_slice(d);
@@ -701,7 +777,10 @@ impl<'a> Sqp<'a> {
         let Some((values, x)) = self.evaluate(x)? else {
             return Ok(None);
         };
-        if self.merit(&values) <= phi0 + ARMIJO * slope {
+        let violation_ok = violation_target.is_none_or(|t| {
+            merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu) <= t
+        });
+        if self.merit(&values) <= phi0 + ARMIJO * slope && violation_ok {
             return self.complete(x, values);
         }
         Ok(None)
