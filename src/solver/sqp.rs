@@ -403,8 +403,7 @@ impl<'a> Sqp<'a> {
             // elastic step) must reduce the violation in fact: otherwise a step into a region
             // where the linearization is poor can pass the Armijo test on the objective alone.
             let predicted: f64 = rows.iter().sum();
-            let violation_slope = (predicted > 0.0
-                && (step.elastic || reduction >= -0.5 * slope))
+            let violation_slope = (predicted > 0.0 && (step.elastic || reduction >= -0.5 * slope))
                 .then_some(-predicted);
             match self.line_search(&point, &jac, d, slope, violation_slope) {
                 LineSearch::Accepted { point: next, alpha } => {
@@ -777,9 +776,8 @@ impl<'a> Sqp<'a> {
         let Some((values, x)) = self.evaluate(x)? else {
             return Ok(None);
         };
-        let violation_ok = violation_target.is_none_or(|t| {
-            merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu) <= t
-        });
+        let violation_ok = violation_target
+            .is_none_or(|t| merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu) <= t);
         if self.merit(&values) <= phi0 + ARMIJO * slope && violation_ok {
             return self.complete(x, values);
         }
