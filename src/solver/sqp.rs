@@ -185,6 +185,18 @@ struct StepChoice {
     qp_iterations: usize,
 }
 
+/// The sufficient-decrease tests of one line search.
+struct Acceptance {
+    /// Merit value at the current point.
+    phi0: f64,
+    /// Upper bound of the merit function's directional derivative along d.
+    slope: f64,
+    /// ℓ1 violation at the current point.
+    v0: f64,
+    /// Predicted violation change along d when the violation must decrease in fact.
+    violation_slope: Option<f64>,
+}
+
 enum LineSearch {
     Accepted { point: Point, alpha: f64 },
     Failed,
@@ -678,6 +690,16 @@ impl<'a> Sqp<'a> {
         }
     }
 
+    /// Whether values at `x + αd` pass the sufficient-decrease tests.
+    fn accepts(&self, test: &Acceptance, values: &Values, alpha: f64) -> bool {
+        let merit_ok = self.merit(values) <= test.phi0 + ARMIJO * alpha * test.slope;
+        let violation_ok = test.violation_slope.is_none_or(|vs| {
+            merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu)
+                <= test.v0 + ARMIJO * alpha * vs
+        });
+        merit_ok && violation_ok
+    }
+
     fn line_search(
         &mut self,
         point: &Point,
@@ -687,7 +709,12 @@ impl<'a> Sqp<'a> {
         violation_slope: Option<f64>,
     ) -> LineSearch {
         let phi0 = self.merit(&point.values);
-        let v0 = merit::l1_violation(&point.values.c, &self.ev.cl, &self.ev.cu);
+        let test = Acceptance {
+            phi0,
+            slope,
+            v0: merit::l1_violation(&point.values.c, &self.ev.cl, &self.ev.cu),
+            violation_slope,
+        };
         let dnorm = d.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
         let xnorm = point.x.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
         if dnorm <= 1e-15 * xnorm {
@@ -705,10 +732,7 @@ impl<'a> Sqp<'a> {
                 continue;
             };
             let phi = self.merit(&values);
-            let violation_ok = violation_slope.is_none_or(|vs| {
-                merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu) <= v0 + ARMIJO * alpha * vs
-            });
-            if phi <= phi0 + ARMIJO * alpha * slope && violation_ok {
+            if self.accepts(&test, &values, alpha) {
                 match self.complete(x, values) {
                     Err(()) => return LineSearch::Fatal,
                     Ok(Some(next)) => return LineSearch::Accepted { point: next, alpha },
@@ -720,8 +744,7 @@ impl<'a> Sqp<'a> {
             }
             if alpha == 1.0 && !soc_tried {
                 soc_tried = true;
-                let target = violation_slope.map(|vs| v0 + ARMIJO * vs);
-                match self.second_order_correction(point, jac, d, &values, phi0, slope, target) {
+                match self.second_order_correction(point, jac, d, &values, &test) {
                     Err(()) => return LineSearch::Fatal,
                     Ok(Some(next)) => return LineSearch::Accepted { point: next, alpha },
                     Ok(None) => {}
@@ -747,9 +770,7 @@ impl<'a> Sqp<'a> {
         jac: &CsrMatrix<f64>,
         d: &[f64],
         trial_values: &Values,
-        phi0: f64,
-        slope: f64,
-        violation_target: Option<f64>,
+        test: &Acceptance,
     ) -> Result<Option<Point>, ()> {
         let (dl, du, mut bl, mut bu) = self.bounds_of_step(point);
         let jd = jac * &DVector::from_column_slice(d);
@@ -776,9 +797,7 @@ impl<'a> Sqp<'a> {
         let Some((values, x)) = self.evaluate(x)? else {
             return Ok(None);
         };
-        let violation_ok = violation_target
-            .is_none_or(|t| merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu) <= t);
-        if self.merit(&values) <= phi0 + ARMIJO * slope && violation_ok {
+        if self.accepts(test, &values, 1.0) {
             return self.complete(x, values);
         }
         Ok(None)
