@@ -56,6 +56,8 @@ const ELASTIC_WEIGHT: f64 = 1e4;
 /// Largest step `‖αd‖∞` relative to `1 + ‖x‖∞` tried by the line search (SNOPT's major step
 /// limit), so that a huge QP step cannot throw the iterate far away in one go.
 const STEP_LIMIT: f64 = 2.0;
+/// Largest initial least-squares multiplier kept (IPOPT's `constr_mult_init_max`).
+const MAX_INITIAL_MULTIPLIER: f64 = 1e3;
 /// Returns to the least violated iterate before `Infeasible` is declared elsewhere.
 const MAX_RETREATS: usize = 3;
 /// Factor on the quasi-Newton matrix and the penalty weights after such a return.
@@ -318,6 +320,9 @@ impl<'a> Sqp<'a> {
         if self.options.verbosity >= 1 {
             let _ = log::write_header(&mut std::io::stderr());
         }
+        if !self.model.is_quasi_newton() {
+            self.lambda = self.least_squares_multipliers(&point);
+        }
         if let Err(e) = self.update_exact(&point) {
             let status = self.eval_status(&e);
             return self.finish(status, &point, None);
@@ -484,6 +489,56 @@ impl<'a> Sqp<'a> {
             self.say(&format!("exact Hessian failed after a retreat: {e}"));
         }
         true
+    }
+
+    /// Initial multipliers: least-squares solution of `∇f + Jᵀλ = 0` over the equality rows and
+    /// the inequality rows active or violated at the start (others 0), as IPOPT initializes
+    /// them; discarded (all 0) when larger than `MAX_INITIAL_MULTIPLIER` or when the system is
+    /// singular, and inequality multipliers of the wrong sign are set to 0. They give the
+    /// exact Hessian its constraint curvature from the first iteration on (quasi-Newton
+    /// models start from λ = 0: their first update uses the QP multipliers anyway).
+    fn least_squares_multipliers(&self, point: &Point) -> Vec<f64> {
+        let (n, m) = (self.ev.dims.n, self.ev.dims.m);
+        let mut lambda = vec![0.0; m];
+        let rows: Vec<usize> = (0..m)
+            .filter(|&i| {
+                let (c, l, u) = (point.values.c[i], self.ev.cl[i], self.ev.cu[i]);
+                l == u || c <= l || c >= u
+            })
+            .collect();
+        if rows.is_empty() || rows.len() > n || rows.len() > qp::DENSE_LIMIT {
+            return lambda;
+        }
+        let mut position = vec![usize::MAX; m];
+        for (k, &i) in rows.iter().enumerate() {
+            position[i] = k;
+        }
+        let mut j: DMatrix<f64> = DMatrix::zeros(rows.len(), n);
+        for (k, (&r, &c)) in self.jac_shape.0.iter().zip(&self.jac_shape.1).enumerate() {
+            if position[r] != usize::MAX {
+                j[(position[r], c)] += point.derivatives.jac[k];
+            }
+        }
+        let g = DVector::from_column_slice(&point.derivatives.grad);
+        let mut normal: DMatrix<f64> = &j * j.transpose();
+        let scale = normal.diagonal().amax().max(1e-300);
+        for k in 0..rows.len() {
+            normal[(k, k)] += 1e-12 * scale;
+        }
+        let Some(chol) = normal.cholesky() else {
+            return lambda;
+        };
+        let estimate = chol.solve(&(-(&j * g)));
+        if estimate.amax() > MAX_INITIAL_MULTIPLIER || !estimate.iter().all(|v| v.is_finite()) {
+            return lambda;
+        }
+        for (k, &i) in rows.iter().enumerate() {
+            let (c, l, u) = (point.values.c[i], self.ev.cl[i], self.ev.cu[i]);
+            let v = estimate[k];
+            let sign_ok = l == u || (c <= l && v <= 0.0) || (c >= u && v >= 0.0);
+            lambda[i] = if sign_ok { v } else { 0.0 };
+        }
+        lambda
     }
 
     /// Unweighted ℓ1 violation of the scaled constraints at a point.
