@@ -498,7 +498,7 @@ fn hanging_chain_with_sparse_derivatives() {
         (HessianMode::Lbfgs, false),
         (HessianMode::Exact, true),
     ] {
-        let chain = Chain { links: 30, exact };
+        let chain = Chain { links: 20, exact };
         let s = solve(
             &chain,
             &Options {
