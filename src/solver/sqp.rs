@@ -1,28 +1,36 @@
 //! The SQP outer loop: a line-search Sℓ1QP method (Fletcher 1985; Nocedal & Wright, 2nd ed.,
 //! Algorithm 18.3 with §18.5), on the automatically scaled problem (see `evaluator`).
 //!
-//! Each major iteration at x (all quantities scaled):
+//! Each major iteration at x (all quantities scaled, dimensionless):
 //! 1. QP `min ½dᵀHd + ∇fᵀd  s.t. xl−x ≤ d ≤ xu−x, cl−c ≤ J d ≤ cu−c` through [`qp::solve`],
 //!    warm-started from the previous working set; bounds on x are constraints of the QP, so
 //!    every iterate satisfies them exactly.
-//! 2. If the QP is inconsistent: elastic mode (see `elastic`). The least reachable linearized
-//!    violation is computed first; when none is reachable although x is infeasible, x is a
-//!    stationary point of the violation and the solve ends `Infeasible`. Otherwise the
-//!    elastic penalty is raised (×10) until the step achieves at least a tenth of the
-//!    reachable reduction (steering).
+//! 2. Elastic mode (see `elastic`) when that QP is inconsistent or its constraint forces
+//!    `|λᵢ|·‖∇cᵢ‖` exceed [`ELASTIC_WEIGHT`] times the objective gradient (a nearly
+//!    inconsistent linearization). The least reachable linearized violation is computed
+//!    first; when it improves on the current violation by less than `tolerance` relative,
+//!    x is a stationary point of the violation: the solve ends `Infeasible`, unless an earlier
+//!    iterate was clearly less violated, in which case it returns there once more with a
+//!    stiffer model (at most [`MAX_RETREATS`] times). Otherwise the elastic weights are raised
+//!    ×10 until the step achieves a tenth of the reachable reduction (steering).
 //! 3. Termination tests at x with the QP multipliers (see `termination`).
-//! 4. Penalty ρ of the ℓ1 merit `φ = f + ρ‖viol c‖₁` raised so that d is a descent direction
-//!    (see `merit::required_penalty`); ρ never decreases.
-//! 5. Backtracking Armijo line search on φ (η = 1e-4, safeguarded quadratic interpolation);
-//!    if the unit step is rejected, one second-order correction (N&W eq. 18.51) re-solves the
-//!    QP with the constraint bounds shifted by `c(x+d) − c(x) − J d`, against the Maratos
-//!    effect. A failed or non-finite evaluation at a trial point only shortens the step.
+//! 4. Weights ρᵢ of the ℓ1 merit `φ = f + Σ ρᵢ viol(cᵢ)`: Powell's update from the QP
+//!    multipliers, raised where needed so the linearized violation decrease pays for the
+//!    model's objective change (see `merit`).
+//! 5. Backtracking Armijo line search on φ (η = 1e-4, safeguarded quadratic interpolation),
+//!    starting no further than [`STEP_LIMIT`]·(1 + ‖x‖∞) away. If the unit step is rejected,
+//!    one second-order correction (N&W eq. 18.51) re-solves the QP with the constraint bounds
+//!    shifted by `c(x+d) − c(x) − J d`, against the Maratos effect. Steps whose predicted
+//!    merit decrease comes mostly from the violation (and elastic steps) must also decrease
+//!    the violation itself. A failed or non-finite evaluation at a trial point only shortens
+//!    the step; `EvalError::Fatal` ends the solve with `EvaluationError`.
 //! 6. Hessian update (damped BFGS / L-BFGS) or exact Hessian at the new point with the new
-//!    multipliers λ = λ_QP.
+//!    multipliers λ = λ_QP (initial multipliers: least squares, for the exact Hessian).
 //!
 //! Hessian choice in `HessianMode::Auto`: the exact Hessian when the problem has one; else
 //! dense BFGS for n ≤ [`DENSE_BFGS_LIMIT`] (an n×n update costs O(n²) per iteration and the
-//! dense QP O(n³) anyway), L-BFGS above.
+//! dense QP O(n³) anyway), L-BFGS above. `HessianMode::Exact` on a problem without a Hessian
+//! makes the same quasi-Newton choice.
 
 use std::io::Write;
 use std::sync::atomic::Ordering;
@@ -224,11 +232,14 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
     let started = Instant::now();
     let ev = Evaluator::new(nlp);
     let n = ev.dims.n;
+    let quasi_newton = if n <= DENSE_BFGS_LIMIT {
+        HessianMode::Bfgs
+    } else {
+        HessianMode::Lbfgs
+    };
     let mode = match options.hessian {
-        HessianMode::Auto if ev.dims.hess_nnz > 0 => HessianMode::Exact,
-        HessianMode::Auto if n <= DENSE_BFGS_LIMIT => HessianMode::Bfgs,
-        HessianMode::Auto => HessianMode::Lbfgs,
-        HessianMode::Exact if ev.dims.hess_nnz == 0 => HessianMode::Bfgs,
+        HessianMode::Auto | HessianMode::Exact if ev.dims.hess_nnz > 0 => HessianMode::Exact,
+        HessianMode::Auto | HessianMode::Exact => quasi_newton,
         other => other,
     };
     let model = match mode {

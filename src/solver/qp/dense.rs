@@ -24,7 +24,8 @@ use nalgebra::{DMatrix, DVector};
 
 use super::{QpProblem, QpSolution, QpStatus};
 
-/// Identifier of one constraint side: see [`ConstraintSide`] for the numbering.
+/// Identifier of one constraint side (`n` variables, `m` rows): `0..n` lower variable bounds,
+/// `n..2n` upper ones, `2n..2n+m` lower row bounds, `2n+m..2n+2m` upper row bounds.
 pub type ConstraintId = usize;
 
 /// Which side of which bound a constraint id stands for (`n` variables, `m` rows):
