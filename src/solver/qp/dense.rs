@@ -299,7 +299,7 @@ pub fn solve(h: &DMatrix<f64>, problem: &QpProblem, preferred: &[ConstraintId]) 
     let cons = Constraints::new(problem);
     // J = L⁻ᵀ, so that J Jᵀ = H⁻¹.
     let l_t = chol.l().transpose();
-    let Some(j) = l_t.try_inverse() else {
+    let Some(j) = l_t.solve_upper_triangular(&DMatrix::identity(n, n)) else {
         return fail(QpStatus::Numerical);
     };
     let g = DVector::from_column_slice(problem.g);
