@@ -66,6 +66,11 @@ const ELASTIC_WEIGHT: f64 = 1e4;
 const STEP_LIMIT: f64 = 2.0;
 /// Largest initial least-squares multiplier kept (IPOPT's `constr_mult_init_max`).
 const MAX_INITIAL_MULTIPLIER: f64 = 1e3;
+/// Penalty weight beyond which an exact-Hessian iteration counts as stuck; after
+/// `EXACT_PATIENCE` such iterations in a row the solve switches to quasi-Newton updates.
+const EXACT_WEIGHT_LIMIT: f64 = 1e8;
+/// See `EXACT_WEIGHT_LIMIT`.
+const EXACT_PATIENCE: usize = 10;
 /// Returns to the least violated iterate before `Infeasible` is declared elsewhere.
 const MAX_RETREATS: usize = 3;
 /// Factor on the quasi-Newton matrix and the penalty weights after such a return.
@@ -343,11 +348,20 @@ impl<'a> Sqp<'a> {
         let mut acceptable_run = 0;
         let mut reset_done = false;
         let mut retreats_left = MAX_RETREATS;
+        let mut heavy_weights = 0;
         let mut least_violated = point.clone();
         let mut iteration = 0;
         loop {
             let jac = self.jacobian(&point.derivatives.jac);
             let step = self.choose_step(&point, &jac);
+            if !self.model.is_quasi_newton() && self.rho.iter().any(|&w| w > EXACT_WEIGHT_LIMIT) {
+                heavy_weights += 1;
+                if heavy_weights >= EXACT_PATIENCE {
+                    self.abandon_exact_hessian("the penalty weights stayed huge");
+                }
+            } else {
+                heavy_weights = 0;
+            }
             let lambda_qp = step.qp.lambda.clone();
             let (kkt, _) = self.kkt(&point, &jac, &lambda_qp);
             self.record(iteration, &point, kkt, alpha_in, qp_in);
@@ -452,7 +466,12 @@ impl<'a> Sqp<'a> {
                     return self.finish(Status::EvaluationError, &point, Some(&lambda_qp));
                 }
                 LineSearch::Failed => {
-                    if self.model.is_quasi_newton() && !reset_done {
+                    if !self.model.is_quasi_newton() {
+                        self.abandon_exact_hessian("the line search failed");
+                        reset_done = true;
+                        alpha_in = 0.0;
+                        qp_in = step.qp_iterations;
+                    } else if !reset_done {
                         // A poor quasi-Newton model is the usual cause: start it afresh.
                         self.model.reset();
                         reset_done = true;
@@ -550,6 +569,25 @@ impl<'a> Sqp<'a> {
             lambda[i] = if sign_ok { v } else { 0.0 };
         }
         lambda
+    }
+
+    /// Switches from the exact Hessian to the quasi-Newton model of `HessianMode::Auto` (dense
+    /// BFGS or L-BFGS) when it cannot make progress: its curvature, scaled by diverging
+    /// multipliers far from a solution, can freeze the steps, while a quasi-Newton model stays
+    /// bounded. The penalty weights restart from the current multipliers.
+    fn abandon_exact_hessian(&mut self, why: &str) {
+        let n = self.ev.dims.n;
+        self.model = if n <= DENSE_BFGS_LIMIT {
+            Model::Bfgs(DenseBfgs::new(n))
+        } else {
+            Model::Lbfgs(Lbfgs::new(n, self.options.lbfgs_memory))
+        };
+        for (w, l) in self.rho.iter_mut().zip(&self.lambda) {
+            *w = l.abs().min(ELASTIC_WEIGHT);
+        }
+        self.say(&format!(
+            "      exact Hessian abandoned ({why}); continuing with quasi-Newton updates"
+        ));
     }
 
     /// Unweighted ℓ1 violation of the scaled constraints at a point.
