@@ -25,7 +25,10 @@
 //!    the violation itself. A failed or non-finite evaluation at a trial point only shortens
 //!    the step; `EvalError::Fatal` ends the solve with `EvaluationError`.
 //! 6. Hessian update (damped BFGS / L-BFGS) or exact Hessian at the new point with the new
-//!    multipliers λ = λ_QP (initial multipliers: least squares, for the exact Hessian).
+//!    multipliers λ = λ_QP (initial multipliers: least squares, for the exact Hessian). An
+//!    exact-Hessian solve whose line search fails, or whose penalty weights stay above
+//!    `EXACT_WEIGHT_LIMIT` for `EXACT_PATIENCE` iterations (curvature scaled by diverging
+//!    multipliers freezes the steps), continues with the quasi-Newton model instead.
 //!
 //! Hessian choice in `HessianMode::Auto`: the exact Hessian when the problem has one; else
 //! dense BFGS for n ≤ [`DENSE_BFGS_LIMIT`] (an n×n update costs O(n²) per iteration and the
