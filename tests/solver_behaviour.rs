@@ -524,3 +524,31 @@ fn hanging_chain_with_sparse_derivatives() {
     assert!((objectives[0] - objectives[2]).abs() <= 1e-6 * objectives[2].abs().max(1.0));
     assert!((objectives[1] - objectives[2]).abs() <= 1e-6 * objectives[2].abs().max(1.0));
 }
+
+#[test]
+fn unbounded_objective_is_reported() {
+    // min −x₀ − x₁ s.t. x₀ − x₁ = 0: decreases without limit along x₀ = x₁ → ∞.
+    let nlp = Small {
+        x0: vec![0.0, 0.0],
+        xl: vec![-INF; 2],
+        xu: vec![INF; 2],
+        cl: vec![0.0],
+        cu: vec![0.0],
+        values: Box::new(|x, c| {
+            c[0] = x[0] - x[1];
+            Ok(-x[0] - x[1])
+        }),
+        derivatives: Box::new(|_x, g, j| {
+            g.copy_from_slice(&[-1.0, -1.0]);
+            j.copy_from_slice(&[1.0, -1.0]);
+        }),
+        hessian: None,
+    };
+    let s = solve(&nlp, &quiet());
+    println!(
+        "{:?} after {} iterations, f = {:e}",
+        s.status, s.iterations, s.objective
+    );
+    assert_eq!(s.status, Status::Unbounded);
+    assert!(!s.status.is_success());
+}

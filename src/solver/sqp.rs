@@ -13,7 +13,8 @@
 //!    iterate was clearly less violated, in which case it returns there once more with a
 //!    stiffer model (at most [`MAX_RETREATS`] times). Otherwise the elastic weights are raised
 //!    ×10 until the step achieves a tenth of the reachable reduction (steering).
-//! 3. Termination tests at x with the QP multipliers (see `termination`).
+//! 3. Termination tests at x with the QP multipliers (see `termination`); a feasible x with
+//!    f < −1e20 or ‖x‖∞ > 1e10 ends the solve `Unbounded`.
 //! 4. Weights ρᵢ of the ℓ1 merit `φ = f + Σ ρᵢ viol(cᵢ)`: Powell's update from the QP
 //!    multipliers, raised where needed so the linearized violation decrease pays for the
 //!    model's objective change (see `merit`).
@@ -67,6 +68,12 @@ const ELASTIC_WEIGHT: f64 = 1e4;
 /// Largest step `‖αd‖∞` relative to `1 + ‖x‖∞` tried by the line search (SNOPT's major step
 /// limit), so that a huge QP step cannot throw the iterate far away in one go.
 const STEP_LIMIT: f64 = 2.0;
+/// An objective below this on a feasible point ends the solve `Unbounded` (SNOPT's
+/// "unbounded objective").
+const UNBOUNDED_OBJECTIVE: f64 = -1e20;
+/// Iterates larger than this (‖x‖∞) on a feasible point end the solve `Unbounded` (SNOPT's
+/// "unbounded step size"): a well-scaled problem never needs them.
+const UNBOUNDED_STEP: f64 = 1e10;
 /// Largest initial least-squares multiplier kept (IPOPT's `constr_mult_init_max`).
 const MAX_INITIAL_MULTIPLIER: f64 = 1e3;
 /// Penalty weight beyond which an exact-Hessian iteration counts as stuck; after
@@ -386,7 +393,11 @@ impl<'a> Sqp<'a> {
                 }
                 return self.finish(Status::Infeasible, &point, Some(&lambda_qp));
             }
-            if kkt.primal <= ctol && point.values.f / self.ev.scale_f < -1e20 {
+            let xnorm = point.x.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+            if kkt.primal <= 100.0 * ctol
+                && (point.values.f / self.ev.scale_f < UNBOUNDED_OBJECTIVE
+                    || xnorm > UNBOUNDED_STEP)
+            {
                 return self.finish(Status::Unbounded, &point, Some(&lambda_qp));
             }
             if kkt.primal <= 100.0 * ctol && kkt.optimality <= 100.0 * tol {
