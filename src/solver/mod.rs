@@ -63,6 +63,7 @@ mod evaluator;
 pub mod hessian;
 mod log;
 mod merit;
+mod multipliers;
 mod nlp;
 mod options;
 pub mod qp;

@@ -41,14 +41,15 @@ use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use nalgebra::{DMatrix, DVector};
-use nalgebra_sparse::{CooMatrix, CscMatrix, CsrMatrix};
+use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
 use super::elastic::{self, Linearization};
 use super::evaluator::{Derivatives, Evaluator, Values};
-use super::hessian::{self, DenseBfgs, InertiaShift, Lbfgs};
+use super::hessian::{self, DenseBfgs, InertiaShift, Lbfgs, Model};
 use super::log;
 use super::merit;
-use super::qp::{self, QpHessian, QpProblem, QpSolution, QpStatus, WarmStart};
+use super::multipliers::{self, LinearizedPoint};
+use super::qp::{self, QpProblem, QpSolution, QpStatus, WarmStart};
 use super::termination::{self, Kkt, KktInput};
 use super::{EvalError, HessianMode, IterationRecord, Nlp, Options, Solution, Status};
 
@@ -74,8 +75,6 @@ const UNBOUNDED_OBJECTIVE: f64 = -1e20;
 /// Iterates larger than this (‖x‖∞) on a feasible point end the solve `Unbounded` (SNOPT's
 /// "unbounded step size"): a well-scaled problem never needs them.
 const UNBOUNDED_STEP: f64 = 1e10;
-/// Largest initial least-squares multiplier kept (IPOPT's `constr_mult_init_max`).
-const MAX_INITIAL_MULTIPLIER: f64 = 1e3;
 /// Penalty weight beyond which an exact-Hessian iteration counts as stuck; after
 /// `EXACT_PATIENCE` such iterations in a row the solve switches to quasi-Newton updates.
 const EXACT_WEIGHT_LIMIT: f64 = 1e8;
@@ -89,108 +88,6 @@ const RETREAT_STIFFNESS: f64 = 10.0;
 const MAX_STEERING: usize = 8;
 /// Consecutive iterations within 100× the tolerances before `Acceptable`.
 const ACCEPTABLE_ITERATIONS: usize = 15;
-
-/// The second-order model in use.
-enum Model {
-    Bfgs(DenseBfgs),
-    Lbfgs(Lbfgs),
-    Exact {
-        shift: InertiaShift,
-        /// Dense convexified matrix (small n) or the raw lower triangle (large n).
-        dense: Option<DMatrix<f64>>,
-        sparse: Option<CscMatrix<f64>>,
-    },
-}
-
-impl Model {
-    fn qp_hessian(&self) -> QpHessian<'_> {
-        match self {
-            Model::Bfgs(b) => QpHessian::Dense(b.matrix()),
-            Model::Lbfgs(l) => {
-                let (delta, w, m) = l.compact();
-                QpHessian::LowRank { delta, w, m }
-            }
-            Model::Exact { dense, sparse, .. } => match (dense, sparse) {
-                (Some(d), _) => QpHessian::Dense(d),
-                (None, Some(s)) => QpHessian::SparseLower(s),
-                (None, None) => unreachable!("exact model is assembled before use"),
-            },
-        }
-    }
-
-    /// Dense copy for the elastic subproblems.
-    fn dense(&self, n: usize) -> DMatrix<f64> {
-        match self.qp_hessian() {
-            QpHessian::Dense(d) => d.clone(),
-            QpHessian::LowRank { delta, w, m } => {
-                let mut d = -(w * m * w.transpose());
-                for i in 0..n {
-                    d[(i, i)] += delta;
-                }
-                d
-            }
-            QpHessian::SparseLower(s) => {
-                let (r, c, v): (Vec<_>, Vec<_>, Vec<_>) = s
-                    .triplet_iter()
-                    .map(|(r, c, &v)| (r, c, v))
-                    .fold((vec![], vec![], vec![]), |mut acc, (r, c, v)| {
-                        acc.0.push(r);
-                        acc.1.push(c);
-                        acc.2.push(v);
-                        acc
-                    });
-                let h = hessian::assemble_dense(n, &r, &c, &v);
-                InertiaShift::default()
-                    .convexify(&h)
-                    .map(|(m, _)| m)
-                    .unwrap_or_else(|| DMatrix::identity(n, n))
-            }
-        }
-    }
-
-    /// H·d.
-    fn times(&self, d: &[f64]) -> Vec<f64> {
-        let v = DVector::from_column_slice(d);
-        match self.qp_hessian() {
-            QpHessian::Dense(h) => (h * v).as_slice().to_vec(),
-            QpHessian::LowRank { delta, w, m } => {
-                (&v * delta - w * (m * w.tr_mul(&v))).as_slice().to_vec()
-            }
-            QpHessian::SparseLower(s) => {
-                let mut out = vec![0.0; d.len()];
-                for (r, c, &val) in s.triplet_iter() {
-                    out[r] += val * d[c];
-                    if r != c {
-                        out[c] += val * d[r];
-                    }
-                }
-                out
-            }
-        }
-    }
-
-    fn is_quasi_newton(&self) -> bool {
-        !matches!(self, Model::Exact { .. })
-    }
-
-    fn reset(&mut self) {
-        match self {
-            Model::Bfgs(b) => b.reset(),
-            Model::Lbfgs(l) => l.reset(),
-            Model::Exact { .. } => {}
-        }
-    }
-
-    /// Restarts a quasi-Newton model at `factor·I` (shorter first steps); the exact Hessian
-    /// is kept.
-    fn reset_stiffer(&mut self, factor: f64) {
-        match self {
-            Model::Bfgs(b) => b.reset_scaled(factor),
-            Model::Lbfgs(l) => l.reset_scaled(factor),
-            Model::Exact { .. } => {}
-        }
-    }
-}
 
 /// One accepted point with everything evaluated there.
 #[derive(Clone)]
@@ -347,7 +244,15 @@ impl<'a> Sqp<'a> {
             let _ = log::write_header(&mut std::io::stderr());
         }
         if !self.model.is_quasi_newton() {
-            self.lambda = self.least_squares_multipliers(&point);
+            self.lambda = multipliers::least_squares(&LinearizedPoint {
+                grad: &point.derivatives.grad,
+                jac_rows: &self.jac_shape.0,
+                jac_cols: &self.jac_shape.1,
+                jac: &point.derivatives.jac,
+                c: &point.values.c,
+                cl: &self.ev.cl,
+                cu: &self.ev.cu,
+            });
         }
         if let Err(e) = self.update_exact(&point) {
             let status = self.eval_status(&e);
@@ -533,56 +438,6 @@ impl<'a> Sqp<'a> {
             self.say(&format!("exact Hessian failed after a retreat: {e}"));
         }
         true
-    }
-
-    /// Initial multipliers: least-squares solution of `∇f + Jᵀλ = 0` over the equality rows and
-    /// the inequality rows active or violated at the start (others 0), as IPOPT initializes
-    /// them; discarded (all 0) when larger than `MAX_INITIAL_MULTIPLIER` or when the system is
-    /// singular, and inequality multipliers of the wrong sign are set to 0. They give the
-    /// exact Hessian its constraint curvature from the first iteration on (quasi-Newton
-    /// models start from λ = 0: their first update uses the QP multipliers anyway).
-    fn least_squares_multipliers(&self, point: &Point) -> Vec<f64> {
-        let (n, m) = (self.ev.dims.n, self.ev.dims.m);
-        let mut lambda = vec![0.0; m];
-        let rows: Vec<usize> = (0..m)
-            .filter(|&i| {
-                let (c, l, u) = (point.values.c[i], self.ev.cl[i], self.ev.cu[i]);
-                l == u || c <= l || c >= u
-            })
-            .collect();
-        if rows.is_empty() || rows.len() > n || rows.len() > qp::DENSE_LIMIT {
-            return lambda;
-        }
-        let mut position = vec![usize::MAX; m];
-        for (k, &i) in rows.iter().enumerate() {
-            position[i] = k;
-        }
-        let mut j: DMatrix<f64> = DMatrix::zeros(rows.len(), n);
-        for (k, (&r, &c)) in self.jac_shape.0.iter().zip(&self.jac_shape.1).enumerate() {
-            if position[r] != usize::MAX {
-                j[(position[r], c)] += point.derivatives.jac[k];
-            }
-        }
-        let g = DVector::from_column_slice(&point.derivatives.grad);
-        let mut normal: DMatrix<f64> = &j * j.transpose();
-        let scale = normal.diagonal().amax().max(1e-300);
-        for k in 0..rows.len() {
-            normal[(k, k)] += 1e-12 * scale;
-        }
-        let Some(chol) = normal.cholesky() else {
-            return lambda;
-        };
-        let estimate = chol.solve(&(-(&j * g)));
-        if estimate.amax() > MAX_INITIAL_MULTIPLIER || !estimate.iter().all(|v| v.is_finite()) {
-            return lambda;
-        }
-        for (k, &i) in rows.iter().enumerate() {
-            let (c, l, u) = (point.values.c[i], self.ev.cl[i], self.ev.cu[i]);
-            let v = estimate[k];
-            let sign_ok = l == u || (c <= l && v <= 0.0) || (c >= u && v >= 0.0);
-            lambda[i] = if sign_ok { v } else { 0.0 };
-        }
-        lambda
     }
 
     /// Switches from the exact Hessian to the quasi-Newton model of `HessianMode::Auto` (dense
