@@ -15,7 +15,7 @@
 use nalgebra::DMatrix;
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
-use super::merit::{l1_violation, weighted_violation};
+use super::merit::{l1_violation, row_violation};
 use super::qp::{self, QpHessian, QpProblem, QpSolution, QpStatus, WarmStart};
 
 /// Regularization of the slack variables (and of d in the feasibility subproblem).
@@ -48,12 +48,15 @@ impl Linearization<'_> {
         l1_violation(&zero, self.bl, self.bu)
     }
 
-    /// Weighted decrease of the linearized violation along d: `Σ wᵢ (vᵢ(0) − vᵢ(d))`.
-    pub fn weighted_reduction(&self, d: &[f64], w: &[f64]) -> f64 {
+    /// Decrease of each row's linearized violation along d: `vᵢ(0) − vᵢ(d)`.
+    pub fn row_reductions(&self, d: &[f64]) -> Vec<f64> {
         let ad = self.a * &nalgebra::DVector::from_column_slice(d);
-        let zero = vec![0.0; self.a.nrows()];
-        weighted_violation(&zero, self.bl, self.bu, w)
-            - weighted_violation(ad.as_slice(), self.bl, self.bu, w)
+        (0..self.bl.len())
+            .map(|i| {
+                row_violation(0.0, self.bl[i], self.bu[i])
+                    - row_violation(ad[i], self.bl[i], self.bu[i])
+            })
+            .collect()
     }
 }
 

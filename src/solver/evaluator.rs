@@ -139,9 +139,9 @@ impl<'a> Evaluator<'a> {
         for (k, &r) in self.jac_rows.iter().enumerate() {
             rmax[r] = rmax[r].max(jac[k].abs());
         }
-        for i in 0..self.dims.m {
-            let s = if rmax[i] > GRADIENT_TARGET {
-                GRADIENT_TARGET / rmax[i]
+        for (i, &r) in rmax.iter().enumerate() {
+            let s = if r > GRADIENT_TARGET {
+                GRADIENT_TARGET / r
             } else {
                 1.0
             };
@@ -234,14 +234,16 @@ impl<'a> Evaluator<'a> {
     /// Largest unscaled violation of bounds and constraints, given scaled c.
     pub fn max_violation(&self, x: &[f64], c_scaled: &[f64]) -> f64 {
         let mut v = 0.0_f64;
-        for j in 0..self.dims.n {
-            v = v.max(self.xl[j] - x[j]).max(x[j] - self.xu[j]);
+        for ((&x, &l), &u) in x.iter().zip(&self.xl).zip(&self.xu) {
+            v = v.max(l - x).max(x - u);
         }
-        for i in 0..self.dims.m {
-            let s = self.scale_c[i];
-            v = v
-                .max((self.cl[i] - c_scaled[i]) / s)
-                .max((c_scaled[i] - self.cu[i]) / s);
+        for (((&c, &l), &u), &s) in c_scaled
+            .iter()
+            .zip(&self.cl)
+            .zip(&self.cu)
+            .zip(&self.scale_c)
+        {
+            v = v.max((l - c) / s).max((c - u) / s);
         }
         v
     }

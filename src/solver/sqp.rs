@@ -1,42 +1,55 @@
 //! The SQP outer loop: a line-search Sℓ1QP method (Fletcher 1985; Nocedal & Wright, 2nd ed.,
 //! Algorithm 18.3 with §18.5), on the automatically scaled problem (see `evaluator`).
 //!
-//! Each major iteration at x (all quantities scaled):
+//! Each major iteration at x (all quantities scaled, dimensionless):
 //! 1. QP `min ½dᵀHd + ∇fᵀd  s.t. xl−x ≤ d ≤ xu−x, cl−c ≤ J d ≤ cu−c` through [`qp::solve`],
 //!    warm-started from the previous working set; bounds on x are constraints of the QP, so
 //!    every iterate satisfies them exactly.
-//! 2. If the QP is inconsistent: elastic mode (see `elastic`). The least reachable linearized
-//!    violation is computed first; when none is reachable although x is infeasible, x is a
-//!    stationary point of the violation and the solve ends `Infeasible`. Otherwise the
-//!    elastic penalty is raised (×10) until the step achieves at least a tenth of the
-//!    reachable reduction (steering).
-//! 3. Termination tests at x with the QP multipliers (see `termination`).
-//! 4. Penalty ρ of the ℓ1 merit `φ = f + ρ‖viol c‖₁` raised so that d is a descent direction
-//!    (see `merit::required_penalty`); ρ never decreases.
-//! 5. Backtracking Armijo line search on φ (η = 1e-4, safeguarded quadratic interpolation);
-//!    if the unit step is rejected, one second-order correction (N&W eq. 18.51) re-solves the
-//!    QP with the constraint bounds shifted by `c(x+d) − c(x) − J d`, against the Maratos
-//!    effect. A failed or non-finite evaluation at a trial point only shortens the step.
+//! 2. Elastic mode (see `elastic`) when that QP is inconsistent or its constraint forces
+//!    `|λᵢ|·‖∇cᵢ‖` exceed [`ELASTIC_WEIGHT`] times the objective gradient (a nearly
+//!    inconsistent linearization). The least reachable linearized violation is computed
+//!    first; when it improves on the current violation by less than `tolerance` relative,
+//!    x is a stationary point of the violation: the solve ends `Infeasible`, unless an earlier
+//!    iterate was clearly less violated, in which case it returns there once more with a
+//!    stiffer model (at most [`MAX_RETREATS`] times). Otherwise the elastic weights are raised
+//!    ×10 until the step achieves a tenth of the reachable reduction (steering).
+//! 3. Termination tests at x with the QP multipliers (see `termination`); a feasible x with
+//!    f < −1e20 or ‖x‖∞ > 1e10 ends the solve `Unbounded`.
+//! 4. Weights ρᵢ of the ℓ1 merit `φ = f + Σ ρᵢ viol(cᵢ)`: Powell's update from the QP
+//!    multipliers, raised where needed so the linearized violation decrease pays for the
+//!    model's objective change (see `merit`).
+//! 5. Backtracking Armijo line search on φ (η = 1e-4, safeguarded quadratic interpolation),
+//!    starting no further than [`STEP_LIMIT`]·(1 + ‖x‖∞) away. If the unit step is rejected,
+//!    one second-order correction (N&W eq. 18.51) re-solves the QP with the constraint bounds
+//!    shifted by `c(x+d) − c(x) − J d`, against the Maratos effect. Steps whose predicted
+//!    merit decrease comes mostly from the violation (and elastic steps) must also decrease
+//!    the violation itself. A failed or non-finite evaluation at a trial point only shortens
+//!    the step; `EvalError::Fatal` ends the solve with `EvaluationError`.
 //! 6. Hessian update (damped BFGS / L-BFGS) or exact Hessian at the new point with the new
-//!    multipliers λ = λ_QP.
+//!    multipliers λ = λ_QP (initial multipliers: least squares, for the exact Hessian). An
+//!    exact-Hessian solve whose line search fails, or whose penalty weights stay above
+//!    `EXACT_WEIGHT_LIMIT` for `EXACT_PATIENCE` iterations (curvature scaled by diverging
+//!    multipliers freezes the steps), continues with the quasi-Newton model instead.
 //!
 //! Hessian choice in `HessianMode::Auto`: the exact Hessian when the problem has one; else
 //! dense BFGS for n ≤ [`DENSE_BFGS_LIMIT`] (an n×n update costs O(n²) per iteration and the
-//! dense QP O(n³) anyway), L-BFGS above.
+//! dense QP O(n³) anyway), L-BFGS above. `HessianMode::Exact` on a problem without a Hessian
+//! makes the same quasi-Newton choice.
 
 use std::io::Write;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use nalgebra::{DMatrix, DVector};
-use nalgebra_sparse::{CooMatrix, CscMatrix, CsrMatrix};
+use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
 use super::elastic::{self, Linearization};
 use super::evaluator::{Derivatives, Evaluator, Values};
-use super::hessian::{self, DenseBfgs, InertiaShift, Lbfgs};
+use super::hessian::{self, DenseBfgs, InertiaShift, Lbfgs, Model};
 use super::log;
 use super::merit;
-use super::qp::{self, QpHessian, QpProblem, QpSolution, QpStatus, WarmStart};
+use super::multipliers::{self, LinearizedPoint};
+use super::qp::{self, QpProblem, QpSolution, QpStatus, WarmStart};
 use super::termination::{self, Kkt, KktInput};
 use super::{EvalError, HessianMode, IterationRecord, Nlp, Options, Solution, Status};
 
@@ -56,102 +69,25 @@ const ELASTIC_WEIGHT: f64 = 1e4;
 /// Largest step `‖αd‖∞` relative to `1 + ‖x‖∞` tried by the line search (SNOPT's major step
 /// limit), so that a huge QP step cannot throw the iterate far away in one go.
 const STEP_LIMIT: f64 = 2.0;
+/// An objective below this on a feasible point ends the solve `Unbounded` (SNOPT's
+/// "unbounded objective").
+const UNBOUNDED_OBJECTIVE: f64 = -1e20;
+/// Iterates larger than this (‖x‖∞) on a feasible point end the solve `Unbounded` (SNOPT's
+/// "unbounded step size"): a well-scaled problem never needs them.
+const UNBOUNDED_STEP: f64 = 1e10;
+/// Penalty weight beyond which an exact-Hessian iteration counts as stuck; after
+/// `EXACT_PATIENCE` such iterations in a row the solve switches to quasi-Newton updates.
+const EXACT_WEIGHT_LIMIT: f64 = 1e8;
+/// See `EXACT_WEIGHT_LIMIT`.
+const EXACT_PATIENCE: usize = 10;
+/// Returns to the least violated iterate before `Infeasible` is declared elsewhere.
+const MAX_RETREATS: usize = 3;
+/// Factor on the quasi-Newton matrix and the penalty weights after such a return.
+const RETREAT_STIFFNESS: f64 = 10.0;
 /// Elastic-penalty increases per iteration.
 const MAX_STEERING: usize = 8;
 /// Consecutive iterations within 100× the tolerances before `Acceptable`.
 const ACCEPTABLE_ITERATIONS: usize = 15;
-
-/// The second-order model in use.
-enum Model {
-    Bfgs(DenseBfgs),
-    Lbfgs(Lbfgs),
-    Exact {
-        shift: InertiaShift,
-        /// Dense convexified matrix (small n) or the raw lower triangle (large n).
-        dense: Option<DMatrix<f64>>,
-        sparse: Option<CscMatrix<f64>>,
-    },
-}
-
-impl Model {
-    fn qp_hessian(&self) -> QpHessian<'_> {
-        match self {
-            Model::Bfgs(b) => QpHessian::Dense(b.matrix()),
-            Model::Lbfgs(l) => {
-                let (delta, w, m) = l.compact();
-                QpHessian::LowRank { delta, w, m }
-            }
-            Model::Exact { dense, sparse, .. } => match (dense, sparse) {
-                (Some(d), _) => QpHessian::Dense(d),
-                (None, Some(s)) => QpHessian::SparseLower(s),
-                (None, None) => unreachable!("exact model is assembled before use"),
-            },
-        }
-    }
-
-    /// Dense copy for the elastic subproblems.
-    fn dense(&self, n: usize) -> DMatrix<f64> {
-        match self.qp_hessian() {
-            QpHessian::Dense(d) => d.clone(),
-            QpHessian::LowRank { delta, w, m } => {
-                let mut d = -(w * m * w.transpose());
-                for i in 0..n {
-                    d[(i, i)] += delta;
-                }
-                d
-            }
-            QpHessian::SparseLower(s) => {
-                let (r, c, v): (Vec<_>, Vec<_>, Vec<_>) = s
-                    .triplet_iter()
-                    .map(|(r, c, &v)| (r, c, v))
-                    .fold((vec![], vec![], vec![]), |mut acc, (r, c, v)| {
-                        acc.0.push(r);
-                        acc.1.push(c);
-                        acc.2.push(v);
-                        acc
-                    });
-                let h = hessian::assemble_dense(n, &r, &c, &v);
-                InertiaShift::default()
-                    .convexify(&h)
-                    .map(|(m, _)| m)
-                    .unwrap_or_else(|| DMatrix::identity(n, n))
-            }
-        }
-    }
-
-    /// H·d.
-    fn times(&self, d: &[f64]) -> Vec<f64> {
-        let v = DVector::from_column_slice(d);
-        match self.qp_hessian() {
-            QpHessian::Dense(h) => (h * v).as_slice().to_vec(),
-            QpHessian::LowRank { delta, w, m } => {
-                (&v * delta - w * (m * w.tr_mul(&v))).as_slice().to_vec()
-            }
-            QpHessian::SparseLower(s) => {
-                let mut out = vec![0.0; d.len()];
-                for (r, c, &val) in s.triplet_iter() {
-                    out[r] += val * d[c];
-                    if r != c {
-                        out[c] += val * d[r];
-                    }
-                }
-                out
-            }
-        }
-    }
-
-    fn is_quasi_newton(&self) -> bool {
-        !matches!(self, Model::Exact { .. })
-    }
-
-    fn reset(&mut self) {
-        match self {
-            Model::Bfgs(b) => b.reset(),
-            Model::Lbfgs(l) => l.reset(),
-            Model::Exact { .. } => {}
-        }
-    }
-}
 
 /// One accepted point with everything evaluated there.
 #[derive(Clone)]
@@ -169,6 +105,18 @@ struct StepChoice {
     /// x is a stationary point of the violation while infeasible.
     infeasible_stationary: bool,
     qp_iterations: usize,
+}
+
+/// The sufficient-decrease tests of one line search.
+struct Acceptance {
+    /// Merit value at the current point.
+    phi0: f64,
+    /// Upper bound of the merit function's directional derivative along d.
+    slope: f64,
+    /// ℓ1 violation at the current point.
+    v0: f64,
+    /// Predicted violation change along d when the violation must decrease in fact.
+    violation_slope: Option<f64>,
 }
 
 enum LineSearch {
@@ -196,11 +144,14 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
     let started = Instant::now();
     let ev = Evaluator::new(nlp);
     let n = ev.dims.n;
+    let quasi_newton = if n <= DENSE_BFGS_LIMIT {
+        HessianMode::Bfgs
+    } else {
+        HessianMode::Lbfgs
+    };
     let mode = match options.hessian {
-        HessianMode::Auto if ev.dims.hess_nnz > 0 => HessianMode::Exact,
-        HessianMode::Auto if n <= DENSE_BFGS_LIMIT => HessianMode::Bfgs,
-        HessianMode::Auto => HessianMode::Lbfgs,
-        HessianMode::Exact if ev.dims.hess_nnz == 0 => HessianMode::Bfgs,
+        HessianMode::Auto | HessianMode::Exact if ev.dims.hess_nnz > 0 => HessianMode::Exact,
+        HessianMode::Auto | HessianMode::Exact => quasi_newton,
         other => other,
     };
     let model = match mode {
@@ -256,8 +207,8 @@ impl<'a> Sqp<'a> {
     /// The start: clamp into the bounds, choose scales, evaluate.
     fn initial_point(&mut self) -> Result<Point, (Status, Vec<f64>)> {
         let mut x = self.ev.start();
-        for j in 0..x.len() {
-            x[j] = x[j].clamp(self.ev.xl[j], self.ev.xu[j]);
+        for ((x, &l), &u) in x.iter_mut().zip(&self.ev.xl).zip(&self.ev.xu) {
+            *x = x.clamp(l, u);
         }
         let raw = self
             .ev
@@ -292,6 +243,17 @@ impl<'a> Sqp<'a> {
         if self.options.verbosity >= 1 {
             let _ = log::write_header(&mut std::io::stderr());
         }
+        if !self.model.is_quasi_newton() {
+            self.lambda = multipliers::least_squares(&LinearizedPoint {
+                grad: &point.derivatives.grad,
+                jac_rows: &self.jac_shape.0,
+                jac_cols: &self.jac_shape.1,
+                jac: &point.derivatives.jac,
+                c: &point.values.c,
+                cl: &self.ev.cl,
+                cu: &self.ev.cu,
+            });
+        }
         if let Err(e) = self.update_exact(&point) {
             let status = self.eval_status(&e);
             return self.finish(status, &point, None);
@@ -300,10 +262,21 @@ impl<'a> Sqp<'a> {
         let mut qp_in = 0;
         let mut acceptable_run = 0;
         let mut reset_done = false;
+        let mut retreats_left = MAX_RETREATS;
+        let mut heavy_weights = 0;
+        let mut least_violated = point.clone();
         let mut iteration = 0;
         loop {
             let jac = self.jacobian(&point.derivatives.jac);
             let step = self.choose_step(&point, &jac);
+            if !self.model.is_quasi_newton() && self.rho.iter().any(|&w| w > EXACT_WEIGHT_LIMIT) {
+                heavy_weights += 1;
+                if heavy_weights >= EXACT_PATIENCE {
+                    self.abandon_exact_hessian("the penalty weights stayed huge");
+                }
+            } else {
+                heavy_weights = 0;
+            }
             let lambda_qp = step.qp.lambda.clone();
             let (kkt, _) = self.kkt(&point, &jac, &lambda_qp);
             self.record(iteration, &point, kkt, alpha_in, qp_in);
@@ -313,10 +286,23 @@ impl<'a> Sqp<'a> {
             if kkt.primal <= ctol && kkt.optimality <= tol {
                 return self.finish(Status::Optimal, &point, Some(&lambda_qp));
             }
-            if step.infeasible_stationary {
+            let infeasible = step.infeasible_stationary
+                || (step.qp.status != QpStatus::Optimal
+                    && self.stalled_status(kkt, &point, &jac) == Status::Infeasible);
+            if infeasible {
+                if self.retreat(&mut point, &least_violated, &mut retreats_left) {
+                    alpha_in = 0.0;
+                    qp_in = step.qp_iterations;
+                    iteration += 1;
+                    continue;
+                }
                 return self.finish(Status::Infeasible, &point, Some(&lambda_qp));
             }
-            if kkt.primal <= ctol && point.values.f / self.ev.scale_f < -1e20 {
+            let xnorm = point.x.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+            if kkt.primal <= 100.0 * ctol
+                && (point.values.f / self.ev.scale_f < UNBOUNDED_OBJECTIVE
+                    || xnorm > UNBOUNDED_STEP)
+            {
                 return self.finish(Status::Unbounded, &point, Some(&lambda_qp));
             }
             if kkt.primal <= 100.0 * ctol && kkt.optimality <= 100.0 * tol {
@@ -348,18 +334,23 @@ impl<'a> Sqp<'a> {
                 .map(|(a, b)| a * b)
                 .sum();
             let dhd: f64 = self.model.times(d).iter().zip(d).map(|(a, b)| a * b).sum();
-            let mut reduction = self.linear_reduction(&point, &jac, d);
-            let mut slope = gd - reduction;
-            for _ in 0..20 {
-                if slope < 0.0 || reduction <= 0.0 {
-                    break;
+            // Byrd–Nocedal safeguard: the weighted linearized violation decrease must pay for
+            // a tenth more than the model's objective change, or the weights of the rows that
+            // decrease are raised uniformly (Powell's rule decays the excess later).
+            let rows = self.row_reductions(&point, &jac, d);
+            let needed = gd + 0.5 * dhd.max(0.0);
+            let have: f64 = 0.9 * rows.iter().zip(&self.rho).map(|(r, w)| r * w).sum::<f64>();
+            let positive: f64 = rows.iter().filter(|&&r| r > 0.0).sum();
+            if positive > 0.0 && needed > have {
+                let tau = (needed - have) / (0.9 * positive);
+                for (w, r) in self.rho.iter_mut().zip(&rows) {
+                    if *r > 0.0 {
+                        *w += tau;
+                    }
                 }
-                for w in &mut self.rho {
-                    *w = 2.0 * *w + 1e-8;
-                }
-                reduction = self.linear_reduction(&point, &jac, d);
-                slope = gd - reduction;
             }
+            let reduction: f64 = rows.iter().zip(&self.rho).map(|(r, w)| r * w).sum();
+            let slope = gd - reduction;
             if self.options.verbosity >= 2 {
                 self.say(&format!(
                     "      |d| = {:.3e}  g'd = {gd:.3e}  d'Hd = {dhd:.3e}  lin.red = {reduction:.3e}  max rho = {:.3e}  slope = {slope:.3e}  qp = {:?}",
@@ -369,7 +360,13 @@ impl<'a> Sqp<'a> {
                 ));
             }
 
-            match self.line_search(&point, &jac, d, slope) {
+            // A step whose predicted merit decrease comes mostly from the violation (and every
+            // elastic step) must reduce the violation in fact: otherwise a step into a region
+            // where the linearization is poor can pass the Armijo test on the objective alone.
+            let predicted: f64 = rows.iter().sum();
+            let violation_slope = (predicted > 0.0 && (step.elastic || reduction >= -0.5 * slope))
+                .then_some(-predicted);
+            match self.line_search(&point, &jac, d, slope, violation_slope) {
                 LineSearch::Accepted { point: next, alpha } => {
                     reset_done = false;
                     self.lambda = lambda_qp;
@@ -378,6 +375,9 @@ impl<'a> Sqp<'a> {
                         return self.finish(status, &next, Some(&self.lambda.clone()));
                     }
                     point = next;
+                    if self.violation(&point) < self.violation(&least_violated) {
+                        least_violated = point.clone();
+                    }
                     alpha_in = alpha;
                     qp_in = step.qp_iterations;
                 }
@@ -385,7 +385,12 @@ impl<'a> Sqp<'a> {
                     return self.finish(Status::EvaluationError, &point, Some(&lambda_qp));
                 }
                 LineSearch::Failed => {
-                    if self.model.is_quasi_newton() && !reset_done {
+                    if !self.model.is_quasi_newton() {
+                        self.abandon_exact_hessian("the line search failed");
+                        reset_done = true;
+                        alpha_in = 0.0;
+                        qp_in = step.qp_iterations;
+                    } else if !reset_done {
                         // A poor quasi-Newton model is the usual cause: start it afresh.
                         self.model.reset();
                         reset_done = true;
@@ -398,12 +403,65 @@ impl<'a> Sqp<'a> {
                         } else {
                             self.stalled_status(kkt, &point, &jac)
                         };
+                        if status == Status::Infeasible
+                            && self.retreat(&mut point, &least_violated, &mut retreats_left)
+                        {
+                            alpha_in = 0.0;
+                            qp_in = step.qp_iterations;
+                            iteration += 1;
+                            continue;
+                        }
                         return self.finish(status, &point, Some(&lambda_qp));
                     }
                 }
             }
             iteration += 1;
         }
+    }
+
+    /// Before `Infeasible` is declared at a stationary point of the violation that is clearly
+    /// worse than an earlier iterate (reached by a long step into a region where the
+    /// linearization misled), goes back to the least violated iterate with a stiffer
+    /// quasi-Newton model (shorter steps) and heavier penalty weights. Returns whether it did.
+    fn retreat(&mut self, point: &mut Point, least: &Point, left: &mut usize) -> bool {
+        if *left == 0 || self.violation(least) >= 0.9 * self.violation(point) {
+            return false;
+        }
+        *left -= 1;
+        *point = least.clone();
+        self.model.reset_stiffer(RETREAT_STIFFNESS);
+        for w in &mut self.rho {
+            *w = (*w * RETREAT_STIFFNESS).max(1.0);
+        }
+        self.warm.clear();
+        if let Err(e) = self.update_exact(point) {
+            self.say(&format!("exact Hessian failed after a retreat: {e}"));
+        }
+        true
+    }
+
+    /// Switches from the exact Hessian to the quasi-Newton model of `HessianMode::Auto` (dense
+    /// BFGS or L-BFGS) when it cannot make progress: its curvature, scaled by diverging
+    /// multipliers far from a solution, can freeze the steps, while a quasi-Newton model stays
+    /// bounded. The penalty weights restart from the current multipliers.
+    fn abandon_exact_hessian(&mut self, why: &str) {
+        let n = self.ev.dims.n;
+        self.model = if n <= DENSE_BFGS_LIMIT {
+            Model::Bfgs(DenseBfgs::new(n))
+        } else {
+            Model::Lbfgs(Lbfgs::new(n, self.options.lbfgs_memory))
+        };
+        for (w, l) in self.rho.iter_mut().zip(&self.lambda) {
+            *w = l.abs().min(ELASTIC_WEIGHT);
+        }
+        self.say(&format!(
+            "      exact Hessian abandoned ({why}); continuing with quasi-Newton updates"
+        ));
+    }
+
+    /// Unweighted ℓ1 violation of the scaled constraints at a point.
+    fn violation(&self, p: &Point) -> f64 {
+        merit::l1_violation(&p.values.c, &self.ev.cl, &self.ev.cu)
     }
 
     /// Stalled, unless x is infeasible and stationary for the violation (then Infeasible).
@@ -549,8 +607,8 @@ impl<'a> Sqp<'a> {
         }
     }
 
-    /// Weighted decrease of the linearized violation along d with the current weights.
-    fn linear_reduction(&self, point: &Point, jac: &CsrMatrix<f64>, d: &[f64]) -> f64 {
+    /// Decrease of each row's linearized violation along d.
+    fn row_reductions(&self, point: &Point, jac: &CsrMatrix<f64>, d: &[f64]) -> Vec<f64> {
         let (dl, du, bl, bu) = self.bounds_of_step(point);
         let lin = Linearization {
             a: jac,
@@ -559,7 +617,7 @@ impl<'a> Sqp<'a> {
             bl: &bl,
             bu: &bu,
         };
-        lin.weighted_reduction(d, &self.rho)
+        lin.row_reductions(d)
     }
 
     fn kkt(&self, point: &Point, jac: &CsrMatrix<f64>, lambda: &[f64]) -> (Kkt, Vec<f64>) {
@@ -605,14 +663,31 @@ impl<'a> Sqp<'a> {
         }
     }
 
+    /// Whether values at `x + αd` pass the sufficient-decrease tests.
+    fn accepts(&self, test: &Acceptance, values: &Values, alpha: f64) -> bool {
+        let merit_ok = self.merit(values) <= test.phi0 + ARMIJO * alpha * test.slope;
+        let violation_ok = test.violation_slope.is_none_or(|vs| {
+            merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu)
+                <= test.v0 + ARMIJO * alpha * vs
+        });
+        merit_ok && violation_ok
+    }
+
     fn line_search(
         &mut self,
         point: &Point,
         jac: &CsrMatrix<f64>,
         d: &[f64],
         slope: f64,
+        violation_slope: Option<f64>,
     ) -> LineSearch {
         let phi0 = self.merit(&point.values);
+        let test = Acceptance {
+            phi0,
+            slope,
+            v0: merit::l1_violation(&point.values.c, &self.ev.cl, &self.ev.cu),
+            violation_slope,
+        };
         let dnorm = d.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
         let xnorm = point.x.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
         if dnorm <= 1e-15 * xnorm {
@@ -630,7 +705,7 @@ impl<'a> Sqp<'a> {
                 continue;
             };
             let phi = self.merit(&values);
-            if phi <= phi0 + ARMIJO * alpha * slope {
+            if self.accepts(&test, &values, alpha) {
                 match self.complete(x, values) {
                     Err(()) => return LineSearch::Fatal,
                     Ok(Some(next)) => return LineSearch::Accepted { point: next, alpha },
@@ -642,7 +717,7 @@ impl<'a> Sqp<'a> {
             }
             if alpha == 1.0 && !soc_tried {
                 soc_tried = true;
-                match self.second_order_correction(point, jac, d, &values, phi0, slope) {
+                match self.second_order_correction(point, jac, d, &values, &test) {
                     Err(()) => return LineSearch::Fatal,
                     Ok(Some(next)) => return LineSearch::Accepted { point: next, alpha },
                     Ok(None) => {}
@@ -668,8 +743,7 @@ impl<'a> Sqp<'a> {
         jac: &CsrMatrix<f64>,
         d: &[f64],
         trial_values: &Values,
-        phi0: f64,
-        slope: f64,
+        test: &Acceptance,
     ) -> Result<Option<Point>, ()> {
         let (dl, du, mut bl, mut bu) = self.bounds_of_step(point);
         let jd = jac * &DVector::from_column_slice(d);
@@ -696,7 +770,7 @@ impl<'a> Sqp<'a> {
         let Some((values, x)) = self.evaluate(x)? else {
             return Ok(None);
         };
-        if self.merit(&values) <= phi0 + ARMIJO * slope {
+        if self.accepts(test, &values, 1.0) {
             return self.complete(x, values);
         }
         Ok(None)
@@ -806,7 +880,10 @@ impl<'a> Sqp<'a> {
             .collect();
         let z = z_scaled.iter().map(|v| v / sf).collect();
         if self.options.verbosity >= 1 {
-            self.say(&format!("{}", status.sentence()));
+            self.say(status.sentence());
+            if status == Status::Infeasible {
+                self.say(&self.worst_rows(&point.values.c));
+            }
         }
         Solution {
             status,
@@ -822,6 +899,24 @@ impl<'a> Sqp<'a> {
             seconds: self.elapsed(),
             log: std::mem::take(&mut self.log),
         }
+    }
+
+    /// The most violated constraints by name, for infeasibility reports.
+    fn worst_rows(&self, c_scaled: &[f64]) -> String {
+        let mut rows: Vec<(usize, f64)> = (0..c_scaled.len())
+            .map(|i| {
+                let v = merit::row_violation(c_scaled[i], self.ev.cl[i], self.ev.cu[i]);
+                (i, v / self.ev.scale_c[i])
+            })
+            .filter(|&(_, v)| v > self.options.constraint_tolerance)
+            .collect();
+        rows.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let list: Vec<String> = rows
+            .iter()
+            .take(5)
+            .map(|&(i, v)| format!("{} by {v:.3e}", self.ev.constraint_name(i)))
+            .collect();
+        format!("most violated: {}", list.join(", "))
     }
 
     /// The result when the start cannot be evaluated.

@@ -32,6 +32,13 @@ impl DenseBfgs {
         self.fresh = true;
     }
 
+    /// Restart at `scale·I`, kept (not rescaled) at the next update.
+    pub fn reset_scaled(&mut self, scale: f64) {
+        self.b.fill_with_identity();
+        self.b *= scale;
+        self.fresh = false;
+    }
+
     /// Updates with step `s` and Lagrangian-gradient change `y`; skips negligible steps.
     pub fn update(&mut self, s: &[f64], y: &[f64]) {
         let sv = DVector::from_column_slice(s);

@@ -2,8 +2,11 @@
 //! inertia-correcting shift `H + δI` for the dense QP (which needs H ≻ 0).
 //!
 //! δ schedule (Wächter & Biegler 2006, §3.1, "IPOPT"): try δ = 0; else start from
-//! `max(δ_min, κ⁻·δ_last)` (κ⁻ = 1/3), or δ₀ = 1e-4 when no shift was needed before, and
-//! grow by κ⁺ = 8 (κ̄⁺ = 100 the first time) until the Cholesky factorization succeeds.
+//! `max(δ_min, κ⁻·δ_last)` (κ⁻ = 1/3), or δ₀ when no shift was needed before, and grow by
+//! κ⁺ = 8 (κ̄⁺ = 100 the first time) until the Cholesky factorization succeeds. Unlike in an
+//! interior-point method no barrier term adds curvature here, so δ₀ = 1 (the identity that
+//! quasi-Newton methods start from, on the scaled problem) rather than IPOPT's 1e-4: a singular
+//! Hessian (a linear objective at λ = 0) must not produce steps of length ‖g‖/δ₀.
 //! Shifts are relative to `max(1, maxᵢ|Hᵢᵢ|)`, and a factorization counts as successful only
 //! when every pivot exceeds 1e-10 of that scale, so a singular H is never passed on.
 //!
@@ -50,7 +53,7 @@ pub struct InertiaShift {
     last: f64,
 }
 
-const DELTA_0: f64 = 1e-4;
+const DELTA_0: f64 = 1.0;
 const DELTA_MIN: f64 = 1e-10;
 const DELTA_MAX: f64 = 1e40;
 /// Relative size of the smallest acceptable Cholesky pivot.

@@ -42,6 +42,12 @@ impl Lbfgs {
         *self = Lbfgs::new(self.n, self.memory);
     }
 
+    /// Forgets all pairs and restarts at `scale·I`.
+    pub fn reset_scaled(&mut self, scale: f64) {
+        self.reset();
+        self.delta = scale;
+    }
+
     /// (δ, W, M) of the compact form.
     pub fn compact(&self) -> (f64, &DMatrix<f64>, &DMatrix<f64>) {
         (self.delta, &self.w, &self.m)

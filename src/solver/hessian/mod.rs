@@ -11,10 +11,12 @@
 mod bfgs;
 mod exact;
 mod lbfgs;
+mod model;
 
 pub use bfgs::DenseBfgs;
 pub use exact::{InertiaShift, assemble_dense, assemble_sparse_lower};
 pub use lbfgs::Lbfgs;
+pub use model::Model;
 
 /// Powell's damping: replaces y by `θy + (1−θ)Bs` when `sᵀy < 0.2 sᵀBs`, so that the update
 /// keeps B positive definite. Returns the (possibly) damped y. `bs` is B·s, `sbs` is sᵀBs.

@@ -24,7 +24,8 @@ use nalgebra::{DMatrix, DVector};
 
 use super::{QpProblem, QpSolution, QpStatus};
 
-/// Identifier of one constraint side: see [`ConstraintSide`] for the numbering.
+/// Identifier of one constraint side (`n` variables, `m` rows): `0..n` lower variable bounds,
+/// `n..2n` upper ones, `2n..2n+m` lower row bounds, `2n+m..2n+2m` upper row bounds.
 pub type ConstraintId = usize;
 
 /// Which side of which bound a constraint id stands for (`n` variables, `m` rows):
@@ -298,7 +299,7 @@ pub fn solve(h: &DMatrix<f64>, problem: &QpProblem, preferred: &[ConstraintId]) 
     let cons = Constraints::new(problem);
     // J = L⁻ᵀ, so that J Jᵀ = H⁻¹.
     let l_t = chol.l().transpose();
-    let Some(j) = l_t.try_inverse() else {
+    let Some(j) = l_t.solve_upper_triangular(&DMatrix::identity(n, n)) else {
         return fail(QpStatus::Numerical);
     };
     let g = DVector::from_column_slice(problem.g);

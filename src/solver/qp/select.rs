@@ -77,3 +77,70 @@ fn dense_hessian(h: &QpHessian) -> DMatrix<f64> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra_sparse::{CooMatrix, CscMatrix, CsrMatrix};
+
+    /// min ½dᵀHd + gᵀd s.t. d₀ + d₁ ≥ 1, −1 ≤ d ≤ 1 with H given three ways.
+    fn solve_with(h: QpHessian) -> QpSolution {
+        let mut coo = CooMatrix::new(1, 2);
+        coo.push(0, 0, 1.0);
+        coo.push(0, 1, 1.0);
+        let a = CsrMatrix::from(&coo);
+        let problem = QpProblem {
+            h,
+            g: &[1.0, -0.5],
+            a: &a,
+            dl: &[-1.0, -1.0],
+            du: &[1.0, 1.0],
+            bl: &[1.0],
+            bu: &[f64::INFINITY],
+        };
+        solve(&problem, &mut WarmStart::default(), 1e-9)
+    }
+
+    #[test]
+    fn dense_sparse_and_low_rank_hessians_give_the_same_step() {
+        // H = [[3, 1], [1, 2]] = 4I − W M Wᵀ with W = I, M = [[1, −1], [−1, 2]].
+        let dense = DMatrix::from_row_slice(2, 2, &[3.0, 1.0, 1.0, 2.0]);
+        let mut coo = CooMatrix::new(2, 2);
+        coo.push(0, 0, 3.0);
+        coo.push(1, 0, 1.0);
+        coo.push(1, 1, 2.0);
+        let lower = CscMatrix::from(&coo);
+        let w = DMatrix::identity(2, 2);
+        let m = DMatrix::from_row_slice(2, 2, &[1.0, -1.0, -1.0, 2.0]);
+        let reference = solve_with(QpHessian::Dense(&dense));
+        assert_eq!(reference.status, QpStatus::Optimal);
+        for other in [
+            solve_with(QpHessian::SparseLower(&lower)),
+            solve_with(QpHessian::LowRank {
+                delta: 4.0,
+                w: &w,
+                m: &m,
+            }),
+        ] {
+            assert_eq!(other.status, QpStatus::Optimal);
+            for (a, b) in other.d.iter().zip(&reference.d) {
+                assert!((a - b).abs() < 1e-12);
+            }
+            assert!((other.lambda[0] - reference.lambda[0]).abs() < 1e-12);
+        }
+        // The constraint is active: d₀ + d₁ = 1 with a non-positive multiplier.
+        assert!((reference.d[0] + reference.d[1] - 1.0).abs() < 1e-12);
+        assert!(reference.lambda[0] < 0.0);
+    }
+
+    #[test]
+    fn indefinite_sparse_hessian_is_convexified() {
+        let mut coo = CooMatrix::new(2, 2);
+        coo.push(0, 0, 1.0);
+        coo.push(1, 1, -1.0);
+        let lower = CscMatrix::from(&coo);
+        let s = solve_with(QpHessian::SparseLower(&lower));
+        assert_eq!(s.status, QpStatus::Optimal);
+        assert!(s.d.iter().all(|v| v.abs() <= 1.0 + 1e-12));
+    }
+}
