@@ -1,0 +1,48 @@
+//! Solves one Hock–Schittkowski problem with the live iteration log on stderr.
+//!
+//! `cargo run --release --example hs -- HS71 [bfgs|lbfgs|exact] [max_iterations] [x0,x1,…]`
+//! (verbosity 2 adds the step, penalty and Hessian-shift details under each line).
+
+#[path = "../tests/common/hs.rs"]
+mod hs;
+
+use optimize::solver::{HessianMode, Options, solve};
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let name = args.get(1).map_or("HS71", String::as_str);
+    let mode = match args.get(2).map(String::as_str) {
+        Some("exact") => HessianMode::Exact,
+        Some("lbfgs") => HessianMode::Lbfgs,
+        _ => HessianMode::Bfgs,
+    };
+    let iterations = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(1000);
+    let verbosity = std::env::var("VERBOSITY")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1);
+    let Some(problem) = hs::all().into_iter().find(|p| p.name == name) else {
+        eprintln!("unknown problem {name}");
+        std::process::exit(2);
+    };
+    let problem = match args.get(4) {
+        Some(list) => problem.with_start(list.split(',').filter_map(|v| v.parse().ok()).collect()),
+        None => problem,
+    };
+    let options = Options {
+        hessian: mode,
+        verbosity,
+        max_iterations: iterations,
+        ..Options::default()
+    };
+    let s = solve(&problem.nlp(mode == HessianMode::Exact), &options);
+    println!(
+        "{name}: {:?}, f = {:.10e} (book: {:.10e}), violation {:.1e}, {} iterations",
+        s.status,
+        s.objective,
+        problem.fstar,
+        problem.violation(&s.x),
+        s.iterations
+    );
+    println!("x = {:?}\nλ = {:?}\nz = {:?}", s.x, s.lambda, s.z);
+}
