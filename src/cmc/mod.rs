@@ -6,5 +6,7 @@ pub mod generators;
 pub mod mesh;
 pub mod volume;
 
+pub mod check;
+pub mod nlp;
 #[cfg(test)]
 mod testing;
