@@ -58,16 +58,16 @@ pub fn triangle_area_hessian(p: &[Point; 3]) -> [[Matrix3<f64>; 3]; 3] {
         [0, 1, 2].map(|l| projector * skew(&opposite_edge(p, l)) * (0.5 / a));
     let skew_n = skew(&n);
     let mut h = [[Matrix3::zeros(); 3]; 3];
-    for k in 0..3 {
+    for (k, row) in h.iter_mut().enumerate() {
         let skew_e = skew(&opposite_edge(p, k));
-        for l in 0..3 {
-            let mut block = -skew_e * dn[l];
+        for (l, (entry, dn_l)) in row.iter_mut().zip(&dn).enumerate() {
+            let mut block = -skew_e * dn_l;
             if l == (k + 2) % 3 {
                 block += skew_n;
             } else if l == (k + 1) % 3 {
                 block -= skew_n;
             }
-            h[k][l] = 0.5 * block;
+            *entry = 0.5 * block;
         }
     }
     h
@@ -159,9 +159,9 @@ mod tests {
         for _ in 0..50 {
             let p = random_triangle(&mut rng);
             let g = triangle_area_gradient(&p);
-            for k in 0..3 {
-                let fd = central_difference(&p, k, 1e-6, |q| triangle_area(q));
-                assert!((g[k] - fd).norm() < 1e-8, "{} vs {}", g[k], fd);
+            for (k, gk) in g.iter().enumerate() {
+                let fd = central_difference(&p, k, 1e-6, triangle_area);
+                assert!((gk - fd).norm() < 1e-8, "{gk} vs {fd}");
             }
         }
     }
@@ -172,9 +172,9 @@ mod tests {
         for _ in 0..50 {
             let p = random_triangle(&mut rng);
             let h = triangle_area_hessian(&p);
-            for k in 0..3 {
-                for l in 0..3 {
-                    assert!((h[k][l] - h[l][k].transpose()).norm() < 1e-12);
+            for (k, row) in h.iter().enumerate() {
+                for (l, block) in row.iter().enumerate() {
+                    assert!((block - h[l][k].transpose()).norm() < 1e-12);
                     for c in 0..3 {
                         // Column c of block (k, l): derivative of ∇_{p_k} a along p_l's c axis.
                         let mut plus = p;
@@ -184,7 +184,7 @@ mod tests {
                         let fd = (triangle_area_gradient(&plus)[k]
                             - triangle_area_gradient(&minus)[k])
                             / 2e-6;
-                        let exact = h[k][l].column(c).into_owned();
+                        let exact = block.column(c).into_owned();
                         assert!((exact - fd).norm() < 1e-6, "{exact} vs {fd}");
                     }
                 }
@@ -249,9 +249,9 @@ mod tests {
                 2
             };
             cases[case] += 1;
-            for k in 0..3 {
+            for (k, gk) in g.iter().enumerate() {
                 let fd = central_difference(&p, k, 1e-6, |q| mixed_area_corner0(q).0);
-                assert!((g[k] - fd).norm() < 1e-7, "case {case}: {} vs {}", g[k], fd);
+                assert!((gk - fd).norm() < 1e-7, "case {case}: {gk} vs {fd}");
             }
         }
         assert!(cases.iter().all(|&c| c > 10), "cases covered: {cases:?}");

@@ -189,8 +189,9 @@ fn add_oriented(b: &mut MeshBuilder, s: usize, tris: Vec<[usize; 3]>, up: Point)
 
 /// A Coons grid patch bounded by four vertex paths: `bottom` from corner 00 to 10, `top` from
 /// 01 to 11 (same length), `left` from 00 to 01, `right` from 10 to 11 (same length). Interior
-/// vertices get `flags` of free vertices. Orientation as in [`add_oriented`], or along
-/// `∂/∂u × ∂/∂v` when `up` is `None`.
+/// vertices are free, at the Coons point plus `offset(u, v)`. Orientation as in
+/// [`add_oriented`], or along `∂/∂u × ∂/∂v` when `up` is `None`.
+#[allow(clippy::too_many_arguments)]
 fn add_grid_patch(
     b: &mut MeshBuilder,
     s: usize,
@@ -199,6 +200,7 @@ fn add_grid_patch(
     left: &[usize],
     right: &[usize],
     up: Option<Point>,
+    offset: impl Fn(f64, f64) -> Point,
 ) {
     let (n, m) = (bottom.len() - 1, left.len() - 1);
     let pos = |b: &MeshBuilder, v: usize| b.position(v);
@@ -229,7 +231,7 @@ fn add_grid_patch(
                         + u * (1.0 - v) * p10
                         + (1.0 - u) * v * p01
                         + u * v * p11);
-                b.vertex(p)
+                b.vertex(p + offset(u, v))
             };
         }
     }
@@ -553,6 +555,7 @@ pub fn cube_frame(edge: f64, bubble_volume: f64, levels: usize) -> Result<Shape,
             &diagonals[i],
             &diagonals[j],
             None,
+            |_, _| Point::zeros(),
         );
     }
     // Bubble faces: for each axis bit and side, corners base, base+u, base+v, base+u+v.
@@ -574,6 +577,7 @@ pub fn cube_frame(edge: f64, bubble_volume: f64, levels: usize) -> Result<Shape,
                 &inner_e[&(base, base | v)],
                 &inner_e[&(base | u, base | u | v)],
                 Some(normal),
+                |_, _| Point::zeros(),
             );
         }
     }
@@ -713,7 +717,9 @@ pub fn u_wires(width: f64, depth: f64, levels: usize) -> Result<Shape, MeshError
     };
     let left = leg(&mut b, c[0], c[4], c[2]);
     let right = leg(&mut b, c[1], c[5], c[3]);
-    add_grid_patch(&mut b, film, &bottom, &top, &left, &right, None);
+    add_grid_patch(&mut b, film, &bottom, &top, &left, &right, None, |_, _| {
+        Point::zeros()
+    });
     Ok(Shape {
         mesh: b.build()?,
         volumes: Vec::new(),
@@ -752,7 +758,7 @@ pub fn tents(specs: &[TentSpec], levels: usize) -> Result<Shape, MeshError> {
     for spec in specs {
         let s = b.surface(&spec.name);
         let first = b.vertex_count();
-        add_polygon_disk(&mut b, s, &spec.boundary, levels, |_, p| p);
+        add_outline_patch(&mut b, s, &spec.boundary, levels, |_| Point::zeros());
         patches.push((first, b.vertex_count()));
     }
     let mut mesh = b.build()?;
@@ -781,16 +787,15 @@ pub fn tents(specs: &[TentSpec], levels: usize) -> Result<Shape, MeshError> {
                 .map(horizontal)
                 .fold(f64::INFINITY, f64::min)
                 .max(2.0 * pole.radius);
-            for v in first..last {
+            for (v, p) in pos.iter_mut().enumerate().take(last).skip(first) {
                 let d = horizontal(v);
                 if cap.contains(&v) {
-                    pos[v].y = pole.height;
+                    p.y = pole.height;
                     let mut f = mesh.flags()[v];
                     f.fixed = true;
                     mesh.set_flags(v, f)?;
                 } else if !mesh.flags()[v].fixed && d < reach {
-                    let lift = pole.height * (1.0 - d / reach);
-                    pos[v].y = pos[v].y.max(lift);
+                    p.y = p.y.max(pole.height * (1.0 - d / reach));
                 }
             }
         }
@@ -802,22 +807,48 @@ pub fn tents(specs: &[TentSpec], levels: usize) -> Result<Shape, MeshError> {
     })
 }
 
-/// Adds a fan disk over `boundary` (a polygon, counter-clockwise seen from above) to surface `s`;
-/// `lift(ρ, p)` adjusts the linearly interpolated point `p` at radial fraction ρ.
-fn add_polygon_disk(
+/// Adds a patch spanning `boundary` (a polygon, counter-clockwise seen from above) to surface
+/// `s`, normals up: a Coons grid with near-square cells for quadrilaterals (elongated shapes
+/// stay well shaped), a fan disk around the centroid otherwise. Interior points are the linear
+/// interpolation of the rim plus `lift(crown)`, where `crown` is 1 at the middle and 0 on the
+/// rim (`1 − ρ²` on fan disks, `(1 − (2u−1)²)(1 − (2v−1)²)` on grids).
+fn add_outline_patch(
     b: &mut MeshBuilder,
     s: usize,
     boundary: &[Point],
     levels: usize,
-    lift: impl Fn(f64, Point) -> Point,
-) -> Vec<usize> {
+    lift: impl Fn(f64) -> Point,
+) {
     let sides = boundary.len();
+    if sides == 4 {
+        let corners: Vec<usize> = boundary.iter().map(|&p| b.vertex(p)).collect();
+        let len = |i: usize, j: usize| (boundary[i] - boundary[j]).norm();
+        let (u_len, v_len) = ((len(0, 1) + len(3, 2)) / 2.0, (len(1, 2) + len(0, 3)) / 2.0);
+        let short = u_len.min(v_len);
+        let count = |l: f64| ((levels as f64 * l / short).round() as usize).max(1);
+        let (nu, nv) = (count(u_len), count(v_len));
+        let bottom = add_path(b, (corners[0], corners[1]), nu, false);
+        let top = add_path(b, (corners[3], corners[2]), nu, false);
+        let left = add_path(b, (corners[0], corners[3]), nv, false);
+        let right = add_path(b, (corners[1], corners[2]), nv, false);
+        add_grid_patch(
+            b,
+            s,
+            &bottom,
+            &top,
+            &left,
+            &right,
+            Some(Point::y()),
+            |u, v| lift((1.0 - (2.0 * u - 1.0).powi(2)) * (1.0 - (2.0 * v - 1.0).powi(2))),
+        );
+        return;
+    }
     let centre = boundary.iter().sum::<Point>() / sides as f64;
     let place = |rho: f64, p: usize, f: f64| {
         let rim = boundary[p] + (boundary[(p + 1) % sides] - boundary[p]) * f;
-        lift(rho, centre + (rim - centre) * rho)
+        centre + (rim - centre) * rho + lift(1.0 - rho * rho)
     };
-    add_fan_disk(b, s, sides, levels, None, place, Point::y())
+    add_fan_disk(b, s, sides, levels, None, place, Point::y());
 }
 
 /// A pneumatic cell: a footprint polygon on the ground (x, z; m, counter-clockwise seen from
@@ -848,8 +879,8 @@ pub fn cells(specs: &[CellSpec], levels: usize) -> Result<Shape, MeshError> {
             .map(|&[x, z]| Point::new(x, 0.0, z))
             .collect();
         let height = spec.height;
-        add_polygon_disk(&mut b, s, &boundary, levels, |rho, p| {
-            p + Point::y() * height * (1.0 - rho * rho)
+        add_outline_patch(&mut b, s, &boundary, levels, |crown| {
+            Point::y() * height * crown
         });
         let centre = boundary.iter().sum::<Point>() / boundary.len() as f64;
         regions.push((

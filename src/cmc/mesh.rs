@@ -311,7 +311,7 @@ impl Mesh {
                 .norm_squared()
                 .max((c - b).norm_squared())
                 .max((a - c).norm_squared());
-            if !(twice_area > 1e-12 * longest) {
+            if twice_area.is_nan() || twice_area <= 1e-12 * longest {
                 return Err(MeshError::Degenerate(t));
             }
         }

@@ -147,8 +147,8 @@ impl CmcNlp {
             .collect();
         rows.extend((0..volumes.len()).map(Row::Volume));
         rows.extend((0..chords.len()).map(Row::Chord));
-        for v in 0..n {
-            if let (Some(g), Some(_)) = (mesh.flags()[v].guide, column[v]) {
+        for (v, col) in column.iter().enumerate() {
+            if let (Some(g), Some(_)) = (mesh.flags()[v].guide, col) {
                 for equation in 0..mesh.guides()[g].rows() {
                     rows.push(Row::Guide {
                         vertex: v,

@@ -41,12 +41,12 @@ pub fn cone_volume_gradient(p: &[Point; 3], o: &Point) -> [Point; 3] {
 /// Hessian blocks `h[k][l] = ∂²V/∂p_k∂p_l` of [`cone_volume`] (m).
 pub fn cone_volume_hessian(p: &[Point; 3], o: &Point) -> [[Matrix3<f64>; 3]; 3] {
     let mut h = [[Matrix3::zeros(); 3]; 3];
-    for k in 0..3 {
+    for (k, row) in h.iter_mut().enumerate() {
         let next = (k + 1) % 3;
         let other = (k + 2) % 3;
         // ∇_{p_k} V = ⅙ (p_next − o) × (p_other − o) = −⅙ [p_other − o]× (p_next − o).
-        h[k][next] = -skew(&(p[other] - o)) / 6.0;
-        h[k][other] = skew(&(p[next] - o)) / 6.0;
+        row[next] = -skew(&(p[other] - o)) / 6.0;
+        row[other] = skew(&(p[next] - o)) / 6.0;
     }
     h
 }
