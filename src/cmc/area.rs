@@ -193,6 +193,19 @@ mod tests {
     }
 
     #[test]
+    fn vertex_mixed_areas_sum_to_the_total_area() {
+        let mut rng = crate::cmc::testing::rng(6);
+        let sphere = crate::cmc::generators::icosphere(1.0, 2, "s").unwrap();
+        let mesh = crate::cmc::testing::perturbed(&sphere, 0.3, &mut rng);
+        let obtuse = (0..mesh.vertex_count())
+            .filter(|&v| crate::cmc::testing::has_obtuse(&mesh, v))
+            .count();
+        assert!(obtuse > 10, "{obtuse}");
+        let sum: f64 = (0..mesh.vertex_count()).map(|v| mixed_area(&mesh, v)).sum();
+        assert!((sum - total_area(&mesh)).abs() < 1e-12 * total_area(&mesh));
+    }
+
+    #[test]
     fn cotangent_identity_holds() {
         let mut rng = crate::cmc::testing::rng(3);
         let p = random_triangle(&mut rng);

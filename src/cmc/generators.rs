@@ -413,9 +413,10 @@ pub fn triple_bubble(volumes: [f64; 3], levels: usize) -> Result<Shape, MeshErro
     let theta = |i: usize| PI * i as f64 / rows as f64;
     let dir = |phi: f64| Point::new(phi.cos(), 0.0, phi.sin());
     let sphere = |i: usize, phi: f64| r * (theta(i).cos() * Point::y() + theta(i).sin() * dir(phi));
-    let axis: Vec<usize> = (1..rows)
-        .map(|i| b.vertex(Point::new(0.0, r * theta(i).cos(), 0.0)))
-        .collect();
+    // Axis vertices evenly spaced (not at the meridians' heights), so the wall rows slant
+    // and the fans at the poles are not slivers.
+    let axis_point = |i: usize| Point::new(0.0, r * (1.0 - 2.0 * i as f64 / rows as f64), 0.0);
+    let axis: Vec<usize> = (1..rows).map(|i| b.vertex(axis_point(i))).collect();
     let meridians: Vec<Vec<usize>> = (0..3)
         .map(|k| {
             let phi = 2.0 * PI * k as f64 / 3.0;
@@ -449,9 +450,8 @@ pub fn triple_bubble(volumes: [f64; 3], levels: usize) -> Result<Shape, MeshErro
         for j in 1..across {
             let inner: Vec<usize> = (1..rows)
                 .map(|i| {
-                    let p = Point::new(0.0, r * theta(i).cos(), 0.0)
-                        + dir(phi0) * (r * theta(i).sin() * j as f64 / across as f64);
-                    b.vertex(p)
+                    let f = j as f64 / across as f64;
+                    b.vertex(axis_point(i) * (1.0 - f) + sphere(i, phi0) * f)
                 })
                 .collect();
             grid.push(column(&inner));
