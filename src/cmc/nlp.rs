@@ -22,8 +22,9 @@
 //! start of the solve (area-weighted normals). R pulls each vertex tangentially towards its ring
 //! centroid (Laplacian smoothing within the surface) without resisting normal motion, so it
 //! shapes the triangles and leaves the surface almost unchanged; its effect on the area is of
-//! order `w` and is reported with the results (set `w = 0` to switch it off). Chosen over edge
-//! flips / refinement between rounds because it keeps one fixed sparsity pattern per solve.
+//! order `w` and is reported with the results (set `w = 0` to switch it off). It keeps one fixed
+//! sparsity pattern per solve; connectivity is improved between solves by edge flips
+//! ([`super::remesh`]), after which the problem is rebuilt ([`CmcNlp::remeshed`]).
 
 use std::sync::Mutex;
 
@@ -185,6 +186,12 @@ impl CmcNlp {
         };
         nlp.pattern = nlp.build_pattern();
         Ok(nlp)
+    }
+
+    /// The same problem (volumes, chords, weight) on another mesh with the same vertices and
+    /// surfaces, e.g. after [`super::remesh::equiangulate`].
+    pub fn remeshed(&self, mesh: Mesh) -> Result<CmcNlp, BuildError> {
+        CmcNlp::new(mesh, self.volumes.clone(), self.chords.clone(), self.weight)
     }
 
     /// The start mesh (connectivity, flags, fixed positions).

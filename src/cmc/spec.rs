@@ -8,6 +8,7 @@
 //! volumes = [1.0e-6, 2.0e-6]    # octahedron_frame | u_wires | tents | cells | obj
 //! [quality]
 //! tangential_weight = 0.01      # w of the tangential regularization (cmc::nlp), ≥ 0
+//! flip_rounds = 1               # edge-flip + re-solve rounds after the first solve (cmc::remesh)
 //! [[chord]]                     # optional chord-length constraints between vertex indices
 //! a = 0
 //! b = 12
@@ -57,16 +58,24 @@ pub struct QualitySpec {
     /// Weight of the tangential regularization (dimensionless, ≥ 0); default 0.01.
     #[serde(default = "default_weight")]
     pub tangential_weight: f64,
+    /// Rounds of equiangulation (edge flips) and re-solving after the first solve; default 1.
+    #[serde(default = "default_flip_rounds")]
+    pub flip_rounds: usize,
 }
 
 fn default_weight() -> f64 {
     0.01
 }
 
+fn default_flip_rounds() -> usize {
+    1
+}
+
 impl Default for QualitySpec {
     fn default() -> Self {
         QualitySpec {
             tangential_weight: default_weight(),
+            flip_rounds: default_flip_rounds(),
         }
     }
 }
@@ -290,6 +299,15 @@ impl CmcSpec {
             return Err(self.err(
                 &["resolution".into()],
                 format!("`resolution` must be between 1 and 64, got {r}"),
+            ));
+        }
+        if f.quality.flip_rounds > 10 {
+            return Err(self.err(
+                &["quality".into(), "flip_rounds".into()],
+                format!(
+                    "`flip_rounds` must be at most 10, got {}",
+                    f.quality.flip_rounds
+                ),
             ));
         }
         if !(f.quality.tangential_weight >= 0.0 && f.quality.tangential_weight.is_finite()) {
