@@ -7,12 +7,18 @@
 //! Entry point: [`solve`]`(&nlp, &options) -> Solution`. Not converging is a [`Status`] in the
 //! [`Solution`], never an `Err`.
 
+mod elastic;
+mod evaluator;
+pub mod hessian;
+mod log;
+mod merit;
 mod nlp;
 mod options;
 pub mod qp;
 mod solution;
 mod sqp;
 mod status;
+mod termination;
 
 pub use nlp::{Dims, EvalError, Nlp};
 pub use options::{HessianMode, Options};
