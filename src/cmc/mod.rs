@@ -121,14 +121,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     if opts.check {
         return check(problem, &nlp, opts, build_seconds);
     }
-    let mut options = problem.spec.file.solver.options();
-    if let Some(m) = opts.max_iter {
-        options.max_iterations = m;
-    }
-    if opts.quiet {
-        options.verbosity = 0;
-    }
-    options.interrupt = opts.interrupt.clone();
+    let options = opts.solver_options(&problem.spec.file.solver);
     let solve_started = Instant::now();
     let mut nlp = nlp;
     let mut solution = crate::solver::solve(&nlp, &options);
@@ -170,6 +163,9 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         .mesh_at(&solution.x)
         .map_err(|e| Error::Runtime(format!("final mesh: {e}")))?;
     let mut summary = ResultSummary::from_solution(&problem.name, "cmc", opts.seed, &solution);
+    // The module's objective in SI units: the total area, m² (the solver saw it scaled by 1/L²
+    // plus the tangential regularization, both reported under `figures`).
+    summary.objective = area::total_area(&mesh);
     summary.iterations = iterations;
     summary.evaluations = evaluations;
     summary.figures = figures_json(&nlp, &mesh, &solution.x)?;
