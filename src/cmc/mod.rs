@@ -7,12 +7,12 @@
 //! flips ([`remesh`]) and re-solves → result figures ([`figures`]) and an SVG preview
 //! ([`preview`]). `result.json` lists each flip round's areas (before flips, after flips, after
 //! the re-solve): the effect of the mesh-quality mechanism on the area.
-//!
-//! The glTF model (`model.glb`) is not produced yet: it awaits the shared writer `io::gltf`.
+//! The final mesh is also written as `model.glb` ([`export`]).
 
 pub mod area;
 pub mod check;
 pub mod curvature;
+pub mod export;
 pub mod figures;
 pub mod generators;
 pub mod import;
@@ -180,14 +180,26 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         figures::figures(&mesh, &nlp.surface_curvatures(&solution.x), nlp.volumes()).total_area,
         solution.status.sentence()
     );
+    let export_started = Instant::now();
+    let model = export::glb(&mesh).map_err(|e| Error::Runtime(e.to_string()))?;
+    let picture = preview::svg(&mesh, 800.0, &caption).into_bytes();
+    summary
+        .timings
+        .insert("export".into(), export_started.elapsed().as_secs_f64());
     Ok(Outcome {
         summary,
         status: Some(solution.status),
         check_passed: None,
-        artifacts: vec![Artifact {
-            name: "preview.svg".into(),
-            bytes: preview::svg(&mesh, 800.0, &caption).into_bytes(),
-        }],
+        artifacts: vec![
+            Artifact {
+                name: "model.glb".into(),
+                bytes: model,
+            },
+            Artifact {
+                name: "preview.svg".into(),
+                bytes: picture,
+            },
+        ],
     })
 }
 
