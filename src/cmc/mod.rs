@@ -384,52 +384,79 @@ mod tests {
         assert!(e.message.contains("counter-clockwise"), "{e}");
     }
 
-    #[test]
-    #[ignore = "needs the SQP solver"]
-    fn single_bubble_reaches_the_isoperimetric_area() {
-        // Area (36π)^(1/3)·V^(2/3) = 4.835975862 for V = 1; error shrinks with refinement.
-        let text = "[shape]\ntype = \"sphere\"\nvolume = 1.0\n[solver]\nverbosity = 0\n";
-        let problem = load_text(text).unwrap();
-        let mut errors = Vec::new();
-        for level in [2, 3, 4] {
-            let outcome = run(&problem.with_resolution(level), &RunOptions::default()).unwrap();
-            assert!(outcome.status.unwrap().is_success());
-            let area = outcome.summary.figures["total_area"].as_f64().unwrap();
-            errors.push((area - 4.835975862).abs());
-        }
-        assert!(errors[2] < errors[1] && errors[1] < errors[0], "{errors:?}");
+    fn solve(problem: &Problem) -> Outcome {
+        let opts = RunOptions {
+            quiet: true,
+            ..Default::default()
+        };
+        run(problem, &opts).unwrap()
     }
 
     #[test]
-    #[ignore = "needs the SQP solver"]
-    fn double_bubble_keeps_the_standard_area() {
-        // Volumes 1 and 2 cm³: 11.854293128 cm², junction films at 120°.
-        let problem = load(&path("double_bubble")).unwrap().with_resolution(6);
-        let outcome = run(&problem, &RunOptions::default()).unwrap();
+    fn single_bubble_approaches_the_isoperimetric_area() {
+        // Area (36π)^(1/3)·V^(2/3) = 4.835975862 for V = 1, approached from above at second
+        // order in the edge length (each level halves the edges).
+        let text = "[shape]\ntype = \"sphere\"\nvolume = 1.0\n";
+        let problem = load_text(text).unwrap();
+        let mut errors = Vec::new();
+        for level in [1, 2] {
+            let outcome = solve(&problem.with_resolution(level));
+            assert!(outcome.status.unwrap().is_success(), "level {level}");
+            let f = &outcome.summary.figures;
+            assert!((f["volumes"][0]["volume"].as_f64().unwrap() - 1.0).abs() < 1e-6);
+            errors.push(f["total_area"].as_f64().unwrap() - 4.835975862);
+        }
+        assert!(errors.iter().all(|&e| e > 0.0), "{errors:?}");
+        let rate = errors[0] / errors[1];
+        assert!(rate > 3.5 && rate < 4.5, "{errors:?}");
+    }
+
+    #[test]
+    fn double_bubble_solves_near_the_standard_area_and_angles() {
+        // Volumes 1 and 2 cm³: exact area 11.854293128 cm²; coarse mesh (18 junction edges).
+        let outcome = solve(&load(&path("double_bubble")).unwrap().with_resolution(3));
         assert!(outcome.status.unwrap().is_success());
         let f = &outcome.summary.figures;
         let area = f["total_area"].as_f64().unwrap();
-        assert!((area / 11.854293128e-4 - 1.0).abs() < 5e-3, "{area}");
+        assert!(
+            area > 11.854293128e-4 && area < 1.025 * 11.854293128e-4,
+            "{area}"
+        );
         let j = &f["junction_angles"];
-        assert!((j["min_deg"].as_f64().unwrap() - 120.0).abs() < 5.0);
-        assert!((j["max_deg"].as_f64().unwrap() - 120.0).abs() < 5.0);
+        for key in ["min_deg", "max_deg"] {
+            let angle = j[key].as_f64().unwrap();
+            assert!((angle - 120.0).abs() < 6.0, "{key} {angle}");
+        }
+        for v in f["volumes"].as_array().unwrap() {
+            let (got, want) = (v["volume"].as_f64().unwrap(), v["target"].as_f64().unwrap());
+            assert!((got / want - 1.0).abs() < 1e-6);
+        }
+        let names: Vec<&str> = outcome.artifacts.iter().map(|a| a.name.as_str()).collect();
+        assert_eq!(names, ["model.glb", "preview.svg"]);
     }
 
     #[test]
-    #[ignore = "needs the SQP solver"]
-    fn every_problem_solves_at_low_resolution() {
-        for name in PROBLEMS {
-            let problem = load(&path(name)).unwrap().with_resolution(3);
-            let outcome = run(
-                &problem,
-                &RunOptions {
-                    quiet: true,
-                    ..Default::default()
-                },
-            )
-            .unwrap();
+    fn films_and_membranes_solve_at_low_resolution() {
+        for name in [
+            "u_wires",
+            "circus_tent",
+            "convention_center",
+            "tennis_cushion",
+        ] {
+            let outcome = solve(&load(&path(name)).unwrap().with_resolution(3));
             assert!(outcome.status.unwrap().is_success(), "{name}");
             assert!(outcome.summary.max_violation < 1e-6, "{name}");
+            let q = &outcome.summary.figures["quality"];
+            assert!(q["min_angle_deg"].as_f64().unwrap() > 5.0, "{name}");
+        }
+    }
+
+    #[test]
+    #[ignore = "does not converge yet: triangles degenerate at resolution 3"]
+    fn bubble_clusters_solve_at_low_resolution() {
+        for name in ["triple_bubble", "cube_frame", "otto_exhibition"] {
+            let outcome = solve(&load(&path(name)).unwrap().with_resolution(3));
+            assert!(outcome.status.unwrap().is_success(), "{name}");
         }
     }
 }
