@@ -781,30 +781,46 @@ pub fn tents(specs: &[TentSpec], levels: usize) -> Result<Shape, MeshError> {
                 cap = vec![nearest];
                 cap.extend_from_slice(mesh.neighbours(nearest));
             }
-            // Raise the surroundings smoothly so the start has no fold at the cap.
-            let reach = (first..last)
-                .filter(|&v| mesh.flags()[v].fixed && !cap.contains(&v))
-                .map(horizontal)
-                .fold(f64::INFINITY, f64::min)
-                .max(2.0 * pole.radius);
-            for (v, p) in pos.iter_mut().enumerate().take(last).skip(first) {
-                let d = horizontal(v);
-                if cap.contains(&v) {
-                    p.y = pole.height;
-                    let mut f = mesh.flags()[v];
-                    f.fixed = true;
-                    mesh.set_flags(v, f)?;
-                } else if !mesh.flags()[v].fixed && d < reach {
-                    p.y = p.y.max(pole.height * (1.0 - d / reach));
-                }
+            for v in cap {
+                pos[v].y = pole.height;
+                let mut f = mesh.flags()[v];
+                f.fixed = true;
+                mesh.set_flags(v, f)?;
             }
         }
     }
+    harmonic_heights(&mesh, &mut pos);
     mesh.set_positions(pos)?;
     Ok(Shape {
         mesh,
         volumes: Vec::new(),
     })
+}
+
+/// Sets the heights of the free vertices to the discrete harmonic interpolation (uniform
+/// weights) of the fixed ones, by over-relaxed Gauss–Seidel sweeps: a smooth start close to a
+/// minimal surface, without folds at pole caps.
+fn harmonic_heights(mesh: &Mesh, pos: &mut [Point]) {
+    let free: Vec<usize> = (0..mesh.vertex_count())
+        .filter(|&v| !mesh.flags()[v].fixed)
+        .collect();
+    let (lo, hi) = pos
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(l, h), p| (l.min(p.y), h.max(p.y)));
+    let tolerance = 1e-9 * (hi - lo).max(1e-300);
+    for _ in 0..20_000 {
+        let mut change: f64 = 0.0;
+        for &v in &free {
+            let ring = mesh.neighbours(v);
+            let mean = ring.iter().map(|&w| pos[w].y).sum::<f64>() / ring.len() as f64;
+            let step = 1.8 * (mean - pos[v].y);
+            pos[v].y += step;
+            change = change.max(step.abs());
+        }
+        if change < tolerance {
+            break;
+        }
+    }
 }
 
 /// Adds a patch spanning `boundary` (a polygon, counter-clockwise seen from above) to surface
