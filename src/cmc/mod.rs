@@ -269,7 +269,7 @@ fn check(
                 report.max_error, report.worst
             )
         },
-        objective,
+        objective: area::total_area(&mesh),
         max_violation: c.iter().fold(0.0, |m: f64, v| m.max(v.abs())),
         iterations: 0,
         evaluations: Evaluations::default(),
