@@ -327,6 +327,10 @@ mod tests {
     }
 
     #[test]
+    #[cfg_attr(
+        debug_assertions,
+        ignore = "slow without optimizations: run with --release"
+    )]
     fn every_problem_passes_the_derivative_check_at_low_resolution() {
         for name in PROBLEMS {
             let problem = load(&path(name)).unwrap().with_resolution(3);
@@ -393,6 +397,10 @@ mod tests {
     }
 
     #[test]
+    #[cfg_attr(
+        debug_assertions,
+        ignore = "slow without optimizations: run with --release"
+    )]
     fn single_bubble_approaches_the_isoperimetric_area() {
         // Area (36π)^(1/3)·V^(2/3) = 4.835975862 for V = 1, approached from above at second
         // order in the edge length (each level halves the edges).
@@ -412,6 +420,10 @@ mod tests {
     }
 
     #[test]
+    #[cfg_attr(
+        debug_assertions,
+        ignore = "slow without optimizations: run with --release"
+    )]
     fn double_bubble_solves_near_the_standard_area_and_angles() {
         // Volumes 1 and 2 cm³: exact area 11.854293128 cm²; coarse mesh (18 junction edges).
         let outcome = solve(&load(&path("double_bubble")).unwrap().with_resolution(3));
@@ -436,6 +448,10 @@ mod tests {
     }
 
     #[test]
+    #[cfg_attr(
+        debug_assertions,
+        ignore = "slow without optimizations: run with --release"
+    )]
     fn films_and_membranes_solve_at_low_resolution() {
         for name in [
             "u_wires",
