@@ -1,0 +1,1057 @@
+//! Start shapes with a resolution parameter (seed §5.3.2: the start needs the topology of the
+//! answer, not its geometry). Lengths in metres, y up.
+//!
+//! Building blocks: an icosphere; a "fan disk" (a polygon split into triangles around a centre
+//! point, each split regularly into `levels²` triangles, so ring k holds `sides·k` vertices); a
+//! Coons grid patch bounded by four vertex paths. Patches share boundary vertices, which is how
+//! films meet along wires and junction lines.
+//!
+//! Shapes:
+//! - [`icosphere`]: sphere, outward normals.
+//! - [`double_bubble`]: the standard double bubble of two given volumes: three spherical caps on
+//!   one junction circle, meeting at 120° (the exact minimizer, so its analytic area is known).
+//! - [`triple_bubble`]: a ball split into three 120° wedges (three lunes and three half-disk
+//!   walls meeting on the axis): the topology of the standard triple bubble.
+//! - [`cube_frame`]: a wire cube (fixed edges) with a central cubical bubble joined to every wire
+//!   by a trapezoidal film (seed Fig. 5.8).
+//! - [`octahedron_frame`]: a wire octahedron; topology `Cone`: every wire joined by a triangle
+//!   to a central vertex (the other stable topologies of seed Fig. 5.9 need their own starts).
+//! - [`u_wires`]: two U-shaped wires meeting at their tips, spanned by one film (seed Fig. 5.3).
+//! - [`tents`]: membranes over boundary polygons with fixed rims; poles lift small caps of
+//!   vertices (never one point, which has no well-posed minimum).
+//! - [`cells`]: pneumatic cells: domes over ground footprints, rims fixed on y = 0.
+
+use std::collections::BTreeMap;
+use std::f64::consts::PI;
+
+use super::mesh::{Mesh, MeshBuilder, MeshError, Point};
+use super::volume::Region;
+
+/// A generated mesh with the regions whose volumes the shape constrains.
+#[derive(Debug, Clone)]
+pub struct Shape {
+    /// The mesh.
+    pub mesh: Mesh,
+    /// Regions with their target volumes (m³).
+    pub volumes: Vec<(String, Region, f64)>,
+}
+
+/// An icosphere of radius `radius` (m), subdivided `level` times (20·4^level triangles).
+pub fn icosphere(radius: f64, level: usize, name: &str) -> Result<Mesh, MeshError> {
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
+    let mut pos: Vec<Point> = [
+        (-1.0, t, 0.0),
+        (1.0, t, 0.0),
+        (-1.0, -t, 0.0),
+        (1.0, -t, 0.0),
+        (0.0, -1.0, t),
+        (0.0, 1.0, t),
+        (0.0, -1.0, -t),
+        (0.0, 1.0, -t),
+        (t, 0.0, -1.0),
+        (t, 0.0, 1.0),
+        (-t, 0.0, -1.0),
+        (-t, 0.0, 1.0),
+    ]
+    .iter()
+    .map(|&(x, y, z)| Point::new(x, y, z).normalize())
+    .collect();
+    let mut tris: Vec<[usize; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..level {
+        let mut mid: BTreeMap<(usize, usize), usize> = BTreeMap::new();
+        let mut midpoint = |a: usize, b: usize, pos: &mut Vec<Point>| {
+            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                pos.push(((pos[a] + pos[b]) / 2.0).normalize());
+                pos.len() - 1
+            })
+        };
+        let mut next = Vec::with_capacity(tris.len() * 4);
+        for [a, b, c] in tris {
+            let ab = midpoint(a, b, &mut pos);
+            let bc = midpoint(b, c, &mut pos);
+            let ca = midpoint(c, a, &mut pos);
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        tris = next;
+    }
+    let mut b = MeshBuilder::new();
+    let s = b.surface(name);
+    for p in pos {
+        b.vertex(p * radius);
+    }
+    for tri in tris {
+        b.triangle(s, tri);
+    }
+    b.build()
+}
+
+/// The triangles of a fan disk over a polygon of `sides` corners with `levels` rings, in terms of
+/// `(ring k, index g)` vertex keys; ring k has `sides·k` vertices (ring 0: the centre), index 0
+/// at polygon corner 0, counter-clockwise in the polygon's plane.
+fn fan_disk(sides: usize, levels: usize) -> Vec<[(usize, usize); 3]> {
+    let key = |k: usize, g: usize| if k == 0 { (0, 0) } else { (k, g % (sides * k)) };
+    let mut tris = Vec::new();
+    for p in 0..sides {
+        for k in 0..levels {
+            for j in 0..=k {
+                tris.push([
+                    key(k, p * k + j),
+                    key(k + 1, p * (k + 1) + j),
+                    key(k + 1, p * (k + 1) + j + 1),
+                ]);
+                if j < k {
+                    tris.push([
+                        key(k, p * k + j),
+                        key(k + 1, p * (k + 1) + j + 1),
+                        key(k, p * k + j + 1),
+                    ]);
+                }
+            }
+        }
+    }
+    tris
+}
+
+/// Position parameter of fan-disk vertex `(k, g)`: radial fraction `k/levels` and the polygon
+/// side `p` with the fraction `f` along it.
+fn fan_coords(sides: usize, levels: usize, k: usize, g: usize) -> (f64, usize, f64) {
+    if k == 0 {
+        return (0.0, 0, 0.0);
+    }
+    let (p, j) = (g / k % sides, g % k);
+    (k as f64 / levels as f64, p, j as f64 / k as f64)
+}
+
+/// Adds a fan disk to surface `s`: `rim` (if given) supplies the `sides·levels` rim vertices,
+/// `place(ρ, side, fraction)` positions the others. Triangles are flipped so that the first
+/// one's normal agrees with `up`. Returns the rim vertices.
+fn add_fan_disk(
+    b: &mut MeshBuilder,
+    s: usize,
+    sides: usize,
+    levels: usize,
+    rim: Option<&[usize]>,
+    place: impl Fn(f64, usize, f64) -> Point,
+    up: Point,
+) -> Vec<usize> {
+    let mut ids: BTreeMap<(usize, usize), usize> = BTreeMap::new();
+    if let Some(rim) = rim {
+        for (g, &v) in rim.iter().enumerate() {
+            ids.insert((levels, g), v);
+        }
+    }
+    let tris: Vec<[usize; 3]> = fan_disk(sides, levels)
+        .into_iter()
+        .map(|tri| {
+            tri.map(|(k, g)| {
+                *ids.entry((k, g)).or_insert_with(|| {
+                    let (rho, p, f) = fan_coords(sides, levels, k, g);
+                    b.vertex(place(rho, p, f))
+                })
+            })
+        })
+        .collect();
+    add_oriented(b, s, tris, up);
+    (0..sides * levels).map(|g| ids[&(levels, g)]).collect()
+}
+
+/// Adds triangles to surface `s`, all flipped if the first one's normal disagrees with `up`.
+fn add_oriented(b: &mut MeshBuilder, s: usize, tris: Vec<[usize; 3]>, up: Point) {
+    let flip = tris.first().is_some_and(|t| {
+        let p = t.map(|v| b.position(v));
+        (p[1] - p[0]).cross(&(p[2] - p[0])).dot(&up) < 0.0
+    });
+    for [a, c, d] in tris {
+        b.triangle(s, if flip { [a, d, c] } else { [a, c, d] });
+    }
+}
+
+/// A Coons grid patch bounded by four vertex paths: `bottom` from corner 00 to 10, `top` from
+/// 01 to 11 (same length), `left` from 00 to 01, `right` from 10 to 11 (same length). Interior
+/// vertices are free, at the Coons point plus `offset(u, v)`. Orientation as in
+/// [`add_oriented`], or along `∂/∂u × ∂/∂v` when `up` is `None`.
+#[allow(clippy::too_many_arguments)]
+fn add_grid_patch(
+    b: &mut MeshBuilder,
+    s: usize,
+    bottom: &[usize],
+    top: &[usize],
+    left: &[usize],
+    right: &[usize],
+    up: Option<Point>,
+    offset: impl Fn(f64, f64) -> Point,
+) {
+    let (n, m) = (bottom.len() - 1, left.len() - 1);
+    let pos = |b: &MeshBuilder, v: usize| b.position(v);
+    let (p00, p10, p01, p11) = (
+        pos(b, bottom[0]),
+        pos(b, bottom[n]),
+        pos(b, top[0]),
+        pos(b, top[n]),
+    );
+    let mut grid = vec![vec![0usize; m + 1]; n + 1];
+    for i in 0..=n {
+        for j in 0..=m {
+            grid[i][j] = if j == 0 {
+                bottom[i]
+            } else if j == m {
+                top[i]
+            } else if i == 0 {
+                left[j]
+            } else if i == n {
+                right[j]
+            } else {
+                let (u, v) = (i as f64 / n as f64, j as f64 / m as f64);
+                let p = (1.0 - v) * pos(b, bottom[i])
+                    + v * pos(b, top[i])
+                    + (1.0 - u) * pos(b, left[j])
+                    + u * pos(b, right[j])
+                    - ((1.0 - u) * (1.0 - v) * p00
+                        + u * (1.0 - v) * p10
+                        + (1.0 - u) * v * p01
+                        + u * v * p11);
+                b.vertex(p + offset(u, v))
+            };
+        }
+    }
+    let mut tris = Vec::with_capacity(2 * n * m);
+    for i in 0..n {
+        for j in 0..m {
+            let (a, c, d, e) = (
+                grid[i][j],
+                grid[i + 1][j],
+                grid[i + 1][j + 1],
+                grid[i][j + 1],
+            );
+            // Alternate the diagonal so the grid has no preferred direction.
+            if (i + j) % 2 == 0 {
+                tris.push([a, c, d]);
+                tris.push([a, d, e]);
+            } else {
+                tris.push([a, c, e]);
+                tris.push([c, d, e]);
+            }
+        }
+    }
+    match up {
+        Some(up) => add_oriented(b, s, tris, up),
+        None => {
+            for t in tris {
+                b.triangle(s, t);
+            }
+        }
+    }
+}
+
+/// A straight path of `count` segments between two existing vertices; the `count − 1` new
+/// vertices between them are fixed or free.
+fn add_path(b: &mut MeshBuilder, ends: (usize, usize), count: usize, fixed: bool) -> Vec<usize> {
+    let (pa, pb) = (b.position(ends.0), b.position(ends.1));
+    let mut path = vec![ends.0];
+    for i in 1..count {
+        let p = pa + (pb - pa) * (i as f64 / count as f64);
+        path.push(if fixed { b.fixed(p) } else { b.vertex(p) });
+    }
+    path.push(ends.1);
+    path
+}
+
+/// Volume of a spherical segment with rim radius `a` and height `h` (m³).
+fn segment_volume(a: f64, h: f64) -> f64 {
+    PI * h.abs() * (3.0 * a * a + h * h) / 6.0
+}
+
+/// Height along the axis from the junction plane to the apex of the spherical cap that leaves
+/// a junction circle of radius `a` with meridian tangent `t = (axial, radial)`.
+fn cap_height(a: f64, t: (f64, f64)) -> f64 {
+    if t.0.abs() < 1e-15 {
+        return 0.0;
+    }
+    let c = a * t.1 / t.0;
+    c + (c * c + a * a).sqrt() * t.0.signum()
+}
+
+/// The standard double bubble's three cap heights `(left, wall, right)` for rim radius `a` and
+/// wall tilt `beta` (rad): the films leave the junction circle at 120° to each other.
+fn double_bubble_heights(a: f64, beta: f64) -> (f64, f64, f64) {
+    let rotate = |(x, y): (f64, f64), ang: f64| {
+        (x * ang.cos() - y * ang.sin(), x * ang.sin() + y * ang.cos())
+    };
+    let wall = (beta.sin(), -beta.cos());
+    let right = rotate(wall, 2.0 * PI / 3.0);
+    let left = rotate(wall, -2.0 * PI / 3.0);
+    (
+        cap_height(a, left),
+        cap_height(a, wall),
+        cap_height(a, right),
+    )
+}
+
+/// Volumes `(left, right)` of the standard double bubble with rim radius `a`, wall tilt `beta`.
+fn double_bubble_volumes(a: f64, beta: f64) -> (f64, f64) {
+    let (hl, hw, hr) = double_bubble_heights(a, beta);
+    let wall = hw.signum() * segment_volume(a, hw);
+    (segment_volume(a, hl) + wall, segment_volume(a, hr) - wall)
+}
+
+/// The exact standard double bubble for volumes `v_left ≤ v_right` (m³): rim radius, wall
+/// tilt, and the total area of the three caps (m²).
+pub fn standard_double_bubble(v_left: f64, v_right: f64) -> (f64, f64, f64) {
+    let ratio = v_right / v_left;
+    let (mut lo, mut hi) = (0.0, PI / 3.0 - 1e-9);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        let (l, r) = double_bubble_volumes(1.0, mid);
+        if r / l < ratio {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let beta = 0.5 * (lo + hi);
+    let a = (v_left / double_bubble_volumes(1.0, beta).0).cbrt();
+    let (hl, hw, hr) = double_bubble_heights(a, beta);
+    let area = [hl, hw, hr].iter().map(|h| PI * (a * a + h * h)).sum();
+    (a, beta, area)
+}
+
+/// Adds a spherical cap (or a flat disk when `h = 0`) bounded by the junction circle `rim`
+/// (radius `a` around the x axis at x = 0), with apex at x = `h`; normals along `up` at the apex.
+fn add_cap(
+    b: &mut MeshBuilder,
+    s: usize,
+    levels: usize,
+    rim: &[usize],
+    (a, h): (f64, f64),
+    up: Point,
+) {
+    let sides = 6;
+    let place = move |rho: f64, p: usize, f: f64| {
+        let phi = 2.0 * PI * (p as f64 + f) / sides as f64;
+        let radial = Point::new(0.0, phi.cos(), phi.sin());
+        if h == 0.0 {
+            return radial * (rho * a);
+        }
+        let r = (a * a + h * h) / (2.0 * h.abs());
+        let theta = rho * (1.0 - h.abs() / r).clamp(-1.0, 1.0).acos();
+        let centre = Point::new(h - h.signum() * r, 0.0, 0.0);
+        centre + r * (theta.cos() * h.signum() * Point::x() + theta.sin() * radial)
+    };
+    add_fan_disk(b, s, sides, levels, Some(rim), place, up);
+}
+
+/// The standard double bubble of volumes `volumes` (m³) with `6·levels` vertices on the
+/// junction circle. Surfaces `left`, `wall`, `right`; the wall's normal points to +x. The
+/// bubble with the larger volume is on the right.
+pub fn double_bubble(volumes: [f64; 2], levels: usize) -> Result<Shape, MeshError> {
+    let (small, large) = (volumes[0].min(volumes[1]), volumes[0].max(volumes[1]));
+    let (a, beta, _) = standard_double_bubble(small, large);
+    let (hl, hw, hr) = double_bubble_heights(a, beta);
+    let mut b = MeshBuilder::new();
+    let (left, wall, right) = (b.surface("left"), b.surface("wall"), b.surface("right"));
+    let n = 6 * levels;
+    let rim: Vec<usize> = (0..n)
+        .map(|g| {
+            let phi = 2.0 * PI * g as f64 / n as f64;
+            b.vertex(Point::new(0.0, a * phi.cos(), a * phi.sin()))
+        })
+        .collect();
+    add_cap(&mut b, left, levels, &rim, (a, hl), -Point::x());
+    add_cap(&mut b, wall, levels, &rim, (a, hw), Point::x());
+    add_cap(&mut b, right, levels, &rim, (a, hr), Point::x());
+    let mesh = b.build()?;
+    let region = |boundary| Region {
+        boundary,
+        reference: Point::zeros(),
+    };
+    Ok(Shape {
+        mesh,
+        volumes: vec![
+            ("left".into(), region(vec![(left, 1.0), (wall, 1.0)]), small),
+            (
+                "right".into(),
+                region(vec![(right, 1.0), (wall, -1.0)]),
+                large,
+            ),
+        ],
+    })
+}
+
+/// Three bubbles of volumes `volumes` (m³) started as a ball of the total volume split into
+/// three 120° wedges about the y axis. `levels` rows from pole to pole. Surfaces `outer_k`
+/// (lunes, outward) and `wall_k` (normal towards increasing azimuth, i.e. into cell k).
+pub fn triple_bubble(volumes: [f64; 3], levels: usize) -> Result<Shape, MeshError> {
+    let total: f64 = volumes.iter().sum();
+    let r = (3.0 * total / (4.0 * PI)).cbrt();
+    let rows = 2 * levels.max(1);
+    let cols = levels.max(1);
+    let across = levels.max(1);
+    let mut b = MeshBuilder::new();
+    let north = b.vertex(Point::new(0.0, r, 0.0));
+    let south = b.vertex(Point::new(0.0, -r, 0.0));
+    let theta = |i: usize| PI * i as f64 / rows as f64;
+    let dir = |phi: f64| Point::new(phi.cos(), 0.0, phi.sin());
+    let sphere = |i: usize, phi: f64| r * (theta(i).cos() * Point::y() + theta(i).sin() * dir(phi));
+    // Axis vertices evenly spaced (not at the meridians' heights), so the wall rows slant
+    // and the fans at the poles are not slivers.
+    let axis_point = |i: usize| Point::new(0.0, r * (1.0 - 2.0 * i as f64 / rows as f64), 0.0);
+    let axis: Vec<usize> = (1..rows).map(|i| b.vertex(axis_point(i))).collect();
+    let meridians: Vec<Vec<usize>> = (0..3)
+        .map(|k| {
+            let phi = 2.0 * PI * k as f64 / 3.0;
+            (1..rows).map(|i| b.vertex(sphere(i, phi))).collect()
+        })
+        .collect();
+    // Full pole-to-pole column of vertex ids for a row-indexed path.
+    let column = |inner: &[usize]| {
+        let mut c = vec![north];
+        c.extend_from_slice(inner);
+        c.push(south);
+        c
+    };
+    let mut regions = Vec::new();
+    let outer: Vec<usize> = (0..3).map(|k| b.surface(&format!("outer_{k}"))).collect();
+    let walls: Vec<usize> = (0..3).map(|k| b.surface(&format!("wall_{k}"))).collect();
+    for k in 0..3 {
+        // Lune k between meridians k and k+1.
+        let phi0 = 2.0 * PI * k as f64 / 3.0;
+        let mut grid = vec![column(&meridians[k])];
+        for j in 1..cols {
+            let phi = phi0 + 2.0 * PI / 3.0 * j as f64 / cols as f64;
+            let inner: Vec<usize> = (1..rows).map(|i| b.vertex(sphere(i, phi))).collect();
+            grid.push(column(&inner));
+        }
+        grid.push(column(&meridians[(k + 1) % 3]));
+        let mid = phi0 + PI / 3.0;
+        add_pole_grid(&mut b, outer[k], &grid, dir(mid));
+        // Wall k at azimuth phi0 between the axis and meridian k.
+        let mut grid = vec![column(&axis)];
+        for j in 1..across {
+            let inner: Vec<usize> = (1..rows)
+                .map(|i| {
+                    let f = j as f64 / across as f64;
+                    b.vertex(axis_point(i) * (1.0 - f) + sphere(i, phi0) * f)
+                })
+                .collect();
+            grid.push(column(&inner));
+        }
+        grid.push(column(&meridians[k]));
+        add_pole_grid(
+            &mut b,
+            walls[k],
+            &grid,
+            Point::new(-phi0.sin(), 0.0, phi0.cos()),
+        );
+    }
+    let mesh = b.build()?;
+    for k in 0..3 {
+        regions.push((
+            format!("cell_{k}"),
+            Region {
+                boundary: vec![(outer[k], 1.0), (walls[k], -1.0), (walls[(k + 1) % 3], 1.0)],
+                reference: Point::zeros(),
+            },
+            volumes[k],
+        ));
+    }
+    Ok(Shape {
+        mesh,
+        volumes: regions,
+    })
+}
+
+/// Triangulates columns of pole-to-pole vertex paths (all starting at the same north pole and
+/// ending at the same south pole): fans at the poles, quads between. Oriented along `up` (tested
+/// on a triangle next to the middle row).
+fn add_pole_grid(b: &mut MeshBuilder, s: usize, grid: &[Vec<usize>], up: Point) {
+    let rows = grid[0].len() - 1;
+    let mut tris = Vec::new();
+    // Start with a quad triangle in the middle so the orientation test sees a regular triangle.
+    let middle = rows / 2;
+    let order = std::iter::once(middle).chain((0..rows).filter(|&i| i != middle));
+    for i in order {
+        for j in 0..grid.len() - 1 {
+            let (a, c, d, e) = (
+                grid[j][i],
+                grid[j][i + 1],
+                grid[j + 1][i + 1],
+                grid[j + 1][i],
+            );
+            if i == 0 {
+                tris.push([a, c, d]);
+            } else if i == rows - 1 {
+                tris.push([a, c, e]);
+            } else {
+                tris.push([a, c, d]);
+                tris.push([a, d, e]);
+            }
+        }
+    }
+    add_oriented(b, s, tris, up);
+}
+
+/// A wire cube of edge `edge` (m, centred at the origin, fixed wires) holding a central cubical
+/// bubble of volume `bubble_volume` (m³) joined to each wire by a trapezoidal film. `levels`
+/// segments along each wire. Surfaces `films` and `bubble` (outward).
+pub fn cube_frame(edge: f64, bubble_volume: f64, levels: usize) -> Result<Shape, MeshError> {
+    let n = levels.max(1);
+    let inner = bubble_volume.cbrt();
+    let mut b = MeshBuilder::new();
+    let films = b.surface("films");
+    let bubble = b.surface("bubble");
+    let corner = |i: usize, size: f64| {
+        Point::new(
+            (i & 1) as f64 - 0.5,
+            ((i >> 1) & 1) as f64 - 0.5,
+            ((i >> 2) & 1) as f64 - 0.5,
+        ) * size
+    };
+    let outer_c: Vec<usize> = (0..8).map(|i| b.fixed(corner(i, edge))).collect();
+    let inner_c: Vec<usize> = (0..8).map(|i| b.vertex(corner(i, inner))).collect();
+    let diagonal_segments = ((edge - inner) / 2.0 * 3f64.sqrt() / (inner / n as f64))
+        .round()
+        .clamp(1.0, n as f64) as usize;
+    let diagonals: Vec<Vec<usize>> = (0..8)
+        .map(|i| add_path(&mut b, (outer_c[i], inner_c[i]), diagonal_segments, false))
+        .collect();
+    let mut outer_e = BTreeMap::new();
+    let mut inner_e = BTreeMap::new();
+    for i in 0..8 {
+        for bit in [1, 2, 4] {
+            if i & bit == 0 {
+                let j = i | bit;
+                outer_e.insert((i, j), add_path(&mut b, (outer_c[i], outer_c[j]), n, true));
+                inner_e.insert((i, j), add_path(&mut b, (inner_c[i], inner_c[j]), n, false));
+            }
+        }
+    }
+    for (&(i, j), wire) in &outer_e {
+        add_grid_patch(
+            &mut b,
+            films,
+            wire,
+            &inner_e[&(i, j)],
+            &diagonals[i],
+            &diagonals[j],
+            None,
+            |_, _| Point::zeros(),
+        );
+    }
+    // Bubble faces: for each axis bit and side, corners base, base+u, base+v, base+u+v.
+    for bit in [1usize, 2, 4] {
+        let others: Vec<usize> = [1usize, 2, 4].into_iter().filter(|&o| o != bit).collect();
+        let (u, v) = (others[0], others[1]);
+        for side in [0, bit] {
+            let base = side;
+            let normal = if side == 0 {
+                -axis_vector(bit)
+            } else {
+                axis_vector(bit)
+            };
+            add_grid_patch(
+                &mut b,
+                bubble,
+                &inner_e[&(base, base | u)],
+                &inner_e[&(base | v, base | u | v)],
+                &inner_e[&(base, base | v)],
+                &inner_e[&(base | u, base | u | v)],
+                Some(normal),
+                |_, _| Point::zeros(),
+            );
+        }
+    }
+    let mesh = b.build()?;
+    Ok(Shape {
+        mesh,
+        volumes: vec![(
+            "bubble".into(),
+            Region {
+                boundary: vec![(bubble, 1.0)],
+                reference: Point::zeros(),
+            },
+            bubble_volume,
+        )],
+    })
+}
+
+fn axis_vector(bit: usize) -> Point {
+    match bit {
+        1 => Point::x(),
+        2 => Point::y(),
+        _ => Point::z(),
+    }
+}
+
+/// Film topologies on the octahedral frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OctahedronTopology {
+    /// Every wire joined by a triangular film to one central vertex.
+    Cone,
+}
+
+/// A wire octahedron with edges of length `edge` (m, vertices on the axes), fixed wires, with
+/// the films of `topology`; `levels` segments per wire. Surface `films`.
+pub fn octahedron_frame(
+    edge: f64,
+    topology: OctahedronTopology,
+    levels: usize,
+) -> Result<Shape, MeshError> {
+    let n = levels.max(1);
+    let s = edge / 2f64.sqrt();
+    let mut b = MeshBuilder::new();
+    let films = b.surface("films");
+    let axes = [
+        Point::x(),
+        -Point::x(),
+        Point::y(),
+        -Point::y(),
+        Point::z(),
+        -Point::z(),
+    ];
+    let corners: Vec<usize> = axes.iter().map(|d| b.fixed(d * s)).collect();
+    match topology {
+        OctahedronTopology::Cone => {
+            let centre = b.vertex(Point::zeros());
+            let spokes: Vec<Vec<usize>> = corners
+                .iter()
+                .map(|&c| add_path(&mut b, (centre, c), n, false))
+                .collect();
+            for i in 0..6 {
+                for j in (i + 1)..6 {
+                    // Opposite vertices (i, i^1) share no wire.
+                    if j == (i ^ 1) {
+                        continue;
+                    }
+                    let wire = add_path(&mut b, (corners[i], corners[j]), n, true);
+                    add_triangle_patch(&mut b, films, &spokes[i], &spokes[j], &wire);
+                }
+            }
+        }
+    }
+    Ok(Shape {
+        mesh: b.build()?,
+        volumes: Vec::new(),
+    })
+}
+
+/// A triangular patch with corner paths `side_a` (apex → A), `side_b` (apex → B) and `base`
+/// (A → B), all with `n` segments: rows parallel to the base, row r holding r + 1 vertices.
+fn add_triangle_patch(
+    b: &mut MeshBuilder,
+    s: usize,
+    side_a: &[usize],
+    side_b: &[usize],
+    base: &[usize],
+) {
+    let n = base.len() - 1;
+    let mut rows: Vec<Vec<usize>> = vec![vec![side_a[0]]];
+    for r in 1..=n {
+        if r == n {
+            rows.push(base.to_vec());
+            continue;
+        }
+        let (pa, pb) = (b.position(side_a[r]), b.position(side_b[r]));
+        let mut row = vec![side_a[r]];
+        for c in 1..r {
+            row.push(b.vertex(pa + (pb - pa) * (c as f64 / r as f64)));
+        }
+        row.push(side_b[r]);
+        rows.push(row);
+    }
+    for r in 0..n {
+        for c in 0..=r {
+            b.triangle(s, [rows[r][c], rows[r + 1][c], rows[r + 1][c + 1]]);
+            if c < r {
+                b.triangle(s, [rows[r][c], rows[r + 1][c + 1], rows[r][c + 1]]);
+            }
+        }
+    }
+}
+
+/// Two U-shaped wires joined at their tips (m): U1 in the plane z = 0 hangs down by `depth`,
+/// U2 in the plane y = 0 reaches out by `depth`, both `width` wide. One film `film` spans the
+/// closed loop; `levels` segments across the width.
+pub fn u_wires(width: f64, depth: f64, levels: usize) -> Result<Shape, MeshError> {
+    let n = levels.max(1);
+    let m = 2 * (((depth / width) * n as f64 / 2.0).round() as usize).max(1);
+    let a = width / 2.0;
+    let mut b = MeshBuilder::new();
+    let film = b.surface("film");
+    let c = [
+        b.fixed(Point::new(-a, -depth, 0.0)),
+        b.fixed(Point::new(a, -depth, 0.0)),
+        b.fixed(Point::new(-a, 0.0, depth)),
+        b.fixed(Point::new(a, 0.0, depth)),
+        b.fixed(Point::new(-a, 0.0, 0.0)),
+        b.fixed(Point::new(a, 0.0, 0.0)),
+    ];
+    let bottom = add_path(&mut b, (c[0], c[1]), n, true);
+    let top = add_path(&mut b, (c[2], c[3]), n, true);
+    let leg = |b: &mut MeshBuilder, from: usize, tip: usize, to: usize| {
+        let mut p = add_path(b, (from, tip), m / 2, true);
+        p.pop();
+        p.extend(add_path(b, (tip, to), m / 2, true));
+        p
+    };
+    let left = leg(&mut b, c[0], c[4], c[2]);
+    let right = leg(&mut b, c[1], c[5], c[3]);
+    add_grid_patch(&mut b, film, &bottom, &top, &left, &right, None, |_, _| {
+        Point::zeros()
+    });
+    Ok(Shape {
+        mesh: b.build()?,
+        volumes: Vec::new(),
+    })
+}
+
+/// A tent pole: lifts the vertices within `radius` (horizontal distance, m) of `(x, z)` to
+/// `height` (m) and fixes them; at least the nearest vertex and its 1-ring are lifted.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pole {
+    /// Horizontal position (x, z), m.
+    pub at: [f64; 2],
+    /// Height of the lifted cap, m.
+    pub height: f64,
+    /// Radius of the lifted cap, m.
+    pub radius: f64,
+}
+
+/// A membrane over a polygon.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TentSpec {
+    /// Surface name.
+    pub name: String,
+    /// Rim corners (x, y, z), m, counter-clockwise seen from above; the rim is fixed.
+    pub boundary: Vec<Point>,
+    /// Poles.
+    pub poles: Vec<Pole>,
+}
+
+/// Membranes over polygons (one surface each) with fixed rims and pole caps; `levels` rings from
+/// the polygon's centroid to its rim. Normals point up.
+pub fn tents(specs: &[TentSpec], levels: usize) -> Result<Shape, MeshError> {
+    let levels = levels.max(1);
+    let mut b = MeshBuilder::new();
+    let mut patches = Vec::new();
+    for spec in specs {
+        let s = b.surface(&spec.name);
+        let first = b.vertex_count();
+        add_outline_patch(&mut b, s, &spec.boundary, levels, |_| Point::zeros());
+        patches.push((first, b.vertex_count()));
+    }
+    let mut mesh = b.build()?;
+    mesh.fix_boundary();
+    let mut pos = mesh.positions().to_vec();
+    for (spec, &(first, last)) in specs.iter().zip(&patches) {
+        for pole in &spec.poles {
+            let distances: Vec<f64> = pos
+                .iter()
+                .map(|p| ((p.x - pole.at[0]).powi(2) + (p.z - pole.at[1]).powi(2)).sqrt())
+                .collect();
+            let horizontal = |v: usize| distances[v];
+            let nearest = (first..last)
+                .min_by(|&u, &v| horizontal(u).total_cmp(&horizontal(v)))
+                .unwrap_or(first);
+            let mut cap: Vec<usize> = (first..last)
+                .filter(|&v| horizontal(v) <= pole.radius)
+                .collect();
+            if cap.len() < 2 {
+                cap = vec![nearest];
+                cap.extend_from_slice(mesh.neighbours(nearest));
+            }
+            for v in cap {
+                pos[v].y = pole.height;
+                let mut f = mesh.flags()[v];
+                f.fixed = true;
+                mesh.set_flags(v, f)?;
+            }
+        }
+    }
+    harmonic_heights(&mesh, &mut pos);
+    mesh.set_positions(pos)?;
+    Ok(Shape {
+        mesh,
+        volumes: Vec::new(),
+    })
+}
+
+/// Sets the heights of the free vertices to the discrete harmonic interpolation (uniform
+/// weights) of the fixed ones, by over-relaxed Gauss–Seidel sweeps: a smooth start close to a
+/// minimal surface, without folds at pole caps.
+fn harmonic_heights(mesh: &Mesh, pos: &mut [Point]) {
+    let free: Vec<usize> = (0..mesh.vertex_count())
+        .filter(|&v| !mesh.flags()[v].fixed)
+        .collect();
+    let (lo, hi) = pos
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(l, h), p| (l.min(p.y), h.max(p.y)));
+    let tolerance = 1e-9 * (hi - lo).max(1e-300);
+    for _ in 0..20_000 {
+        let mut change: f64 = 0.0;
+        for &v in &free {
+            let ring = mesh.neighbours(v);
+            let mean = ring.iter().map(|&w| pos[w].y).sum::<f64>() / ring.len() as f64;
+            let step = 1.8 * (mean - pos[v].y);
+            pos[v].y += step;
+            change = change.max(step.abs());
+        }
+        if change < tolerance {
+            break;
+        }
+    }
+}
+
+/// Adds a patch spanning `boundary` (a polygon, counter-clockwise seen from above) to surface
+/// `s`, normals up: a Coons grid with near-square cells for quadrilaterals (elongated shapes
+/// stay well shaped), a fan disk around the centroid otherwise. Interior points are the linear
+/// interpolation of the rim plus `lift(crown)`, where `crown` is 1 at the middle and 0 on the
+/// rim (`1 − ρ²` on fan disks, `(1 − (2u−1)²)(1 − (2v−1)²)` on grids).
+fn add_outline_patch(
+    b: &mut MeshBuilder,
+    s: usize,
+    boundary: &[Point],
+    levels: usize,
+    lift: impl Fn(f64) -> Point,
+) {
+    let sides = boundary.len();
+    if sides == 4 {
+        let corners: Vec<usize> = boundary.iter().map(|&p| b.vertex(p)).collect();
+        let len = |i: usize, j: usize| (boundary[i] - boundary[j]).norm();
+        let (u_len, v_len) = ((len(0, 1) + len(3, 2)) / 2.0, (len(1, 2) + len(0, 3)) / 2.0);
+        let short = u_len.min(v_len);
+        let count = |l: f64| ((levels as f64 * l / short).round() as usize).max(1);
+        let (nu, nv) = (count(u_len), count(v_len));
+        let bottom = add_path(b, (corners[0], corners[1]), nu, false);
+        let top = add_path(b, (corners[3], corners[2]), nu, false);
+        let left = add_path(b, (corners[0], corners[3]), nv, false);
+        let right = add_path(b, (corners[1], corners[2]), nv, false);
+        add_grid_patch(
+            b,
+            s,
+            &bottom,
+            &top,
+            &left,
+            &right,
+            Some(Point::y()),
+            |u, v| lift((1.0 - (2.0 * u - 1.0).powi(2)) * (1.0 - (2.0 * v - 1.0).powi(2))),
+        );
+        return;
+    }
+    let centre = boundary.iter().sum::<Point>() / sides as f64;
+    let place = |rho: f64, p: usize, f: f64| {
+        let rim = boundary[p] + (boundary[(p + 1) % sides] - boundary[p]) * f;
+        centre + (rim - centre) * rho + lift(1.0 - rho * rho)
+    };
+    add_fan_disk(b, s, sides, levels, None, place, Point::y());
+}
+
+/// A pneumatic cell: a footprint polygon on the ground (x, z; m, counter-clockwise seen from
+/// above), the start dome height (m) and the enclosed volume (m³).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CellSpec {
+    /// Surface name.
+    pub name: String,
+    /// Footprint corners (x, z), m.
+    pub footprint: Vec<[f64; 2]>,
+    /// Height of the start dome's crown, m.
+    pub height: f64,
+    /// Enclosed volume, m³.
+    pub volume: f64,
+}
+
+/// Pneumatic cells: paraboloid start domes over their footprints, rims fixed on the ground
+/// (y = 0), each enclosing its own volume (reference point on the ground), normals outward.
+pub fn cells(specs: &[CellSpec], levels: usize) -> Result<Shape, MeshError> {
+    let levels = levels.max(1);
+    let mut b = MeshBuilder::new();
+    let mut regions = Vec::new();
+    for spec in specs {
+        let s = b.surface(&spec.name);
+        let boundary: Vec<Point> = spec
+            .footprint
+            .iter()
+            .map(|&[x, z]| Point::new(x, 0.0, z))
+            .collect();
+        let height = spec.height;
+        add_outline_patch(&mut b, s, &boundary, levels, |crown| {
+            Point::y() * height * crown
+        });
+        let centre = boundary.iter().sum::<Point>() / boundary.len() as f64;
+        regions.push((
+            spec.name.clone(),
+            Region {
+                boundary: vec![(s, 1.0)],
+                reference: centre,
+            },
+            spec.volume,
+        ));
+    }
+    let mut mesh = b.build()?;
+    mesh.fix_boundary();
+    Ok(Shape {
+        mesh,
+        volumes: regions,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cmc::area::{surface_areas, total_area};
+
+    #[test]
+    fn icosphere_counts_and_orientation() {
+        let m = icosphere(1.0, 2, "s").unwrap();
+        assert_eq!(m.vertex_count(), 162);
+        assert_eq!(m.triangles().len(), 320);
+        let r = Region {
+            boundary: vec![(0, 1.0)],
+            reference: Point::zeros(),
+        };
+        assert!(r.volume(&m) > 0.0);
+    }
+
+    #[test]
+    fn standard_double_bubble_matches_the_known_areas() {
+        // Equal volumes 1 and 1: 9.139421678; volumes 1 and 2: 11.854293128.
+        let (_, beta, area) = standard_double_bubble(1.0, 1.0);
+        assert!(beta.abs() < 1e-9);
+        assert!((area - 9.139421678).abs() < 1e-8, "{area}");
+        let (_, _, area) = standard_double_bubble(1.0, 2.0);
+        assert!((area - 11.854293128).abs() < 1e-8, "{area}");
+    }
+
+    #[test]
+    fn double_bubble_mesh_converges_to_the_exact_shape() {
+        let exact = standard_double_bubble(1.0, 2.0).2;
+        let mut errors = Vec::new();
+        for levels in [4, 8, 16] {
+            let shape = double_bubble([1.0, 2.0], levels).unwrap();
+            let area = total_area(&shape.mesh);
+            errors.push((exact - area) / exact);
+            for (_, region, target) in &shape.volumes {
+                let v = region.volume(&shape.mesh);
+                assert!(v > 0.0 && (v / target - 1.0).abs() < 0.1, "{v} vs {target}");
+            }
+            assert_eq!(shape.mesh.junction_vertices().len(), 6 * levels);
+        }
+        // Inscribed meshes underestimate; the error falls about 4× per halving of the edge.
+        assert!(errors.iter().all(|&e| e > 0.0), "{errors:?}");
+        for w in errors.windows(2) {
+            let rate = w[0] / w[1];
+            assert!(rate > 3.0 && rate < 5.0, "{errors:?}");
+        }
+    }
+
+    #[test]
+    fn triple_bubble_cells_share_the_ball() {
+        let shape = triple_bubble([1.0, 1.0, 1.0], 8).unwrap();
+        let sum: f64 = shape
+            .volumes
+            .iter()
+            .map(|(_, r, _)| {
+                let v = r.volume(&shape.mesh);
+                assert!((v - 1.0).abs() < 0.05, "{v}");
+                v
+            })
+            .sum();
+        let ball = Region {
+            boundary: (0..3).map(|k| (k, 1.0)).collect(),
+            reference: Point::zeros(),
+        };
+        assert!((sum - ball.volume(&shape.mesh)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn cube_frame_bubble_is_closed_and_wires_fixed() {
+        let shape = cube_frame(1.0, 0.05, 4).unwrap();
+        let (_, region, target) = &shape.volumes[0];
+        assert!((region.volume(&shape.mesh) - target).abs() < 1e-12);
+        let bubble = shape.mesh.surface_index("bubble").unwrap();
+        // Every bubble edge is shared by two bubble triangles (closed), some also by a film.
+        let fixed = shape.mesh.flags().iter().filter(|f| f.fixed).count();
+        assert_eq!(fixed, 8 + 12 * 3);
+        assert!(surface_areas(&shape.mesh)[bubble] > 0.0);
+    }
+
+    #[test]
+    fn frames_wires_and_tents_build() {
+        let o = octahedron_frame(1.0, OctahedronTopology::Cone, 3).unwrap();
+        // 12 cone triangles of base 1 and height ½.
+        assert!((total_area(&o.mesh) - 3.0).abs() < 1e-12);
+        let u = u_wires(1.0, 0.5, 6).unwrap();
+        assert!(
+            u.mesh
+                .curvature_surface(u.mesh.vertex_count() - 1)
+                .is_some()
+        );
+        let t = tents(
+            &[TentSpec {
+                name: "roof".into(),
+                boundary: (0..8)
+                    .map(|k| {
+                        let a = 2.0 * PI * k as f64 / 8.0;
+                        Point::new(5.0 * a.cos(), 1.0, -5.0 * a.sin())
+                    })
+                    .collect(),
+                poles: vec![Pole {
+                    at: [0.0, 0.0],
+                    height: 4.0,
+                    radius: 0.3,
+                }],
+            }],
+            6,
+        )
+        .unwrap();
+        let top = t.mesh.positions().iter().map(|p| p.y).fold(0.0, f64::max);
+        assert_eq!(top, 4.0);
+        let lifted = t
+            .mesh
+            .positions()
+            .iter()
+            .zip(t.mesh.flags())
+            .filter(|(p, f)| f.fixed && p.y == 4.0)
+            .count();
+        assert!(lifted >= 7, "a pole lifts a cap, not a point: {lifted}");
+        let c = cells(
+            &[CellSpec {
+                name: "dome".into(),
+                footprint: (0..12)
+                    .map(|k| {
+                        let a = 2.0 * PI * k as f64 / 12.0;
+                        [3.0 * a.cos(), -3.0 * a.sin()]
+                    })
+                    .collect(),
+                height: 2.0,
+                volume: 30.0,
+            }],
+            6,
+        )
+        .unwrap();
+        // The paraboloid over a near-disk of radius 3, height 2 encloses about π·9·2/2.
+        let v = c.volumes[0].1.volume(&c.mesh);
+        assert!((v / (PI * 9.0) - 1.0).abs() < 0.1, "{v}");
+    }
+}

@@ -1,0 +1,695 @@
+//! The CMC optimization problem of seed eq. 5.4 as an [`Nlp`].
+//!
+//! Variables: the positions of the non-fixed vertices and one mean curvature `H_s` per surface
+//! that has curvature vertices. Objective: the total area, plus the tangential regularization
+//! below. Equality constraints, in row order:
+//! 1. `H(x_j) − H_s = 0` at every curvature vertex j of surface s ([`Mesh::curvature_surface`]);
+//! 2. `V(region) − V₀ = 0` for every volume constraint;
+//! 3. `|x_a − x_b| − ℓ = 0` for every chord;
+//! 4. the plane / line / circle equations of guided vertices ([`super::mesh::Guide`]).
+//!
+//! Scaling: internally lengths are divided by a characteristic length `L` (m), so variables are
+//! `x/L` and `H·L`, the objective is `area/L²`, and the rows are `H·L`, `V/L³`, `ℓ/L` and guide
+//! residuals `/L`. Millimetre bubbles and 50 m roofs then look alike to the solver.
+//!
+//! Triangle quality: the curvature rows fix each vertex's normal position only, leaving its
+//! tangential position free, where the discrete area is nearly flat (a nearly singular Hessian)
+//! and its minimization drifts towards slivers. We add the tangential regularization
+//! ```text
+//!   R(x) = (w/2) Σ_j |P_j (x_j − mean of x_j's neighbours)|²      (scaled units)
+//! ```
+//! over the curvature vertices j, with `P_j = I − n_j n_jᵀ` the tangent projector frozen at the
+//! start of the solve (area-weighted normals). R pulls each vertex tangentially towards its ring
+//! centroid (Laplacian smoothing within the surface) without resisting normal motion, so it
+//! shapes the triangles and leaves the surface almost unchanged; its effect on the area is of
+//! order `w` and is reported with the results (set `w = 0` to switch it off). It keeps one fixed
+//! sparsity pattern per solve; connectivity is improved between solves by edge flips
+//! ([`super::remesh`]), after which the problem is rebuilt ([`CmcNlp::remeshed`]).
+
+use std::sync::Mutex;
+
+use nalgebra::Matrix3;
+
+use super::area::{total_area, total_area_gradient};
+use super::curvature::{mean_curvature, mean_curvature_gradient};
+use super::mesh::{Mesh, Point};
+use super::volume::{Region, chord};
+use crate::solver::{Dims, EvalError, Nlp};
+
+/// A volume constraint: the region must enclose `target` m³.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VolumeConstraint {
+    /// Name used in reports.
+    pub name: String,
+    /// The region.
+    pub region: Region,
+    /// Required volume, m³.
+    pub target: f64,
+}
+
+/// A chord-length constraint: vertices `a` and `b` stay `length` m apart.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Chord {
+    /// First vertex.
+    pub a: usize,
+    /// Second vertex.
+    pub b: usize,
+    /// Required distance, m.
+    pub length: f64,
+}
+
+/// One constraint row's meaning.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Row {
+    Curvature { vertex: usize, surface: usize },
+    Volume(usize),
+    Chord(usize),
+    Guide { vertex: usize, equation: usize },
+}
+
+/// The CMC problem: see the module header.
+#[derive(Debug)]
+pub struct CmcNlp {
+    start: Mesh,
+    scratch: Mutex<Mesh>,
+    scale: f64,
+    column: Vec<Option<usize>>,
+    vertex_columns: usize,
+    curvature_column: Vec<Option<usize>>,
+    rows: Vec<Row>,
+    volumes: Vec<VolumeConstraint>,
+    chords: Vec<Chord>,
+    smoothing: Vec<(usize, Matrix3<f64>)>,
+    weight: f64,
+    pattern: Vec<(usize, usize)>,
+}
+
+/// Why a problem cannot be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BuildError {
+    /// A chord names a vertex that does not exist, or two equal vertices.
+    #[error("chord {0} names a missing vertex or the same vertex twice")]
+    BadChord(usize),
+    /// Nothing can move.
+    #[error("every vertex is fixed: there is nothing to optimize")]
+    NothingFree,
+    /// A quantity is non-finite or non-positive.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl CmcNlp {
+    /// Builds the problem from a start mesh; `tangential_weight` is `w` of the module header.
+    pub fn new(
+        mesh: Mesh,
+        volumes: Vec<VolumeConstraint>,
+        chords: Vec<Chord>,
+        tangential_weight: f64,
+    ) -> Result<CmcNlp, BuildError> {
+        if !(tangential_weight >= 0.0 && tangential_weight.is_finite()) {
+            return Err(BuildError::Invalid(format!(
+                "tangential weight must be ≥ 0, got {tangential_weight}"
+            )));
+        }
+        for (i, c) in chords.iter().enumerate() {
+            if c.a >= mesh.vertex_count() || c.b >= mesh.vertex_count() || c.a == c.b {
+                return Err(BuildError::BadChord(i));
+            }
+        }
+        let n = mesh.vertex_count();
+        let mut column = vec![None; n];
+        let mut next = 0;
+        for (v, slot) in column.iter_mut().enumerate() {
+            if !mesh.flags()[v].fixed {
+                *slot = Some(next);
+                next += 3;
+            }
+        }
+        if next == 0 {
+            return Err(BuildError::NothingFree);
+        }
+        let vertex_columns = next;
+        let curvature_vertices: Vec<(usize, usize)> = (0..n)
+            .filter_map(|v| mesh.curvature_surface(v).map(|s| (v, s)))
+            .collect();
+        let mut curvature_column = vec![None; mesh.surfaces().len()];
+        for &(_, s) in &curvature_vertices {
+            if curvature_column[s].is_none() {
+                curvature_column[s] = Some(usize::MAX);
+            }
+        }
+        for slot in curvature_column.iter_mut().flatten() {
+            *slot = next;
+            next += 1;
+        }
+        let mut rows: Vec<Row> = curvature_vertices
+            .iter()
+            .map(|&(vertex, surface)| Row::Curvature { vertex, surface })
+            .collect();
+        rows.extend((0..volumes.len()).map(Row::Volume));
+        rows.extend((0..chords.len()).map(Row::Chord));
+        for (v, col) in column.iter().enumerate() {
+            if let (Some(g), Some(_)) = (mesh.flags()[v].guide, col) {
+                for equation in 0..mesh.guides()[g].rows() {
+                    rows.push(Row::Guide {
+                        vertex: v,
+                        equation,
+                    });
+                }
+            }
+        }
+        let scale = characteristic_length(&mesh);
+        let smoothing = if tangential_weight > 0.0 {
+            curvature_vertices
+                .iter()
+                .map(|&(v, _)| {
+                    let normal = vertex_normal(&mesh, v);
+                    (v, Matrix3::identity() - normal * normal.transpose())
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let mut nlp = CmcNlp {
+            scratch: Mutex::new(mesh.clone()),
+            start: mesh,
+            scale,
+            column,
+            vertex_columns,
+            curvature_column,
+            rows,
+            volumes,
+            chords,
+            smoothing,
+            weight: tangential_weight,
+            pattern: Vec::new(),
+        };
+        nlp.pattern = nlp.build_pattern();
+        Ok(nlp)
+    }
+
+    /// The same problem (volumes, chords, weight) on another mesh with the same vertices and
+    /// surfaces, e.g. after [`super::remesh::equiangulate`].
+    pub fn remeshed(&self, mesh: Mesh) -> Result<CmcNlp, BuildError> {
+        CmcNlp::new(mesh, self.volumes.clone(), self.chords.clone(), self.weight)
+    }
+
+    /// The start mesh (connectivity, flags, fixed positions).
+    pub fn mesh(&self) -> &Mesh {
+        &self.start
+    }
+
+    /// The characteristic length `L` used for scaling, m.
+    pub fn scale(&self) -> f64 {
+        self.scale
+    }
+
+    /// The volume constraints.
+    pub fn volumes(&self) -> &[VolumeConstraint] {
+        &self.volumes
+    }
+
+    /// The tangential regularization weight `w`.
+    pub fn tangential_weight(&self) -> f64 {
+        self.weight
+    }
+
+    /// Number of curvature rows.
+    pub fn curvature_rows(&self) -> usize {
+        self.rows
+            .iter()
+            .filter(|r| matches!(r, Row::Curvature { .. }))
+            .count()
+    }
+
+    /// Vertex positions (m) at the variables `x`.
+    pub fn positions(&self, x: &[f64]) -> Vec<Point> {
+        self.start
+            .positions()
+            .iter()
+            .zip(&self.column)
+            .map(|(p, col)| match col {
+                Some(c) => Point::new(x[*c], x[c + 1], x[c + 2]) * self.scale,
+                None => *p,
+            })
+            .collect()
+    }
+
+    /// Each surface's curvature variable `H_s` (1/m) at `x`; `None` for surfaces without
+    /// curvature vertices.
+    pub fn surface_curvatures(&self, x: &[f64]) -> Vec<Option<f64>> {
+        self.curvature_column
+            .iter()
+            .map(|c| c.map(|c| x[c] / self.scale))
+            .collect()
+    }
+
+    /// A copy of the mesh with the positions at `x`.
+    pub fn mesh_at(&self, x: &[f64]) -> Result<Mesh, EvalError> {
+        let mut mesh = self.start.clone();
+        mesh.set_positions(self.positions(x))
+            .map_err(|e| EvalError::Domain(e.to_string()))?;
+        Ok(mesh)
+    }
+
+    /// The regularization term R(x) alone (scaled units, see the module header).
+    pub fn regularization(&self, x: &[f64]) -> f64 {
+        let pos = self.positions(x);
+        self.smoothing
+            .iter()
+            .map(|(v, p)| {
+                let r = p * self.ring_offset(&pos, *v) / self.scale;
+                0.5 * self.weight * r.norm_squared()
+            })
+            .sum()
+    }
+
+    /// `x_v − mean of its neighbours`, m.
+    fn ring_offset(&self, pos: &[Point], v: usize) -> Point {
+        let ring = self.start.neighbours(v);
+        let mean = ring.iter().map(|&w| pos[w]).sum::<Point>() / ring.len() as f64;
+        pos[v] - mean
+    }
+
+    /// Vertices each row depends on, in the order their gradients are produced.
+    fn row_vertices(&self, row: Row) -> Vec<usize> {
+        match row {
+            Row::Curvature { vertex, .. } => {
+                let mut v = vec![vertex];
+                v.extend_from_slice(self.start.neighbours(vertex));
+                v
+            }
+            Row::Volume(k) => self.volumes[k].region.vertices(&self.start),
+            Row::Chord(k) => vec![self.chords[k].a, self.chords[k].b],
+            Row::Guide { vertex, .. } => vec![vertex],
+        }
+    }
+
+    fn build_pattern(&self) -> Vec<(usize, usize)> {
+        let mut pattern = Vec::new();
+        for (r, &row) in self.rows.iter().enumerate() {
+            for v in self.row_vertices(row) {
+                if let Some(c) = self.column[v] {
+                    pattern.extend((0..3).map(|k| (r, c + k)));
+                }
+            }
+            if let Row::Curvature { surface, .. } = row
+                && let Some(c) = self.curvature_column[surface]
+            {
+                pattern.push((r, c));
+            }
+        }
+        pattern
+    }
+
+    /// Runs `f` on the scratch mesh moved to `x`.
+    fn with_mesh<T>(
+        &self,
+        x: &[f64],
+        f: impl FnOnce(&Mesh) -> Result<T, EvalError>,
+    ) -> Result<T, EvalError> {
+        if x.iter().any(|v| !v.is_finite()) {
+            return Err(EvalError::Domain("non-finite variable".into()));
+        }
+        let mut mesh = self
+            .scratch
+            .lock()
+            .map_err(|_| EvalError::Fatal("mesh scratch poisoned".into()))?;
+        mesh.set_positions(self.positions(x))
+            .map_err(|e| EvalError::Domain(e.to_string()))?;
+        f(&mesh)
+    }
+}
+
+/// The bounding-box diagonal over √3 (the edge of a cube with that diagonal), m; 1 for a
+/// single point.
+fn characteristic_length(mesh: &Mesh) -> f64 {
+    let mut lo = Point::repeat(f64::INFINITY);
+    let mut hi = Point::repeat(f64::NEG_INFINITY);
+    for p in mesh.positions() {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    let d = (hi - lo).norm() / 3f64.sqrt();
+    if d > 0.0 { d } else { 1.0 }
+}
+
+/// Unit area-weighted normal at a vertex (zero vector if it vanishes).
+fn vertex_normal(mesh: &Mesh, v: usize) -> Point {
+    let n: Point = mesh
+        .vertex_triangles(v)
+        .iter()
+        .map(|&t| super::area::area_vector(&mesh.corners(t)))
+        .sum();
+    n.try_normalize(0.0).unwrap_or_else(Point::zeros)
+}
+
+fn domain(e: impl std::fmt::Display) -> EvalError {
+    EvalError::Domain(e.to_string())
+}
+
+impl Nlp for CmcNlp {
+    fn dims(&self) -> Dims {
+        Dims {
+            n: self.vertex_columns + self.curvature_column.iter().flatten().count(),
+            m: self.rows.len(),
+            jac_nnz: self.pattern.len(),
+            hess_nnz: 0,
+        }
+    }
+
+    fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
+        xl.fill(f64::NEG_INFINITY);
+        xu.fill(f64::INFINITY);
+        cl.fill(0.0);
+        cu.fill(0.0);
+    }
+
+    fn start(&self, x: &mut [f64]) {
+        for (v, col) in self.column.iter().enumerate() {
+            if let Some(c) = col {
+                let p = self.start.positions()[v] / self.scale;
+                x[*c..c + 3].copy_from_slice(p.as_slice());
+            }
+        }
+        let mut sums = vec![(0.0, 0usize); self.curvature_column.len()];
+        for row in &self.rows {
+            if let Row::Curvature { vertex, surface } = *row
+                && let Ok(h) = mean_curvature(&self.start, vertex)
+            {
+                sums[surface].0 += h;
+                sums[surface].1 += 1;
+            }
+        }
+        for (s, col) in self.curvature_column.iter().enumerate() {
+            if let Some(c) = col {
+                let (sum, count) = sums[s];
+                x[*c] = if count > 0 {
+                    sum / count as f64 * self.scale
+                } else {
+                    0.0
+                };
+            }
+        }
+    }
+
+    fn jacobian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
+        for (k, &(r, c)) in self.pattern.iter().enumerate() {
+            rows[k] = r;
+            cols[k] = c;
+        }
+    }
+
+    fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
+        let l = self.scale;
+        let reg = self.regularization(x);
+        self.with_mesh(x, |mesh| {
+            *f = total_area(mesh) / (l * l) + reg;
+            for (r, row) in self.rows.iter().enumerate() {
+                c[r] = match *row {
+                    Row::Curvature { vertex, surface } => {
+                        let h = mean_curvature(mesh, vertex).map_err(domain)?;
+                        let col = self.curvature_column[surface].unwrap_or(0);
+                        h * l - x[col]
+                    }
+                    Row::Volume(k) => {
+                        let v = &self.volumes[k];
+                        (v.region.volume(mesh) - v.target) / (l * l * l)
+                    }
+                    Row::Chord(k) => {
+                        let ch = self.chords[k];
+                        (chord(mesh, ch.a, ch.b).0 - ch.length) / l
+                    }
+                    Row::Guide { vertex, equation } => {
+                        let g = &mesh.guides()[mesh.flags()[vertex].guide.unwrap_or(0)];
+                        g.residuals(&mesh.positions()[vertex])[equation].0 / l
+                    }
+                };
+            }
+            if f.is_finite() && c.iter().all(|v| v.is_finite()) {
+                Ok(())
+            } else {
+                Err(EvalError::Domain("non-finite area or constraint".into()))
+            }
+        })
+    }
+
+    fn eval_derivatives(
+        &self,
+        x: &[f64],
+        grad: &mut [f64],
+        jac: &mut [f64],
+    ) -> Result<(), EvalError> {
+        let l = self.scale;
+        grad.fill(0.0);
+        let pos = self.positions(x);
+        for (v, p) in &self.smoothing {
+            let r = p * self.ring_offset(&pos, *v) / l;
+            let g = self.weight * p * r;
+            let ring = self.start.neighbours(*v);
+            if let Some(c) = self.column[*v] {
+                add3(grad, c, g);
+            }
+            for &w in ring {
+                if let Some(c) = self.column[w] {
+                    add3(grad, c, -g / ring.len() as f64);
+                }
+            }
+        }
+        self.with_mesh(x, |mesh| {
+            for (v, g) in total_area_gradient(mesh).into_iter().enumerate() {
+                if let Some(c) = self.column[v] {
+                    add3(grad, c, g / l);
+                }
+            }
+            let mut k = 0;
+            let column = &self.column;
+            let put = |jac: &mut [f64], k: &mut usize, list: Vec<(usize, Point)>, factor: f64| {
+                for (v, g) in list {
+                    if column[v].is_some() {
+                        jac[*k..*k + 3].copy_from_slice((g * factor).as_slice());
+                        *k += 3;
+                    }
+                }
+            };
+            for row in &self.rows {
+                match *row {
+                    Row::Curvature { vertex, surface } => {
+                        let (_, g) = mean_curvature_gradient(mesh, vertex).map_err(domain)?;
+                        put(jac, &mut k, g, l * l);
+                        if self.curvature_column[surface].is_some() {
+                            jac[k] = -1.0;
+                            k += 1;
+                        }
+                    }
+                    Row::Volume(i) => {
+                        put(
+                            jac,
+                            &mut k,
+                            self.volumes[i].region.volume_gradient(mesh),
+                            1.0 / (l * l),
+                        );
+                    }
+                    Row::Chord(i) => {
+                        let ch = self.chords[i];
+                        let (_, g) = chord(mesh, ch.a, ch.b);
+                        put(jac, &mut k, vec![(ch.a, g), (ch.b, -g)], 1.0);
+                    }
+                    Row::Guide { vertex, equation } => {
+                        let g = &mesh.guides()[mesh.flags()[vertex].guide.unwrap_or(0)];
+                        let (_, d) = g.residuals(&mesh.positions()[vertex])[equation];
+                        put(jac, &mut k, vec![(vertex, d)], 1.0);
+                    }
+                }
+            }
+            debug_assert_eq!(k, self.pattern.len());
+            if grad.iter().chain(jac.iter()).all(|v| v.is_finite()) {
+                Ok(())
+            } else {
+                Err(EvalError::Domain("non-finite derivative".into()))
+            }
+        })
+    }
+
+    fn constraint_name(&self, row: usize) -> String {
+        match self.rows.get(row) {
+            Some(Row::Curvature { vertex, surface }) => format!(
+                "curvature at vertex {vertex} of surface `{}`",
+                self.start.surfaces()[*surface]
+            ),
+            Some(Row::Volume(k)) => format!("volume of `{}`", self.volumes[*k].name),
+            Some(Row::Chord(k)) => format!(
+                "chord {k} between vertices {} and {}",
+                self.chords[*k].a, self.chords[*k].b
+            ),
+            Some(Row::Guide { vertex, equation }) => {
+                format!("guide equation {equation} of vertex {vertex}")
+            }
+            None => format!("c[{row}]"),
+        }
+    }
+}
+
+fn add3(v: &mut [f64], c: usize, g: Point) {
+    v[c] += g.x;
+    v[c + 1] += g.y;
+    v[c + 2] += g.z;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cmc::check::{check_derivatives, jittered_start, spread_columns};
+    use crate::cmc::generators::{self, OctahedronTopology, Shape};
+    use crate::cmc::mesh::Guide;
+
+    fn nlp_of(shape: Shape, weight: f64) -> CmcNlp {
+        let volumes = shape
+            .volumes
+            .into_iter()
+            .map(|(name, region, target)| VolumeConstraint {
+                name,
+                region,
+                target,
+            })
+            .collect();
+        CmcNlp::new(shape.mesh, volumes, Vec::new(), weight).unwrap()
+    }
+
+    fn assert_derivatives(nlp: &CmcNlp, what: &str) -> f64 {
+        let n = nlp.dims().n;
+        let x = jittered_start(nlp, 1e-3, 7);
+        let report = check_derivatives(nlp, &x, &spread_columns(n, 120), 1e-6).unwrap();
+        assert!(
+            report.max_error < 1e-6,
+            "{what}: error {:.2e} at {}",
+            report.max_error,
+            report.worst
+        );
+        report.max_error
+    }
+
+    #[test]
+    fn icosahedron_start_is_feasible() {
+        let mesh = generators::icosphere(0.01, 0, "skin").unwrap();
+        let region = Region {
+            boundary: vec![(0, 1.0)],
+            reference: Point::zeros(),
+        };
+        let target = region.volume(&mesh);
+        let nlp = CmcNlp::new(
+            mesh,
+            vec![VolumeConstraint {
+                name: "ball".into(),
+                region,
+                target,
+            }],
+            Vec::new(),
+            0.01,
+        )
+        .unwrap();
+        let d = nlp.dims();
+        assert_eq!((d.n, d.m), (12 * 3 + 1, 12 + 1));
+        let mut x = vec![0.0; d.n];
+        nlp.start(&mut x);
+        let (mut f, mut c) = (0.0, vec![0.0; d.m]);
+        nlp.eval(&x, &mut f, &mut c).unwrap();
+        assert!(c.iter().all(|v| v.abs() < 1e-12), "{c:?}");
+        // A regular mesh has every vertex at its ring centroid's tangent: no regularization.
+        assert!(nlp.regularization(&x) < 1e-28);
+        let h = nlp.surface_curvatures(&x)[0].unwrap();
+        assert!(h > 0.0 && (h * 0.01 - 1.0).abs() < 0.2, "{h}");
+    }
+
+    #[test]
+    fn derivatives_match_on_every_generator() {
+        let shapes = [
+            (
+                "double bubble",
+                generators::double_bubble([1e-6, 2e-6], 2).unwrap(),
+            ),
+            (
+                "triple bubble",
+                generators::triple_bubble([1.0, 1.5, 2.0], 2).unwrap(),
+            ),
+            ("cube frame", generators::cube_frame(1.0, 0.05, 2).unwrap()),
+            (
+                "octahedron",
+                generators::octahedron_frame(1.0, OctahedronTopology::Cone, 3).unwrap(),
+            ),
+            ("u wires", generators::u_wires(1.0, 0.6, 4).unwrap()),
+        ];
+        for (what, shape) in shapes {
+            let nlp = nlp_of(shape, 0.05);
+            assert!(nlp.curvature_rows() > 0, "{what}");
+            assert_derivatives(&nlp, what);
+        }
+    }
+
+    #[test]
+    fn guides_and_chords_have_exact_derivatives() {
+        let mut mesh = generators::icosphere(2.0, 1, "skin").unwrap();
+        let plane = mesh.add_guide(Guide::Plane {
+            point: Point::new(0.0, 0.0, 0.0),
+            normal: Point::new(0.3, 1.0, 0.0),
+        });
+        let circle = mesh.add_guide(Guide::Circle {
+            centre: Point::new(0.0, 1.0, 0.0),
+            axis: Point::new(0.0, 1.0, 0.2),
+            radius: 1.5,
+        });
+        let line = mesh.add_guide(Guide::Line {
+            point: Point::new(1.0, 0.0, 0.0),
+            direction: Point::new(0.0, 0.0, 1.0),
+        });
+        for (v, g) in [(3, plane), (5, circle), (8, line)] {
+            let mut f = mesh.flags()[v];
+            f.guide = Some(g);
+            mesh.set_flags(v, f).unwrap();
+        }
+        let mut f = mesh.flags()[0];
+        f.fixed = true;
+        mesh.set_flags(0, f).unwrap();
+        let nlp = CmcNlp::new(
+            mesh,
+            Vec::new(),
+            vec![
+                Chord {
+                    a: 0,
+                    b: 9,
+                    length: 3.0,
+                },
+                Chord {
+                    a: 4,
+                    b: 7,
+                    length: 1.0,
+                },
+            ],
+            0.1,
+        )
+        .unwrap();
+        // 42 vertices, 1 fixed, 3 guided: 38 curvature rows, 2 chords, 1 + 2 + 2 guide rows.
+        assert_eq!(nlp.dims().m, 38 + 2 + 5);
+        assert_derivatives(&nlp, "guides and chords");
+    }
+
+    #[test]
+    fn degenerate_points_are_domain_errors() {
+        let nlp = nlp_of(generators::u_wires(1.0, 0.6, 4).unwrap(), 0.0);
+        let mut x = vec![0.0; nlp.dims().n];
+        nlp.start(&mut x);
+        let (mut f, mut c) = (0.0, vec![0.0; nlp.dims().m]);
+        x[0] = f64::NAN;
+        assert!(matches!(
+            nlp.eval(&x, &mut f, &mut c),
+            Err(EvalError::Domain(_))
+        ));
+        // Collapse every free vertex onto one point: zero-area triangles.
+        let k = nlp.dims().n - nlp.curvature_column.iter().flatten().count();
+        x[..k].fill(0.0);
+        assert!(matches!(
+            nlp.eval(&x, &mut f, &mut c),
+            Err(EvalError::Domain(_))
+        ));
+    }
+}

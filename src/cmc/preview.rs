@@ -1,0 +1,99 @@
+//! An SVG preview of a mesh: orthographic view from above-front-right (y up), triangles drawn
+//! back to front (painter's algorithm) in a colour per surface, shaded by the angle between the
+//! triangle normal and a light direction (two-sided, since films have no outside).
+
+use std::fmt::Write;
+
+use super::area::area_vector;
+use super::mesh::{Mesh, Point};
+
+/// Base colours (RGB) cycled over surfaces.
+const PALETTE: [(f64, f64, f64); 8] = [
+    (0.30, 0.55, 0.85),
+    (0.90, 0.55, 0.25),
+    (0.40, 0.75, 0.40),
+    (0.80, 0.35, 0.45),
+    (0.60, 0.45, 0.80),
+    (0.85, 0.75, 0.30),
+    (0.35, 0.70, 0.75),
+    (0.65, 0.65, 0.65),
+];
+
+/// Renders `mesh` as an SVG document `width` pixels wide with a caption.
+pub fn svg(mesh: &Mesh, width: f64, caption: &str) -> String {
+    let view = Point::new(1.0, 0.8, 1.4).normalize();
+    let right = Point::y().cross(&view).normalize();
+    let up = view.cross(&right);
+    let light = Point::new(0.4, 1.0, 0.6).normalize();
+    let project = |p: &Point| (p.dot(&right), -p.dot(&up), p.dot(&view));
+    let pts: Vec<(f64, f64, f64)> = mesh.positions().iter().map(project).collect();
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for &(x, y, _) in &pts {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    let margin = 20.0;
+    let span = (x1 - x0).max(y1 - y0).max(1e-300);
+    let s = (width - 2.0 * margin) / span;
+    let height = (y1 - y0) * s + 2.0 * margin + 24.0;
+    let mut order: Vec<usize> = (0..mesh.triangles().len()).collect();
+    let depth = |t: usize| mesh.triangles()[t].iter().map(|&v| pts[v].2).sum::<f64>();
+    order.sort_by(|&a, &b| depth(a).total_cmp(&depth(b)));
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}">"#
+    );
+    let _ = writeln!(out, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    for t in order {
+        let n = area_vector(&mesh.corners(t)).normalize();
+        let shade = 0.35 + 0.65 * n.dot(&light).abs();
+        let (r, g, b) = PALETTE[mesh.triangle_surface()[t] % PALETTE.len()];
+        let colour = |c: f64| (255.0 * (c * shade).clamp(0.0, 1.0)).round() as u8;
+        let points: Vec<String> = mesh.triangles()[t]
+            .iter()
+            .map(|&v| {
+                let (x, y, _) = pts[v];
+                format!("{:.2},{:.2}", (x - x0) * s + margin, (y - y0) * s + margin)
+            })
+            .collect();
+        let _ = writeln!(
+            out,
+            r#"<polygon points="{}" fill="rgb({},{},{})" stroke="rgb(40,40,40)" stroke-width="0.2" fill-opacity="0.85"/>"#,
+            points.join(" "),
+            colour(r),
+            colour(g),
+            colour(b)
+        );
+    }
+    let _ = writeln!(
+        out,
+        r#"<text x="{margin}" y="{:.0}" font-family="sans-serif" font-size="14">{}</text>"#,
+        height - 8.0,
+        escape(caption)
+    );
+    out.push_str("</svg>\n");
+    out
+}
+
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_polygon_per_triangle() {
+        let mesh = crate::cmc::generators::icosphere(1.0, 1, "s").unwrap();
+        let text = svg(&mesh, 400.0, "sphere <test>");
+        assert_eq!(text.matches("<polygon").count(), mesh.triangles().len());
+        assert!(text.contains("sphere &lt;test&gt;"));
+        assert!(text.ends_with("</svg>\n"));
+    }
+}

@@ -1,0 +1,698 @@
+//! CMC problem files (TOML, SI units: metres, cubic metres), see `problems/cmc/`.
+//!
+//! ```toml
+//! name = "double_bubble"        # optional; defaults to the file stem
+//! resolution = 6                # optional refinement level (meaning per shape, see below)
+//! [shape]
+//! type = "double_bubble"        # sphere | double_bubble | triple_bubble | cube_frame |
+//! volumes = [1.0e-6, 2.0e-6]    # octahedron_frame | u_wires | tents | cells | obj
+//! [quality]
+//! tangential_weight = 0.01      # w of the tangential regularization (cmc::nlp), ≥ 0
+//! flip_rounds = 1               # edge-flip + re-solve rounds after the first solve (cmc::remesh)
+//! [[chord]]                     # optional chord-length constraints between vertex indices
+//! a = 0
+//! b = 12
+//! length = 0.5
+//! [solver]                      # the shared solver table
+//! ```
+//! Resolution: icosphere subdivision level (sphere), rings per cap (double bubble), rows per
+//! half-meridian (triple bubble), segments per wire (frames, U wires), rings from centre to rim
+//! (tents, cells); ignored for OBJ imports.
+
+use std::path::Path;
+
+use serde::Deserialize;
+
+use super::generators::{self, CellSpec, OctahedronTopology, Pole, Shape, TentSpec};
+use super::mesh::Point;
+use super::nlp::Chord;
+use super::volume::Region;
+use crate::error::InputError;
+use crate::spec::{Key, SolverSpec, Source};
+
+/// The whole file.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CmcFile {
+    /// Problem name; defaults to the file stem.
+    pub name: Option<String>,
+    /// Refinement level; defaults per shape ([`ShapeSpec::default_resolution`]).
+    pub resolution: Option<usize>,
+    /// The start shape.
+    pub shape: ShapeSpec,
+    /// Mesh-quality settings.
+    #[serde(default)]
+    pub quality: QualitySpec,
+    /// Chord-length constraints.
+    #[serde(default)]
+    pub chord: Vec<ChordSpec>,
+    /// Solver options.
+    #[serde(default)]
+    pub solver: SolverSpec,
+}
+
+/// `[quality]`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct QualitySpec {
+    /// Weight of the tangential regularization (dimensionless, ≥ 0); default 0.01.
+    #[serde(default = "default_weight")]
+    pub tangential_weight: f64,
+    /// Rounds of equiangulation (edge flips) and re-solving after the first solve; default 1.
+    #[serde(default = "default_flip_rounds")]
+    pub flip_rounds: usize,
+}
+
+fn default_weight() -> f64 {
+    0.01
+}
+
+fn default_flip_rounds() -> usize {
+    1
+}
+
+impl Default for QualitySpec {
+    fn default() -> Self {
+        QualitySpec {
+            tangential_weight: default_weight(),
+            flip_rounds: default_flip_rounds(),
+        }
+    }
+}
+
+/// `[[chord]]`: vertices `a` and `b` (0-based indices of the built mesh) stay `length` m apart.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ChordSpec {
+    /// First vertex index.
+    pub a: usize,
+    /// Second vertex index.
+    pub b: usize,
+    /// Length, m.
+    pub length: f64,
+}
+
+/// `[shape]`: which start shape, with its parameters.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ShapeSpec {
+    /// One bubble of `volume` m³ (an icosphere).
+    Sphere {
+        /// Volume, m³.
+        volume: f64,
+    },
+    /// The standard double bubble.
+    DoubleBubble {
+        /// The two volumes, m³.
+        volumes: [f64; 2],
+    },
+    /// Three bubbles (wedges of a ball to start).
+    TripleBubble {
+        /// The three volumes, m³.
+        volumes: [f64; 3],
+    },
+    /// Wire cube with a central bubble.
+    CubeFrame {
+        /// Wire edge length, m.
+        edge: f64,
+        /// Central bubble volume, m³.
+        bubble_volume: f64,
+    },
+    /// Wire octahedron.
+    OctahedronFrame {
+        /// Wire edge length, m.
+        edge: f64,
+        /// Film topology.
+        topology: OctahedronTopology,
+    },
+    /// Two U-shaped wires meeting at their tips.
+    UWires {
+        /// Width of each U, m.
+        width: f64,
+        /// Depth of each U, m.
+        depth: f64,
+    },
+    /// Membranes over polygons, lifted by poles.
+    Tents {
+        /// The membranes.
+        tent: Vec<TentToml>,
+    },
+    /// Pneumatic cells on the ground.
+    Cells {
+        /// The cells.
+        cell: Vec<CellToml>,
+    },
+    /// A mesh from an OBJ file (see `cmc::import`).
+    Obj {
+        /// Path, relative to the problem file.
+        file: String,
+        /// Fix every boundary vertex (films spanning wires modelled as open edges).
+        #[serde(default)]
+        fix_boundary: bool,
+        /// Volume constraints.
+        #[serde(default)]
+        volume: Vec<VolumeToml>,
+    },
+}
+
+/// A closed or ground-standing polygon: explicit corners or a regular polygon.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RimToml {
+    /// Centre (x, z), m.
+    pub centre: [f64; 2],
+    /// Circumradius, m.
+    pub radius: f64,
+    /// Height of the rim, m.
+    #[serde(default)]
+    pub height: f64,
+    /// Number of corners.
+    pub sides: usize,
+}
+
+/// A ring of equal poles.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PoleRingToml {
+    /// Centre (x, z), m.
+    pub centre: [f64; 2],
+    /// Ring radius, m.
+    pub radius: f64,
+    /// Number of poles.
+    pub count: usize,
+    /// Pole height, m.
+    pub height: f64,
+    /// Radius of each lifted cap, m.
+    pub cap: f64,
+    /// Angle of the first pole from +x towards −z, degrees.
+    #[serde(default)]
+    pub phase: f64,
+}
+
+/// One pole.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PoleToml {
+    /// Position (x, z), m.
+    pub at: [f64; 2],
+    /// Height, m.
+    pub height: f64,
+    /// Radius of the lifted cap, m.
+    pub cap: f64,
+}
+
+/// `[[shape.tent]]`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TentToml {
+    /// Surface name.
+    pub name: String,
+    /// Rim corners (x, y, z), m, counter-clockwise seen from above.
+    pub boundary: Option<Vec<[f64; 3]>>,
+    /// Or a regular polygon rim.
+    pub rim: Option<RimToml>,
+    /// Single poles.
+    #[serde(default)]
+    pub pole: Vec<PoleToml>,
+    /// Rings of poles.
+    #[serde(default)]
+    pub pole_ring: Vec<PoleRingToml>,
+}
+
+/// `[[shape.cell]]`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CellToml {
+    /// Surface name.
+    pub name: String,
+    /// Footprint corners (x, z), m, counter-clockwise seen from above.
+    pub footprint: Option<Vec<[f64; 2]>>,
+    /// Or a regular polygon footprint (its `height` is ignored).
+    pub circle: Option<RimToml>,
+    /// Crown height of the start dome, m.
+    pub height: f64,
+    /// Enclosed volume, m³.
+    pub volume: f64,
+}
+
+/// `[[shape.volume]]` for imported meshes.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct VolumeToml {
+    /// Name used in reports.
+    pub name: String,
+    /// Bounding surfaces; prefix `-` for surfaces whose normals point into the region.
+    pub surfaces: Vec<String>,
+    /// Reference point (m), on the fixed plane for regions closed by one; default origin.
+    #[serde(default)]
+    pub reference: [f64; 3],
+    /// Volume, m³.
+    pub volume: f64,
+}
+
+impl ShapeSpec {
+    /// The resolution used when the file gives none.
+    pub fn default_resolution(&self) -> usize {
+        match self {
+            ShapeSpec::Sphere { .. } => 4,
+            ShapeSpec::DoubleBubble { .. } | ShapeSpec::TripleBubble { .. } => 8,
+            ShapeSpec::CubeFrame { .. } | ShapeSpec::OctahedronFrame { .. } => 8,
+            ShapeSpec::UWires { .. } => 16,
+            ShapeSpec::Tents { .. } | ShapeSpec::Cells { .. } => 10,
+            ShapeSpec::Obj { .. } => 1,
+        }
+    }
+}
+
+/// A validated file plus where it came from.
+#[derive(Debug, Clone)]
+pub struct CmcSpec {
+    /// The parsed file.
+    pub file: CmcFile,
+    /// Its text, for positioned errors.
+    pub source: Source,
+}
+
+/// Parses and validates a problem file.
+pub fn parse(source: Source) -> Result<CmcSpec, InputError> {
+    let file: CmcFile = source.parse()?;
+    let spec = CmcSpec { file, source };
+    spec.validate()?;
+    Ok(spec)
+}
+
+fn positive(v: f64) -> bool {
+    v > 0.0 && v.is_finite()
+}
+
+impl CmcSpec {
+    fn err(&self, path: &[Key<'_>], message: impl Into<String>) -> InputError {
+        self.source.error_at(path, message)
+    }
+
+    fn validate(&self) -> Result<(), InputError> {
+        let f = &self.file;
+        f.solver.validate(&self.source, &[Key::Name("solver")])?;
+        if let Some(r) = f.resolution
+            && !(1..=64).contains(&r)
+        {
+            return Err(self.err(
+                &["resolution".into()],
+                format!("`resolution` must be between 1 and 64, got {r}"),
+            ));
+        }
+        if f.quality.flip_rounds > 10 {
+            return Err(self.err(
+                &["quality".into(), "flip_rounds".into()],
+                format!(
+                    "`flip_rounds` must be at most 10, got {}",
+                    f.quality.flip_rounds
+                ),
+            ));
+        }
+        if !(f.quality.tangential_weight >= 0.0 && f.quality.tangential_weight.is_finite()) {
+            return Err(self.err(
+                &["quality".into(), "tangential_weight".into()],
+                "`tangential_weight` must be a finite number ≥ 0",
+            ));
+        }
+        for (i, c) in f.chord.iter().enumerate() {
+            if !positive(c.length) {
+                return Err(self.err(
+                    &["chord".into(), i.into(), "length".into()],
+                    format!("chord length must be positive metres, got {}", c.length),
+                ));
+            }
+        }
+        let shape = |key: &'static str| [Key::Name("shape"), Key::Name(key)];
+        let check_volumes = |volumes: &[f64]| match volumes.iter().find(|v| !positive(**v)) {
+            Some(v) => Err(self.err(
+                &shape("volumes"),
+                format!("volumes must be positive cubic metres, got {v}"),
+            )),
+            None => Ok(()),
+        };
+        match &f.shape {
+            ShapeSpec::Sphere { volume } => check_volumes(&[*volume])?,
+            ShapeSpec::DoubleBubble { volumes } => check_volumes(volumes)?,
+            ShapeSpec::TripleBubble { volumes } => check_volumes(volumes)?,
+            ShapeSpec::CubeFrame {
+                edge,
+                bubble_volume,
+            } => {
+                if !positive(*edge) {
+                    return Err(self.err(&shape("edge"), "`edge` must be positive metres"));
+                }
+                if !(positive(*bubble_volume) && bubble_volume.cbrt() < 0.8 * edge) {
+                    return Err(self.err(
+                        &shape("bubble_volume"),
+                        "`bubble_volume` must be positive and its cube root below 0.8·edge",
+                    ));
+                }
+            }
+            ShapeSpec::OctahedronFrame { edge, .. } => {
+                if !positive(*edge) {
+                    return Err(self.err(&shape("edge"), "`edge` must be positive metres"));
+                }
+            }
+            ShapeSpec::UWires { width, depth } => {
+                for (key, v) in [("width", width), ("depth", depth)] {
+                    if !positive(*v) {
+                        return Err(
+                            self.err(&shape(key), format!("`{key}` must be positive metres"))
+                        );
+                    }
+                }
+            }
+            ShapeSpec::Tents { tent } => {
+                if tent.is_empty() {
+                    return Err(self.err(&shape("tent"), "at least one `[[shape.tent]]`"));
+                }
+                for (i, t) in tent.iter().enumerate() {
+                    let at = |k: &'static str| {
+                        [
+                            Key::Name("shape"),
+                            Key::Name("tent"),
+                            Key::Index(i),
+                            Key::Name(k),
+                        ]
+                    };
+                    self.check_outline(t.boundary.is_some(), t.rim.as_ref(), &at("name"))?;
+                    if let Some(b) = &t.boundary {
+                        let flat: Vec<[f64; 2]> = b.iter().map(|p| [p[0], p[2]]).collect();
+                        self.check_polygon(&flat, &at("boundary"))?;
+                    }
+                    for (j, p) in t.pole.iter().enumerate() {
+                        let path = [
+                            Key::Name("shape"),
+                            Key::Name("tent"),
+                            Key::Index(i),
+                            Key::Name("pole"),
+                            Key::Index(j),
+                        ];
+                        if !(positive(p.cap) && p.height.is_finite()) {
+                            return Err(self.err(&path, "a pole needs a positive `cap` radius"));
+                        }
+                    }
+                    for (j, r) in t.pole_ring.iter().enumerate() {
+                        let path = [
+                            Key::Name("shape"),
+                            Key::Name("tent"),
+                            Key::Index(i),
+                            Key::Name("pole_ring"),
+                            Key::Index(j),
+                        ];
+                        if !(positive(r.cap) && positive(r.radius) && r.count > 0) {
+                            return Err(self.err(
+                                &path,
+                                "a pole ring needs positive `cap`, `radius` and `count`",
+                            ));
+                        }
+                    }
+                }
+            }
+            ShapeSpec::Cells { cell } => {
+                if cell.is_empty() {
+                    return Err(self.err(&shape("cell"), "at least one `[[shape.cell]]`"));
+                }
+                for (i, c) in cell.iter().enumerate() {
+                    let at = |k: &'static str| {
+                        [
+                            Key::Name("shape"),
+                            Key::Name("cell"),
+                            Key::Index(i),
+                            Key::Name(k),
+                        ]
+                    };
+                    self.check_outline(c.footprint.is_some(), c.circle.as_ref(), &at("name"))?;
+                    if let Some(fp) = &c.footprint {
+                        self.check_polygon(fp, &at("footprint"))?;
+                    }
+                    if !positive(c.volume) {
+                        return Err(self.err(&at("volume"), "`volume` must be positive m³"));
+                    }
+                    if !positive(c.height) {
+                        return Err(self.err(&at("height"), "`height` must be positive m"));
+                    }
+                }
+            }
+            ShapeSpec::Obj { volume, .. } => {
+                for (i, v) in volume.iter().enumerate() {
+                    if !positive(v.volume) {
+                        return Err(self.err(
+                            &[
+                                Key::Name("shape"),
+                                Key::Name("volume"),
+                                Key::Index(i),
+                                Key::Name("volume"),
+                            ],
+                            "`volume` must be positive m³",
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn check_outline(
+        &self,
+        explicit: bool,
+        regular: Option<&RimToml>,
+        path: &[Key<'_>],
+    ) -> Result<(), InputError> {
+        if explicit == regular.is_some() {
+            return Err(self.err(
+                path,
+                "give either corner points or a regular polygon, not both",
+            ));
+        }
+        if let Some(r) = regular
+            && !(positive(r.radius) && r.sides >= 3 && r.height.is_finite())
+        {
+            return Err(self.err(path, "a regular polygon needs radius > 0 and sides ≥ 3"));
+        }
+        Ok(())
+    }
+
+    /// At least three corners, counter-clockwise seen from above (positive area in (x, −z)),
+    /// and star-shaped from the centroid (every fan triangle positively oriented).
+    fn check_polygon(&self, corners: &[[f64; 2]], path: &[Key<'_>]) -> Result<(), InputError> {
+        if corners.len() < 3 || corners.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(self.err(path, "a polygon needs at least three finite corners"));
+        }
+        let n = corners.len() as f64;
+        let cx = corners.iter().map(|c| c[0]).sum::<f64>() / n;
+        let cz = corners.iter().map(|c| c[1]).sum::<f64>() / n;
+        for i in 0..corners.len() {
+            let (a, b) = (corners[i], corners[(i + 1) % corners.len()]);
+            // Counter-clockwise seen from +y means clockwise in (x, z).
+            let cross = (a[0] - cx) * (b[1] - cz) - (a[1] - cz) * (b[0] - cx);
+            if cross >= 0.0 {
+                return Err(self.err(
+                    path,
+                    "the polygon must be counter-clockwise seen from above and star-shaped from its centroid",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Builds the start shape at `resolution` and the chords; geometry problems are positioned
+    /// at `[shape]`.
+    pub fn build(&self, resolution: usize) -> Result<(Shape, Vec<Chord>), InputError> {
+        let at_shape = |e: &dyn std::fmt::Display| {
+            self.err(
+                &["shape".into()],
+                format!("cannot build the start mesh: {e}"),
+            )
+        };
+        let shape = match &self.file.shape {
+            ShapeSpec::Sphere { volume } => {
+                let radius = (3.0 * volume / (4.0 * std::f64::consts::PI)).cbrt();
+                let mesh = generators::icosphere(radius, resolution.min(7), "bubble")
+                    .map_err(|e| at_shape(&e))?;
+                Shape {
+                    mesh,
+                    volumes: vec![(
+                        "bubble".into(),
+                        Region {
+                            boundary: vec![(0, 1.0)],
+                            reference: Point::zeros(),
+                        },
+                        *volume,
+                    )],
+                }
+            }
+            ShapeSpec::DoubleBubble { volumes } => {
+                generators::double_bubble(*volumes, resolution).map_err(|e| at_shape(&e))?
+            }
+            ShapeSpec::TripleBubble { volumes } => {
+                generators::triple_bubble(*volumes, resolution).map_err(|e| at_shape(&e))?
+            }
+            ShapeSpec::CubeFrame {
+                edge,
+                bubble_volume,
+            } => generators::cube_frame(*edge, *bubble_volume, resolution)
+                .map_err(|e| at_shape(&e))?,
+            ShapeSpec::OctahedronFrame { edge, topology } => {
+                generators::octahedron_frame(*edge, *topology, resolution)
+                    .map_err(|e| at_shape(&e))?
+            }
+            ShapeSpec::UWires { width, depth } => {
+                generators::u_wires(*width, *depth, resolution).map_err(|e| at_shape(&e))?
+            }
+            ShapeSpec::Tents { tent } => {
+                let specs: Vec<TentSpec> = tent.iter().map(tent_spec).collect();
+                generators::tents(&specs, resolution).map_err(|e| at_shape(&e))?
+            }
+            ShapeSpec::Cells { cell } => {
+                let specs: Vec<CellSpec> = cell.iter().map(cell_spec).collect();
+                generators::cells(&specs, resolution).map_err(|e| at_shape(&e))?
+            }
+            ShapeSpec::Obj {
+                file,
+                fix_boundary,
+                volume,
+            } => self.import(file, *fix_boundary, volume)?,
+        };
+        let n = shape.mesh.vertex_count();
+        let mut chords = Vec::new();
+        for (i, c) in self.file.chord.iter().enumerate() {
+            if c.a >= n || c.b >= n || c.a == c.b {
+                return Err(self.err(
+                    &["chord".into(), i.into()],
+                    format!("chord vertices must be two different indices below {n}"),
+                ));
+            }
+            chords.push(Chord {
+                a: c.a,
+                b: c.b,
+                length: c.length,
+            });
+        }
+        Ok((shape, chords))
+    }
+
+    fn import(
+        &self,
+        file: &str,
+        fix_boundary: bool,
+        volumes: &[VolumeToml],
+    ) -> Result<Shape, InputError> {
+        let dir = self.source.path.parent().unwrap_or(Path::new("."));
+        let path = dir.join(file);
+        let at_file = |m: String| self.err(&["shape".into(), "file".into()], m);
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| at_file(format!("cannot read `{}`: {e}", path.display())))?;
+        let mut mesh = super::import::read_obj(&text)
+            .map_err(|e| at_file(format!("`{}`: {e}", path.display())))?;
+        if fix_boundary {
+            mesh.fix_boundary();
+        }
+        let mut regions = Vec::new();
+        for (i, v) in volumes.iter().enumerate() {
+            let mut boundary = Vec::new();
+            for name in &v.surfaces {
+                let (sign, bare) = match name.strip_prefix('-') {
+                    Some(bare) => (-1.0, bare),
+                    None => (1.0, name.as_str()),
+                };
+                let s = mesh.surface_index(bare).ok_or_else(|| {
+                    self.err(
+                        &[
+                            Key::Name("shape"),
+                            Key::Name("volume"),
+                            Key::Index(i),
+                            Key::Name("surfaces"),
+                        ],
+                        format!(
+                            "no surface `{bare}` in the mesh; it has: {}",
+                            mesh.surfaces().join(", ")
+                        ),
+                    )
+                })?;
+                boundary.push((s, sign));
+            }
+            regions.push((
+                v.name.clone(),
+                Region {
+                    boundary,
+                    reference: Point::from(v.reference),
+                },
+                v.volume,
+            ));
+        }
+        Ok(Shape {
+            mesh,
+            volumes: regions,
+        })
+    }
+}
+
+/// Corners of a regular polygon, counter-clockwise seen from above, first corner at +x.
+fn regular_polygon(r: &RimToml) -> Vec<[f64; 2]> {
+    (0..r.sides)
+        .map(|k| {
+            let a = 2.0 * std::f64::consts::PI * k as f64 / r.sides as f64;
+            // Counter-clockwise seen from +y: from +x towards −z.
+            [
+                r.centre[0] + r.radius * a.cos(),
+                r.centre[1] - r.radius * a.sin(),
+            ]
+        })
+        .collect()
+}
+
+fn tent_spec(t: &TentToml) -> TentSpec {
+    let boundary = match (&t.boundary, &t.rim) {
+        (Some(b), _) => b.iter().map(|&p| Point::from(p)).collect(),
+        (None, Some(r)) => regular_polygon(r)
+            .into_iter()
+            .map(|[x, z]| Point::new(x, r.height, z))
+            .collect(),
+        (None, None) => Vec::new(),
+    };
+    let mut poles: Vec<Pole> = t
+        .pole
+        .iter()
+        .map(|p| Pole {
+            at: p.at,
+            height: p.height,
+            radius: p.cap,
+        })
+        .collect();
+    for ring in &t.pole_ring {
+        for k in 0..ring.count {
+            let a =
+                ring.phase.to_radians() + 2.0 * std::f64::consts::PI * k as f64 / ring.count as f64;
+            poles.push(Pole {
+                at: [
+                    ring.centre[0] + ring.radius * a.cos(),
+                    ring.centre[1] - ring.radius * a.sin(),
+                ],
+                height: ring.height,
+                radius: ring.cap,
+            });
+        }
+    }
+    TentSpec {
+        name: t.name.clone(),
+        boundary,
+        poles,
+    }
+}
+
+fn cell_spec(c: &CellToml) -> CellSpec {
+    let footprint = match (&c.footprint, &c.circle) {
+        (Some(f), _) => f.clone(),
+        (None, Some(r)) => regular_polygon(r),
+        (None, None) => Vec::new(),
+    };
+    CellSpec {
+        name: c.name.clone(),
+        footprint,
+        height: c.height,
+        volume: c.volume,
+    }
+}
