@@ -384,6 +384,7 @@ fn settings(
         max_length: spec.max_length,
         planar: spec.planar,
         held_axis: spec.hold_in_planes.map(|a| a.index()),
+        move_joints: spec.move_joints,
         symmetry: (spec.symmetry.iter())
             .map(|s| Mirror {
                 point: Vec3::from(s.point),

@@ -131,6 +131,45 @@ pub fn segment_distance_squared(a: &Vec3, b: &Vec3, c: &Vec3) -> SegmentDistance
     }
 }
 
+/// Closest distance between segments `p1`–`q1` and `p2`–`q2`, with the parameters (s, t) ∈ [0, 1]²
+/// of the closest points (Ericson, Real-Time Collision Detection, §5.1.9).
+pub fn segment_segment_distance(p1: &Vec3, q1: &Vec3, p2: &Vec3, q2: &Vec3) -> (f64, f64, f64) {
+    let d1 = q1 - p1;
+    let d2 = q2 - p2;
+    let r = p1 - p2;
+    let a = d1.norm_squared();
+    let e = d2.norm_squared();
+    let f = d2.dot(&r);
+    let (s, t) = if a <= 0.0 && e <= 0.0 {
+        (0.0, 0.0)
+    } else if a <= 0.0 {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = d1.dot(&r);
+        if e <= 0.0 {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = d1.dot(&d2);
+            let denom = a * e - b * b;
+            let mut s = if denom > 0.0 {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut t = (b * s + f) / e;
+            if t < 0.0 {
+                t = 0.0;
+                s = (-c / a).clamp(0.0, 1.0);
+            } else if t > 1.0 {
+                t = 1.0;
+                s = ((b - c) / a).clamp(0.0, 1.0);
+            }
+            (s, t)
+        }
+    };
+    ((p1 + s * d1 - (p2 + t * d2)).norm(), s, t)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -244,6 +283,46 @@ mod tests {
                 );
                 assert!((lcol[l] - hl[(l, k)]).abs() < 1e-7);
             }
+        }
+    }
+
+    #[test]
+    fn segment_segment_distance_matches_sampling() {
+        let cases = [
+            // Crossing diagonals of a square.
+            (
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+            ),
+            // Skew lines.
+            (
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(2.0, 0.0, 0.0),
+                Vec3::new(1.0, -1.0, 0.5),
+                Vec3::new(1.3, 1.0, 0.5),
+            ),
+            // Parallel, offset.
+            (
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(2.0, 1.0, 0.0),
+                Vec3::new(3.0, 1.0, 0.0),
+            ),
+        ];
+        for (p1, q1, p2, q2) in cases {
+            let n = 400;
+            let mut brute = f64::INFINITY;
+            for i in 0..=n {
+                for k in 0..=n {
+                    let a = p1 + (q1 - p1) * (f64::from(i) / f64::from(n));
+                    let b = p2 + (q2 - p2) * (f64::from(k) / f64::from(n));
+                    brute = brute.min((a - b).norm());
+                }
+            }
+            let (d, _, _) = segment_segment_distance(&p1, &q1, &p2, &q2);
+            assert!(d <= brute + 1e-12 && brute - d < 1e-4, "{d} vs {brute}");
         }
     }
 }

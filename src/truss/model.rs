@@ -179,6 +179,8 @@ pub struct Settings {
     pub planar: bool,
     /// Free joints keep this coordinate (0 = x, 1 = y, 2 = z): they move in planes normal to it.
     pub held_axis: Option<usize>,
+    /// Whether free joints move at all (false: sizing only, seed §4.3.2).
+    pub move_joints: bool,
     /// Mirror planes.
     pub symmetry: Vec<Mirror>,
     /// Obstacles.
@@ -191,7 +193,7 @@ impl Settings {
     /// Which coordinates of a free joint are variables.
     pub fn variable_axes(&self) -> Vec<usize> {
         (0..3)
-            .filter(|&k| !(self.planar && k == 2) && self.held_axis != Some(k))
+            .filter(|&k| self.move_joints && !(self.planar && k == 2) && self.held_axis != Some(k))
             .collect()
     }
 

@@ -414,7 +414,7 @@ impl TrussNlp {
         let p = self.positions(x);
         for (j, b) in self.structure.beams.iter().enumerate() {
             let len = (p[b.ends[1]] - p[b.ends[0]]).norm();
-            if !(len > 1e-12 * self.length_scale) {
+            if len.is_nan() || len <= 1e-12 * self.length_scale {
                 return Err(EvalError::Domain(format!("beam {j} has zero length")));
             }
         }
@@ -797,9 +797,9 @@ impl Nlp for TrussNlp {
             );
         }
         for (j, vars) in self.structure.joints.iter().zip(&self.position_vars) {
-            for k in 0..3 {
-                if let Some(v) = vars[k] {
-                    x[v] = j.position[k];
+            for (k, var) in vars.iter().enumerate() {
+                if let Some(v) = var {
+                    x[*v] = j.position[k];
                 }
             }
         }
@@ -921,6 +921,13 @@ impl Nlp for TrussNlp {
 }
 
 impl TrussNlp {
+    /// Sphere-obstacle rows: (row, beam, centre, radius).
+    pub fn sphere_rows(&self) -> Vec<(usize, usize, Vec3, f64)> {
+        (self.spheres.iter().enumerate())
+            .map(|(k, &(j, c, r))| (self.sphere_offset + k, j, c, r))
+            .collect()
+    }
+
     /// Row of joint `i`'s first balance row in case `c`, if the joint balances at all.
     pub fn balance_row(&self, i: usize, c: usize) -> Option<usize> {
         self.balance_of_joint[i].map(|o| c * self.balance_rows + o)
@@ -929,7 +936,7 @@ impl TrussNlp {
 
 /// Orthonormal directions a joint must balance in: every axis of the problem's space, minus the
 /// span of a roller's reactions; none for a pinned anchor.
-fn balance_basis(kind: &JointKind, axes: usize) -> Vec<Vec3> {
+pub(crate) fn balance_basis(kind: &JointKind, axes: usize) -> Vec<Vec3> {
     let space: Vec<Vec3> = (0..axes).map(|k| Vec3::ith(k, 1.0)).collect();
     let reactions: Vec<Vec3> = match kind {
         JointKind::Anchor(Support::Pinned) => return Vec::new(),

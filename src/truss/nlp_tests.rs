@@ -36,6 +36,7 @@ fn settings(cases: usize) -> Settings {
         max_length: None,
         planar: false,
         held_axis: None,
+        move_joints: true,
         symmetry: Vec::new(),
         obstacles: Vec::new(),
         load_cases: (0..cases).map(|c| format!("case{c}")).collect(),

@@ -13,6 +13,7 @@
 //! self_weight = true              # lump beam weight into the joints (seed eq. 4.1)
 //! planar = false                  # 2-D problem in the plane z = const
 //! hold_in_planes = "z"            # free joints keep their z: they move in vertical planes
+//! move_joints = true              # false: size the beams of the fixed ground structure only
 //! seed = 1                        # seed for random ground structures and starts
 //! start_forces = "random"         # "random" (small, seeded) or "zero"
 //! [mass]  model = "seed" (k_t, k_c) | "linear" (sigma_t, sigma_c, density); blend_force
@@ -61,6 +62,9 @@ pub struct TrussSpec {
     pub planar: bool,
     /// Free joints keep this coordinate ("x", "y" or "z").
     pub hold_in_planes: Option<Axis>,
+    /// Whether free joints move (default true); false sizes the beams of a fixed geometry.
+    #[serde(default = "yes")]
+    pub move_joints: bool,
     /// Seed for random ground structures and random starting forces (default: the run's seed).
     pub seed: Option<u64>,
     /// Starting forces.
