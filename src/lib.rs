@@ -8,6 +8,7 @@
 //! Data flows one way: problem file → spec → model → [`solver::Nlp`] → [`solver::Solution`] →
 //! module result → files. See `docs/architecture.md`.
 
+pub mod cli;
 pub mod cmc;
 pub mod error;
 pub mod gait;

@@ -8,7 +8,8 @@
 //! - range errors from `validate` name a key path (`["solver", "tolerance"]`), which
 //!   [`Source::error_at`] maps back to the key's position with the toml parser's spans.
 //!
-//! The shared `[solver]` table ([`SolverSpec`]) is accepted by every kind.
+//! The shared `[solver]` table ([`SolverSpec`]) is accepted by every kind; a `[global]` table
+//! ([`GlobalSpec`]) asks for a global method around the local solver.
 
 use std::path::{Path, PathBuf};
 
@@ -17,6 +18,9 @@ use serde::de::DeserializeOwned;
 
 use crate::error::InputError;
 use crate::solver::{HessianMode, Options};
+
+mod global;
+pub use global::{GlobalMethodName, GlobalSpec};
 
 /// A problem file's text, kept to point errors found after parsing back into the file.
 #[derive(Debug, Clone)]

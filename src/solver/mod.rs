@@ -7,12 +7,21 @@
 //! Entry point: [`solve`]`(&nlp, &options) -> Solution`. Not converging is a [`Status`] in the
 //! [`Solution`], never an `Err`.
 
+pub mod derivatives;
+mod elastic;
+mod evaluator;
+pub mod global;
+pub mod hessian;
+pub mod kkt;
+mod log;
+mod merit;
 mod nlp;
 mod options;
 pub mod qp;
 mod solution;
 mod sqp;
 mod status;
+mod termination;
 
 pub use nlp::{Dims, EvalError, Nlp};
 pub use options::{HessianMode, Options};

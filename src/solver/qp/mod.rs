@@ -8,6 +8,11 @@
 //! `bl == bu`. Two methods share this interface: a dense one for small problems and a sparse
 //! interior-point one for large problems.
 
+pub mod dense;
+mod select;
+
+pub use select::{DENSE_LIMIT, WarmStart, solve};
+
 use nalgebra::DMatrix;
 use nalgebra_sparse::{CscMatrix, CsrMatrix};
 
@@ -79,3 +84,5 @@ pub struct QpSolution {
     /// Inner iterations.
     pub iterations: usize,
 }
+
+pub mod sparse;

@@ -1,0 +1,155 @@
+//! Command-line definitions (clap derive). `main.rs` turns them into [`RunOptions`].
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+
+use crate::run::{Kind, RunOptions};
+
+const EXAMPLES: &str = "\
+Examples:
+  optimize truss problems/truss/warren_bridge.toml
+  optimize cmc problems/cmc/double_bubble.toml -o out/bubble --json
+  optimize gait problems/gait/luxo_leap.toml --trial 2 --seed 7
+  optimize truss problems/truss/michell.toml --check
+
+Exit codes: 0 converged, 1 runtime failure, 2 usage or problem-file error,
+3 stopped without converging (best result written), 130 interrupted (best so far written).";
+
+/// Design physically valid motion and structures by constrained nonlinear optimization.
+#[derive(Debug, Parser)]
+#[command(name = "optimize", version, after_help = EXAMPLES)]
+pub struct Cli {
+    /// What to optimize.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The problem kinds.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Spacetime motion of an articulated character (torque splines through a simulator).
+    #[command(after_help = "Example:\n  optimize gait problems/gait/luxo_leap.toml --trial 2")]
+    Gait {
+        #[command(flatten)]
+        common: Common,
+        /// Run only trial K (1-based) of the file's trials.
+        #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(1..))]
+        trial: Option<u64>,
+    },
+    /// Minimum-mass truss from anchors and loads (geometry and sizing together).
+    #[command(
+        after_help = "Example:\n  optimize truss problems/truss/warren_bridge.toml --rounds 3"
+    )]
+    Truss {
+        #[command(flatten)]
+        common: Common,
+        /// Topology rounds: merge short beams, drop idle ones, re-solve (overrides the file).
+        #[arg(long, value_name = "N")]
+        rounds: Option<usize>,
+    },
+    /// Constant-mean-curvature surfaces: soap films, bubbles, tents, pneumatic structures.
+    #[command(
+        after_help = "Example:\n  optimize cmc problems/cmc/double_bubble.toml -o out/bubble"
+    )]
+    Cmc {
+        #[command(flatten)]
+        common: Common,
+    },
+}
+
+/// Flags every kind accepts.
+#[derive(Debug, Args)]
+pub struct Common {
+    /// Problem file (TOML; see docs/problem-files.md).
+    pub file: PathBuf,
+    /// Parse, validate, build the model and compare its derivatives with finite differences,
+    /// without solving.
+    #[arg(long)]
+    pub check: bool,
+    /// Output folder [default: out/<problem name>/].
+    #[arg(short = 'o', long = "out", value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Print nothing but errors.
+    #[arg(short, long, conflicts_with = "verbose")]
+    pub quiet: bool,
+    /// Print a detailed iteration log.
+    #[arg(short, long)]
+    pub verbose: bool,
+    /// Print the result summary as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+    /// Major-iteration limit (overrides [solver] max_iterations).
+    #[arg(long, value_name = "N")]
+    pub max_iter: Option<usize>,
+    /// Seed for every random choice; the same file and seed give the same result.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads [default: all cores]; results do not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    pub threads: Option<u64>,
+}
+
+impl Command {
+    /// The kind, the problem file, the flags shared by all kinds, and the run options.
+    pub fn resolve(&self) -> (Kind, &Common, RunOptions) {
+        let (kind, common) = match self {
+            Command::Gait { common, .. } => (Kind::Gait, common),
+            Command::Truss { common, .. } => (Kind::Truss, common),
+            Command::Cmc { common } => (Kind::Cmc, common),
+        };
+        let mut opts = RunOptions {
+            out_dir: common.out.clone(),
+            quiet: common.quiet,
+            verbose: common.verbose,
+            check: common.check,
+            max_iter: common.max_iter,
+            seed: common.seed,
+            threads: common.threads.map(|t| t as usize),
+            ..RunOptions::default()
+        };
+        match self {
+            Command::Gait { trial, .. } => opts.trial = trial.map(|t| t as usize),
+            Command::Truss { rounds, .. } => opts.rounds = *rounds,
+            Command::Cmc { .. } => {}
+        }
+        (kind, common, opts)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn cli_definition_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn flags_reach_the_run_options() {
+        let cli = Cli::try_parse_from([
+            "optimize",
+            "truss",
+            "p.toml",
+            "--rounds",
+            "3",
+            "--seed",
+            "9",
+            "-q",
+            "--max-iter",
+            "5",
+        ])
+        .unwrap();
+        let (kind, common, opts) = cli.command.resolve();
+        assert_eq!(kind, Kind::Truss);
+        assert_eq!(common.file, PathBuf::from("p.toml"));
+        assert_eq!(
+            (opts.rounds, opts.seed, opts.quiet, opts.max_iter),
+            (Some(3), 9, true, Some(5))
+        );
+        assert!(Cli::try_parse_from(["optimize", "gait", "p.toml", "--trial", "0"]).is_err());
+        assert!(Cli::try_parse_from(["optimize", "cmc", "p.toml", "-q", "-v"]).is_err());
+    }
+}

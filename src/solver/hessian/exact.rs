@@ -1,0 +1,167 @@
+//! Exact Lagrangian Hessians: assembly from the problem's lower-triangle triplets, and the
+//! inertia-correcting shift `H + δI` for the dense QP (which needs H ≻ 0).
+//!
+//! δ schedule (Wächter & Biegler 2006, §3.1, "IPOPT"): try δ = 0; else start from
+//! `max(δ_min, κ⁻·δ_last)` (κ⁻ = 1/3), or δ₀ = 1e-4 when no shift was needed before, and
+//! grow by κ⁺ = 8 (κ̄⁺ = 100 the first time) until the Cholesky factorization succeeds.
+//! Shifts are relative to `max(1, maxᵢ|Hᵢᵢ|)`, and a factorization counts as successful only
+//! when every pivot exceeds 1e-10 of that scale, so a singular H is never passed on.
+//!
+//! Before shifting, the augmented-Lagrangian term `γ AᵀA` over the rows expected active
+//! (equalities and the previous QP's active inequalities) is tried (Debreu's lemma: if H is
+//! positive definite on the null space of A, `H + γAᵀA ≻ 0` for γ large enough). On the QP's
+//! feasible set `‖A d‖²` is constant for those rows, so when they stay active the QP step is
+//! the one of the unmodified H and the fast local convergence of the exact Hessian is kept.
+
+use nalgebra::DMatrix;
+use nalgebra_sparse::{CooMatrix, CscMatrix};
+
+/// Dense symmetric matrix from lower-triangle triplets (duplicates summed).
+pub fn assemble_dense(n: usize, rows: &[usize], cols: &[usize], values: &[f64]) -> DMatrix<f64> {
+    let mut h = DMatrix::zeros(n, n);
+    for ((&r, &c), &v) in rows.iter().zip(cols).zip(values) {
+        h[(r, c)] += v;
+        if r != c {
+            h[(c, r)] += v;
+        }
+    }
+    h
+}
+
+/// Sparse lower triangle (row ≥ col) from triplets; entries given above the diagonal are
+/// mirrored below it.
+pub fn assemble_sparse_lower(
+    n: usize,
+    rows: &[usize],
+    cols: &[usize],
+    values: &[f64],
+) -> CscMatrix<f64> {
+    let mut coo = CooMatrix::new(n, n);
+    for ((&r, &c), &v) in rows.iter().zip(cols).zip(values) {
+        let (r, c) = if r >= c { (r, c) } else { (c, r) };
+        coo.push(r, c, v);
+    }
+    CscMatrix::from(&coo)
+}
+
+/// The remembered inertia-correction shift.
+#[derive(Debug, Clone, Default)]
+pub struct InertiaShift {
+    last: f64,
+}
+
+const DELTA_0: f64 = 1e-4;
+const DELTA_MIN: f64 = 1e-10;
+const DELTA_MAX: f64 = 1e40;
+/// Relative size of the smallest acceptable Cholesky pivot.
+const PIVOT_MIN: f64 = 1e-10;
+/// Augmentation weights tried, relative to the Hessian scale over the row scale.
+const GAMMAS: [f64; 3] = [1.0, 1e2, 1e4];
+
+/// `max(1, maxᵢ|Hᵢᵢ|)`.
+fn scale_of(h: &DMatrix<f64>) -> f64 {
+    h.diagonal().iter().fold(1.0_f64, |a, v| a.max(v.abs()))
+}
+
+/// Positive definite with every Cholesky pivot above `PIVOT_MIN·scale`.
+fn safely_definite(h: &DMatrix<f64>, scale: f64) -> bool {
+    match h.clone().cholesky() {
+        Some(c) => c.l().diagonal().iter().all(|p| p * p >= PIVOT_MIN * scale),
+        None => false,
+    }
+}
+
+impl InertiaShift {
+    /// Last δ used (0 when none was needed).
+    pub fn last(&self) -> f64 {
+        self.last
+    }
+
+    /// `h + δI` with the smallest δ of the schedule that makes it positive definite, or None
+    /// when h is not finite.
+    pub fn convexify(&mut self, h: &DMatrix<f64>) -> Option<(DMatrix<f64>, f64)> {
+        self.convexify_with_rows(h, &DMatrix::zeros(0, h.nrows()))
+    }
+
+    /// As [`InertiaShift::convexify`], trying `h + γ·rowsᵀrows` first (rows k×n).
+    pub fn convexify_with_rows(
+        &mut self,
+        h: &DMatrix<f64>,
+        rows: &DMatrix<f64>,
+    ) -> Option<(DMatrix<f64>, f64)> {
+        if !h.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let scale = scale_of(h);
+        if safely_definite(h, scale) {
+            self.last = 0.0;
+            return Some((h.clone(), 0.0));
+        }
+        if rows.nrows() > 0 {
+            // Unit rows, so that a short row counts as much as a long one.
+            let mut unit = rows.clone();
+            for mut r in unit.row_iter_mut() {
+                let norm = r.norm();
+                if norm > 0.0 {
+                    r /= norm;
+                }
+            }
+            let gram = unit.tr_mul(&unit);
+            for g in GAMMAS {
+                let augmented = h + &gram * (g * scale);
+                if safely_definite(&augmented, scale_of(&augmented)) {
+                    return Some((augmented, 0.0));
+                }
+            }
+        }
+        let first = self.last == 0.0;
+        let mut delta = if first {
+            DELTA_0
+        } else {
+            (self.last / 3.0).max(DELTA_MIN)
+        };
+        while delta <= DELTA_MAX {
+            let mut shifted = h.clone();
+            for i in 0..h.nrows() {
+                shifted[(i, i)] += delta * scale;
+            }
+            if safely_definite(&shifted, scale) {
+                self.last = delta;
+                return Some((shifted, delta));
+            }
+            delta *= if first { 100.0 } else { 8.0 };
+        }
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shift_makes_indefinite_matrix_definite_and_is_remembered() {
+        let h = assemble_dense(2, &[0, 1, 1], &[0, 0, 1], &[1.0, 0.0, -2.0]);
+        assert_eq!(h[(0, 1)], 0.0);
+        let mut shift = InertiaShift::default();
+        let (m, d) = shift.convexify(&h).unwrap();
+        assert!(d > 2.0 && m.cholesky().is_some());
+        let (_, d2) = shift.convexify(&h).unwrap();
+        assert!(d2 > 2.0 && d2 <= d * 8.0);
+        // Positive definite on the null space of the row (1, 0): augmentation, no shift.
+        let rows = DMatrix::from_row_slice(1, 2, &[0.0, 1.0]);
+        let (m, d3) = shift.convexify_with_rows(&h, &rows).unwrap();
+        assert_eq!(d3, 0.0);
+        assert!(m.cholesky().is_some());
+        let pd = assemble_dense(2, &[0, 1], &[0, 1], &[1.0, 1.0]);
+        assert_eq!(shift.convexify(&pd).unwrap().1, 0.0);
+    }
+
+    #[test]
+    fn sparse_lower_mirrors_upper_entries() {
+        let h = assemble_sparse_lower(3, &[0, 0, 2], &[0, 2, 2], &[1.0, 5.0, 2.0]);
+        let t: Vec<_> = h.triplet_iter().map(|(r, c, &v)| (r, c, v)).collect();
+        assert!(t.contains(&(2, 0, 5.0)));
+        assert!(t.iter().all(|&(r, c, _)| r >= c));
+    }
+}

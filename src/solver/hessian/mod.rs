@@ -1,0 +1,31 @@
+//! Second-order models of the Lagrangian for the SQP subproblems.
+//!
+//! - [`DenseBfgs`]: dense damped BFGS (Powell 1978), for small n;
+//! - [`Lbfgs`]: limited-memory BFGS in the compact form of Byrd, Nocedal & Schnabel (1994),
+//!   `B = δI − W M Wᵀ`, never forming an n×n matrix;
+//! - [`InertiaShift`]: the δ schedule that makes an exact Hessian positive definite
+//!   (Wächter & Biegler 2006, §3.1), remembered between iterations.
+//!
+//! All work on the scaled Lagrangian `L = s_f·f + Σ λᵢ sᵢ cᵢ` of the SQP (unitless).
+
+mod bfgs;
+mod exact;
+mod lbfgs;
+
+pub use bfgs::DenseBfgs;
+pub use exact::{InertiaShift, assemble_dense, assemble_sparse_lower};
+pub use lbfgs::Lbfgs;
+
+/// Powell's damping: replaces y by `θy + (1−θ)Bs` when `sᵀy < 0.2 sᵀBs`, so that the update
+/// keeps B positive definite. Returns the (possibly) damped y. `bs` is B·s, `sbs` is sᵀBs.
+pub fn powell_damped(s: &[f64], y: &[f64], bs: &[f64], sbs: f64) -> Vec<f64> {
+    let sy: f64 = s.iter().zip(y).map(|(a, b)| a * b).sum();
+    if sy >= 0.2 * sbs {
+        return y.to_vec();
+    }
+    let theta = 0.8 * sbs / (sbs - sy);
+    y.iter()
+        .zip(bs)
+        .map(|(yi, bsi)| theta * yi + (1.0 - theta) * bsi)
+        .collect()
+}

@@ -1,0 +1,149 @@
+//! Numeric LDLᵀ factorization of the KKT matrix, with static and dynamic regularization, and
+//! the inertia read off the pivots.
+//!
+//! ```text
+//!     K + diag(δ_p I, −δ_d I) = P L D Lᵀ Pᵀ,   inertia(K + reg) = (#D>0, #D<0, #D=0)
+//! ```
+//! Dynamic regularization (as in Clarabel/QDLDL): a pivot with |d| ≤ `pivot_threshold` is
+//! replaced by ±`pivot_replacement`, keeping its sign, and counted in [`Inertia::regularized`].
+
+use faer::Par;
+use faer::dyn_stack::MemStack;
+use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+use faer::sparse::SparseColMatRef;
+use faer::sparse::SymbolicSparseColMatRef;
+use faer::sparse::linalg::cholesky::{SymbolicCholeskyRaw, supernodal};
+
+use super::{KktError, KktSolver};
+
+/// Regularization applied during the numeric factorization (absolute values).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Regularization {
+    /// Added to every primal diagonal entry (δ_p ≥ 0).
+    pub primal: f64,
+    /// Subtracted from every dual diagonal entry (δ_d ≥ 0); > 0 makes K quasi-definite
+    /// even with dependent or equality rows.
+    pub dual: f64,
+    /// Pivots with magnitude at or below this are replaced (0 disables).
+    pub pivot_threshold: f64,
+    /// Magnitude given to a replaced pivot.
+    pub pivot_replacement: f64,
+}
+
+impl Default for Regularization {
+    fn default() -> Self {
+        Regularization {
+            primal: 1e-9,
+            dual: 1e-9,
+            pivot_threshold: 1e-13,
+            pivot_replacement: 1e-7,
+        }
+    }
+}
+
+/// Signs of the pivots of the last factorization.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Inertia {
+    /// Positive pivots.
+    pub positive: usize,
+    /// Negative pivots.
+    pub negative: usize,
+    /// Pivots replaced by dynamic regularization (included in `positive`/`negative`).
+    pub regularized: usize,
+}
+
+impl Inertia {
+    /// True when the factored matrix has exactly `n_primal` positive and `n_dual` negative
+    /// eigenvalues and no pivot needed replacing: the test of IPOPT-style inertia correction.
+    pub fn is_quasi_definite_like(&self, n_primal: usize, n_dual: usize) -> bool {
+        self.positive == n_primal && self.negative == n_dual && self.regularized == 0
+    }
+}
+
+impl KktSolver {
+    /// Factors `K + diag(δ_p I, −δ_d I)` numerically (no allocation) and returns its inertia.
+    pub fn factor(&mut self, reg: Regularization) -> Result<Inertia, KktError> {
+        self.factored = false;
+        self.shifted.copy_from_slice(&self.values);
+        for (k, &p) in self.diag_pos.iter().enumerate() {
+            self.shifted[p] += if k < self.n_primal {
+                reg.primal
+            } else {
+                -reg.dual
+            };
+        }
+        let pattern = SymbolicSparseColMatRef::new_checked(
+            self.dim,
+            self.dim,
+            &self.col_ptr,
+            None,
+            &self.row_idx,
+        );
+        let matrix = SparseColMatRef::new(pattern, &self.shifted);
+        let regularization = LdltRegularization {
+            dynamic_regularization_signs: None,
+            dynamic_regularization_delta: reg.pivot_replacement,
+            dynamic_regularization_epsilon: reg.pivot_threshold,
+        };
+        let stack = MemStack::new(&mut self.factor_mem);
+        let result = self.symbolic.factorize_numeric_ldlt(
+            &mut self.l_values,
+            matrix,
+            faer::Side::Lower,
+            regularization,
+            Par::Seq,
+            stack,
+            Default::default(),
+        );
+        if let Err(faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index }) = result {
+            return Err(KktError::Breakdown(index));
+        }
+        let mut inertia = Inertia::default();
+        let mut count = |d: f64| {
+            if d > 0.0 {
+                inertia.positive += 1;
+            } else if d < 0.0 {
+                inertia.negative += 1;
+            }
+            // faer replaces a small pivot by exactly ±pivot_replacement.
+            if reg.pivot_threshold > 0.0 && d.abs() == reg.pivot_replacement {
+                inertia.regularized += 1;
+            }
+        };
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                for &p in &s.col_ptr()[..self.dim] {
+                    count(self.l_values[p]);
+                }
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let factor = supernodal::SupernodalLdltRef::new(s, &self.l_values);
+                for k in 0..s.n_supernodes() {
+                    let block = factor.supernode(k).val();
+                    for j in 0..block.ncols() {
+                        count(block[(j, j)]);
+                    }
+                }
+            }
+        }
+        if inertia.positive + inertia.negative != self.dim {
+            return Err(KktError::Breakdown(self.dim));
+        }
+        self.inertia = inertia;
+        self.factored = true;
+        Ok(inertia)
+    }
+
+    /// Inertia of the last successful factorization.
+    pub fn inertia(&self) -> Inertia {
+        self.inertia
+    }
+}
+
+#[cfg(test)]
+impl KktSolver {
+    /// True when the symbolic analysis chose the supernodal (blocked) factorization.
+    pub(crate) fn is_supernodal(&self) -> bool {
+        matches!(self.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
+    }
+}

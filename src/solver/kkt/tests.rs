@@ -1,0 +1,211 @@
+//! KKT solver against dense nalgebra solves and known inertias.
+
+use nalgebra::{DMatrix, DVector};
+use rand::RngExt;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use super::{KktSolver, Regularization};
+
+/// A random sparse quasi-definite matrix [H, Aᵀ; A, −D] with H ≻ 0 (diagonally dominant), D ≻ 0,
+/// as lower-triangle triplets plus its dense form.
+fn random_quasi_definite(
+    rng: &mut ChaCha8Rng,
+    n: usize,
+    m: usize,
+    density: f64,
+) -> (Vec<usize>, Vec<usize>, Vec<f64>, DMatrix<f64>) {
+    let dim = n + m;
+    let mut dense = DMatrix::<f64>::zeros(dim, dim);
+    for c in 0..n {
+        for r in c + 1..n {
+            if rng.random::<f64>() < density {
+                let v = rng.random_range(-1.0..1.0);
+                dense[(r, c)] = v;
+                dense[(c, r)] = v;
+            }
+        }
+    }
+    for r in n..dim {
+        for c in 0..n {
+            if rng.random::<f64>() < density {
+                let v = rng.random_range(-3.0..3.0);
+                dense[(r, c)] = v;
+                dense[(c, r)] = v;
+            }
+        }
+    }
+    for k in 0..n {
+        let off: f64 = (0..n)
+            .filter(|&j| j != k)
+            .map(|j| dense[(k, j)].abs())
+            .sum();
+        dense[(k, k)] = off + rng.random_range(0.1..2.0);
+    }
+    for k in n..dim {
+        dense[(k, k)] = -rng.random_range(1e-3..1.0);
+    }
+    let (mut rows, mut cols, mut vals) = (vec![], vec![], vec![]);
+    for c in 0..dim {
+        for r in c..dim {
+            if dense[(r, c)] != 0.0 {
+                rows.push(r);
+                cols.push(c);
+                vals.push(dense[(r, c)]);
+            }
+        }
+    }
+    (rows, cols, vals, dense)
+}
+
+fn build(n: usize, m: usize, rows: &[usize], cols: &[usize], vals: &[f64]) -> KktSolver {
+    let (mut kkt, pos) = KktSolver::from_lower_triplets(n, m, rows, cols).unwrap();
+    let values = kkt.values_mut();
+    for (&p, &v) in pos.iter().zip(vals) {
+        values[p] += v;
+    }
+    kkt
+}
+
+#[test]
+fn random_quasi_definite_systems_match_dense_solves() {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let mut saw_supernodal = false;
+    let mut saw_simplicial = false;
+    for &(n, m, density) in &[
+        (5, 2, 0.5),
+        (40, 15, 0.1),
+        (120, 60, 0.03),
+        (150, 100, 0.3),
+        (300, 10, 0.01),
+        (20, 0, 0.2),
+    ] {
+        let (rows, cols, vals, dense) = random_quasi_definite(&mut rng, n, m, density);
+        let mut kkt = build(n, m, &rows, &cols, &vals);
+        saw_supernodal |= kkt.is_supernodal();
+        saw_simplicial |= !kkt.is_supernodal();
+        let inertia = kkt.factor(Regularization::default()).unwrap();
+        assert_eq!((inertia.positive, inertia.negative), (n, m));
+        let b = DVector::from_fn(n + m, |_, _| rng.random_range(-1.0..1.0));
+        let expected = dense.clone().lu().solve(&b).unwrap();
+        let mut x = b.as_slice().to_vec();
+        let report = kkt.solve_refined(&mut x, 5, 1e-14).unwrap();
+        let err = x
+            .iter()
+            .zip(expected.iter())
+            .map(|(a, e)| (a - e).abs())
+            .fold(0.0f64, f64::max);
+        let scale = expected.amax().max(1.0);
+        assert!(
+            err <= 1e-10 * scale,
+            "n={n} m={m}: error {err:e}, {report:?}"
+        );
+    }
+    assert!(
+        saw_supernodal && saw_simplicial,
+        "both factorization paths must be exercised"
+    );
+}
+
+#[test]
+fn values_can_be_updated_in_place_and_refactored() {
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let (rows, cols, vals, dense) = random_quasi_definite(&mut rng, 30, 12, 0.15);
+    let mut kkt = build(30, 12, &rows, &cols, &vals);
+    kkt.factor(Regularization::default()).unwrap();
+    // Scale the whole matrix by 3 in place: the solution of K x = b shrinks by 3.
+    for v in kkt.values_mut() {
+        *v *= 3.0;
+    }
+    kkt.factor(Regularization::default()).unwrap();
+    let b = DVector::from_fn(42, |i, _| (i as f64).sin());
+    let expected = (dense * 3.0).lu().solve(&b).unwrap();
+    let mut x = b.as_slice().to_vec();
+    kkt.solve_refined(&mut x, 5, 1e-14).unwrap();
+    for (a, e) in x.iter().zip(expected.iter()) {
+        assert!((a - e).abs() <= 1e-10 * (1.0 + e.abs()));
+    }
+}
+
+#[test]
+fn inertia_of_indefinite_matrices_with_known_eigenvalue_signs() {
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    for &(dim, negatives) in &[(8, 3), (60, 25), (200, 1), (200, 199)] {
+        // K = Qᵀ Λ Q with Q a product of sparse Givens-like rotations keeps a known inertia.
+        let mut dense = DMatrix::<f64>::zeros(dim, dim);
+        for k in 0..dim {
+            let magnitude = rng.random_range(0.5..2.0);
+            dense[(k, k)] = if k < negatives { -magnitude } else { magnitude };
+        }
+        for _ in 0..dim {
+            let i = rng.random_range(0..dim);
+            let j = rng.random_range(0..dim);
+            if i == j {
+                continue;
+            }
+            let theta: f64 = rng.random_range(0.0..1.0);
+            let (c, s) = (theta.cos(), theta.sin());
+            // dense ← G dense Gᵀ with G rotating coordinates i and j.
+            for col in 0..dim {
+                let (a, b) = (dense[(i, col)], dense[(j, col)]);
+                dense[(i, col)] = c * a - s * b;
+                dense[(j, col)] = s * a + c * b;
+            }
+            for row in 0..dim {
+                let (a, b) = (dense[(row, i)], dense[(row, j)]);
+                dense[(row, i)] = c * a - s * b;
+                dense[(row, j)] = s * a + c * b;
+            }
+        }
+        let eig = dense.clone().symmetric_eigen().eigenvalues;
+        assert_eq!(eig.iter().filter(|&&e| e < 0.0).count(), negatives);
+        let (mut rows, mut cols, mut vals) = (vec![], vec![], vec![]);
+        for c in 0..dim {
+            for r in c..dim {
+                if dense[(r, c)].abs() > 1e-300 {
+                    rows.push(r);
+                    cols.push(c);
+                    vals.push(dense[(r, c)]);
+                }
+            }
+        }
+        // All rows declared primal: no regularization, the inertia is the matrix's own.
+        let mut kkt = build(dim, 0, &rows, &cols, &vals);
+        let reg = Regularization {
+            primal: 0.0,
+            dual: 0.0,
+            ..Regularization::default()
+        };
+        let inertia = kkt.factor(reg).unwrap();
+        assert_eq!(inertia.negative, negatives, "dim {dim}");
+        assert_eq!(inertia.positive, dim - negatives, "dim {dim}");
+        assert_eq!(inertia.regularized, 0);
+    }
+}
+
+#[test]
+fn inertia_flags_a_convex_kkt_and_a_nonconvex_one() {
+    // [H, aᵀ; a, 0] with H = diag(1, h22), a = (1, 0): inertia (2, 1) iff h22 > 0 (H on the
+    // null space of a is h22).
+    for &(h22, expect_ok) in &[(1.0, true), (-1.0, false)] {
+        let rows = [0, 1, 2];
+        let cols = [0, 1, 0];
+        let vals = [1.0, h22, 1.0];
+        let mut kkt = build(2, 1, &rows, &cols, &vals);
+        let inertia = kkt.factor(Regularization::default()).unwrap();
+        assert_eq!(
+            inertia.is_quasi_definite_like(2, 1),
+            expect_ok,
+            "{inertia:?}"
+        );
+    }
+}
+
+#[test]
+fn malformed_patterns_are_rejected() {
+    assert!(KktSolver::from_lower_triplets(2, 1, &[0], &[1]).is_err());
+    assert!(KktSolver::from_lower_triplets(2, 1, &[5], &[0]).is_err());
+    assert!(KktSolver::new(2, 0, vec![0, 1, 1], vec![0]).is_err());
+    let mut kkt = build(2, 0, &[0, 1], &[0, 1], &[1.0, 1.0]);
+    assert!(kkt.solve_refined(&mut [1.0, 1.0], 1, 1e-12).is_err());
+}

@@ -1,0 +1,713 @@
+//! Dense strictly convex QP by the Goldfarb–Idnani dual active-set method.
+//!
+//! ```text
+//!     min ½ dᵀH d + gᵀd   s.t.   dl ≤ d ≤ du,   bl ≤ A d ≤ bu        (H ≻ 0)
+//! ```
+//! Every finite bound becomes one constraint `nₖᵀd ≥ bₖ` (upper bounds are negated); rows with
+//! `bl == bu` and variables with `dl == du` are equalities. The method (Goldfarb & Idnani,
+//! Math. Programming 27, 1983) starts from the unconstrained minimizer `−H⁻¹g`, keeps the dual
+//! iterate feasible (multipliers uₖ ≥ 0 on active inequalities) and adds the most violated
+//! constraint at a time, dropping active ones whose multiplier would turn negative. It keeps
+//! `J` with `J Jᵀ = H⁻¹` and an upper-triangular `R` with `Jᵀ N = [R; 0]` for the active normals
+//! `N`, updated by Givens rotations. When a violated constraint can be neither reached by a
+//! primal step nor made reachable by dropping another, the constraints are inconsistent and the
+//! QP is reported `Infeasible` (a certificate of the dual method, not a heuristic).
+//!
+//! Warm start: constraints of the previous working set are preferred when choosing which
+//! violated constraint to add next, which reproduces an unchanged active set in as many steps
+//! as it has members and never changes the solution.
+//!
+//! Multipliers are returned in the convention of [`super::QpSolution`]:
+//! `H d + g + Aᵀλ + z = 0`, λ ≤ 0 at an active lower bound, ≥ 0 at an active upper one.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::{QpProblem, QpSolution, QpStatus};
+
+/// Identifier of one constraint side: see [`ConstraintSide`] for the numbering.
+pub type ConstraintId = usize;
+
+/// Which side of which bound a constraint id stands for (`n` variables, `m` rows):
+/// `0..n` lower variable bounds, `n..2n` upper ones, `2n..2n+m` lower row bounds,
+/// `2n+m..2n+2m` upper row bounds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ConstraintSide {
+    VarLower(usize),
+    VarUpper(usize),
+    RowLower(usize),
+    RowUpper(usize),
+}
+
+fn side_of(id: ConstraintId, n: usize, m: usize) -> ConstraintSide {
+    debug_assert!(id < 2 * (n + m));
+    if id < n {
+        ConstraintSide::VarLower(id)
+    } else if id < 2 * n {
+        ConstraintSide::VarUpper(id - n)
+    } else if id < 2 * n + m {
+        ConstraintSide::RowLower(id - 2 * n)
+    } else {
+        ConstraintSide::RowUpper(id - 2 * n - m)
+    }
+}
+
+/// The constraints of a QP in `nₖᵀd ≥ bₖ` form, with the rows of A held densely.
+struct Constraints<'a> {
+    n: usize,
+    m: usize,
+    rows: DMatrix<f64>,
+    problem: &'a QpProblem<'a>,
+}
+
+impl<'a> Constraints<'a> {
+    fn new(problem: &'a QpProblem<'a>) -> Self {
+        let n = problem.g.len();
+        let m = problem.a.nrows();
+        let mut rows = DMatrix::zeros(m, n);
+        for (i, row) in problem.a.row_iter().enumerate() {
+            for (&j, &v) in row.col_indices().iter().zip(row.values()) {
+                rows[(i, j)] += v;
+            }
+        }
+        Constraints {
+            n,
+            m,
+            rows,
+            problem,
+        }
+    }
+
+    fn count(&self) -> usize {
+        2 * (self.n + self.m)
+    }
+
+    /// Right-hand side bₖ, or None when that bound is infinite.
+    fn rhs(&self, id: ConstraintId) -> Option<f64> {
+        let p = self.problem;
+        let b = match side_of(id, self.n, self.m) {
+            ConstraintSide::VarLower(j) => p.dl[j],
+            ConstraintSide::VarUpper(j) => -p.du[j],
+            ConstraintSide::RowLower(i) => p.bl[i],
+            ConstraintSide::RowUpper(i) => -p.bu[i],
+        };
+        b.is_finite().then_some(b)
+    }
+
+    /// Whether the constraint is one side of an equality (then only the lower side is used).
+    fn is_equality_lower(&self, id: ConstraintId) -> bool {
+        let p = self.problem;
+        match side_of(id, self.n, self.m) {
+            ConstraintSide::VarLower(j) => p.dl[j] == p.du[j],
+            ConstraintSide::RowLower(i) => p.bl[i] == p.bu[i],
+            _ => false,
+        }
+    }
+
+    fn is_equality_upper(&self, id: ConstraintId) -> bool {
+        let p = self.problem;
+        match side_of(id, self.n, self.m) {
+            ConstraintSide::VarUpper(j) => p.dl[j] == p.du[j],
+            ConstraintSide::RowUpper(i) => p.bl[i] == p.bu[i],
+            _ => false,
+        }
+    }
+
+    /// nₖᵀv.
+    fn dot(&self, id: ConstraintId, v: &DVector<f64>) -> f64 {
+        match side_of(id, self.n, self.m) {
+            ConstraintSide::VarLower(j) => v[j],
+            ConstraintSide::VarUpper(j) => -v[j],
+            ConstraintSide::RowLower(i) => self.rows.row(i).transpose().dot(v),
+            ConstraintSide::RowUpper(i) => -self.rows.row(i).transpose().dot(v),
+        }
+    }
+
+    /// Jᵀnₖ.
+    fn jt_times_normal(&self, id: ConstraintId, j: &DMatrix<f64>) -> DVector<f64> {
+        match side_of(id, self.n, self.m) {
+            ConstraintSide::VarLower(c) => j.row(c).transpose(),
+            ConstraintSide::VarUpper(c) => -j.row(c).transpose(),
+            ConstraintSide::RowLower(i) => j.tr_mul(&self.rows.row(i).transpose()),
+            ConstraintSide::RowUpper(i) => -j.tr_mul(&self.rows.row(i).transpose()),
+        }
+    }
+
+    fn normal_norm(&self, id: ConstraintId) -> f64 {
+        match side_of(id, self.n, self.m) {
+            ConstraintSide::VarLower(_) | ConstraintSide::VarUpper(_) => 1.0,
+            ConstraintSide::RowLower(i) | ConstraintSide::RowUpper(i) => self.rows.row(i).norm(),
+        }
+    }
+}
+
+/// Result of a dense QP solve together with the final working set (for warm starts).
+#[derive(Debug, Clone)]
+pub struct DenseQpResult {
+    /// The solution in the shared convention.
+    pub solution: QpSolution,
+    /// Constraint ids active at the end (equalities included).
+    pub working_set: Vec<ConstraintId>,
+}
+
+/// Givens rotation (c, s, h) with `[c s; −s c]·[a; b] = [h; 0]`.
+fn givens(a: f64, b: f64) -> (f64, f64, f64) {
+    let h = a.hypot(b);
+    if h == 0.0 {
+        (1.0, 0.0, 0.0)
+    } else {
+        (a / h, b / h, h)
+    }
+}
+
+/// Rotates columns `p` and `q` of `mat`: `(colp, colq) ← (c·colp + s·colq, −s·colp + c·colq)`.
+fn rotate_columns(mat: &mut DMatrix<f64>, p: usize, q: usize, c: f64, s: f64) {
+    for k in 0..mat.nrows() {
+        let (a, b) = (mat[(k, p)], mat[(k, q)]);
+        mat[(k, p)] = c * a + s * b;
+        mat[(k, q)] = -s * a + c * b;
+    }
+}
+
+/// The Goldfarb–Idnani state.
+struct ActiveSet {
+    /// J with J Jᵀ = H⁻¹, rotated so that its first `iq` columns span the active normals.
+    j: DMatrix<f64>,
+    /// Upper triangular, first `iq` columns used.
+    r: DMatrix<f64>,
+    /// Active constraint ids in order.
+    ids: Vec<ConstraintId>,
+    /// Multipliers of the active constraints (≥ 0 for inequalities).
+    u: Vec<f64>,
+    /// Whether each active constraint is an equality (never dropped).
+    equality: Vec<bool>,
+    /// Largest |R diagonal| seen, for the linear-dependence test.
+    r_norm: f64,
+}
+
+impl ActiveSet {
+    fn len(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// z = J[:, iq..] d[iq..] (the primal direction) and r = R⁻¹ d[..iq] (the dual one).
+    fn directions(&self, d: &DVector<f64>) -> (DVector<f64>, DVector<f64>) {
+        let n = self.j.nrows();
+        let iq = self.len();
+        let mut z = DVector::zeros(n);
+        for c in iq..n {
+            z.axpy(d[c], &self.j.column(c), 1.0);
+        }
+        let mut r = DVector::zeros(iq);
+        for i in (0..iq).rev() {
+            let mut s = d[i];
+            for k in i + 1..iq {
+                s -= self.r[(i, k)] * r[k];
+            }
+            r[i] = s / self.r[(i, i)];
+        }
+        (z, r)
+    }
+
+    /// Appends a constraint whose `d = Jᵀn` is given; false when it is linearly dependent on
+    /// the active ones (to working precision).
+    fn add(&mut self, mut d: DVector<f64>, id: ConstraintId, u: f64, equality: bool) -> bool {
+        let n = self.j.nrows();
+        let iq = self.len();
+        for c in (iq + 1..n).rev() {
+            let (cs, sn, h) = givens(d[c - 1], d[c]);
+            if sn == 0.0 {
+                continue;
+            }
+            d[c - 1] = h;
+            d[c] = 0.0;
+            rotate_columns(&mut self.j, c - 1, c, cs, sn);
+        }
+        if iq >= n || d[iq].abs() <= f64::EPSILON * self.r_norm.max(1.0) * 1e2 {
+            return false;
+        }
+        for i in 0..=iq {
+            self.r[(i, iq)] = d[i];
+        }
+        self.r_norm = self.r_norm.max(d[iq].abs());
+        self.ids.push(id);
+        self.u.push(u);
+        self.equality.push(equality);
+        true
+    }
+
+    /// Removes the active constraint at position `pos` and restores R's triangular form.
+    fn remove(&mut self, pos: usize) {
+        let iq = self.len();
+        for c in pos..iq - 1 {
+            for i in 0..=c + 1 {
+                self.r[(i, c)] = self.r[(i, c + 1)];
+            }
+        }
+        for i in 0..iq {
+            self.r[(i, iq - 1)] = 0.0;
+        }
+        self.ids.remove(pos);
+        self.u.remove(pos);
+        self.equality.remove(pos);
+        let iq = iq - 1;
+        for c in pos..iq {
+            let (cs, sn, h) = givens(self.r[(c, c)], self.r[(c + 1, c)]);
+            if sn == 0.0 {
+                continue;
+            }
+            self.r[(c, c)] = h;
+            self.r[(c + 1, c)] = 0.0;
+            for k in c + 1..iq {
+                let (a, b) = (self.r[(c, k)], self.r[(c + 1, k)]);
+                self.r[(c, k)] = cs * a + sn * b;
+                self.r[(c + 1, k)] = -sn * a + cs * b;
+            }
+            rotate_columns(&mut self.j, c, c + 1, cs, sn);
+        }
+    }
+}
+
+/// Iteration cap of the dual active-set loop, in additions plus drops.
+fn iteration_cap(n: usize, m: usize) -> usize {
+    50 + 10 * (n + m)
+}
+
+/// Solves the QP with a dense positive definite `h`. `preferred` lists constraint ids to try
+/// first (the previous working set). A non-positive-definite `h` gives `QpStatus::Numerical`.
+pub fn solve(h: &DMatrix<f64>, problem: &QpProblem, preferred: &[ConstraintId]) -> DenseQpResult {
+    let n = problem.g.len();
+    let m = problem.a.nrows();
+    let fail = |status| DenseQpResult {
+        solution: QpSolution {
+            status,
+            d: vec![0.0; n],
+            lambda: vec![0.0; m],
+            z: vec![0.0; n],
+            iterations: 0,
+        },
+        working_set: Vec::new(),
+    };
+    if problem.dl.iter().zip(problem.du).any(|(l, u)| l > u)
+        || problem.bl.iter().zip(problem.bu).any(|(l, u)| l > u)
+    {
+        return fail(QpStatus::Infeasible);
+    }
+    let Some(chol) = h.clone().cholesky() else {
+        return fail(QpStatus::Numerical);
+    };
+    let cons = Constraints::new(problem);
+    // J = L⁻ᵀ, so that J Jᵀ = H⁻¹.
+    let l_t = chol.l().transpose();
+    let Some(j) = l_t.try_inverse() else {
+        return fail(QpStatus::Numerical);
+    };
+    let g = DVector::from_column_slice(problem.g);
+    let mut x = -chol.solve(&g);
+    let mut set = ActiveSet {
+        j,
+        r: DMatrix::zeros(n, n),
+        ids: Vec::new(),
+        u: Vec::new(),
+        equality: Vec::new(),
+        r_norm: 1.0,
+    };
+    let mut iterations = 0;
+    let scale_x = |x: &DVector<f64>| x.amax();
+    let violation_tol = |id: ConstraintId, b: f64, x: &DVector<f64>| {
+        1e-11 * (1.0 + b.abs() + cons.normal_norm(id) * scale_x(x))
+    };
+
+    // Equalities first: each is added by a full primal step (no drops are possible).
+    for id in 0..cons.count() {
+        if !cons.is_equality_lower(id) {
+            continue;
+        }
+        let Some(b) = cons.rhs(id) else { continue };
+        let d = cons.jt_times_normal(id, &set.j);
+        let (z, r) = set.directions(&d);
+        let s = cons.dot(id, &x) - b;
+        let zn = cons.dot(id, &z);
+        if zn.abs() <= 1e-14 * (1.0 + cons.normal_norm(id).powi(2)) {
+            // Dependent on earlier equalities: consistent ones are redundant.
+            if s.abs() > violation_tol(id, b, &x) * 1e3 {
+                return fail(QpStatus::Infeasible);
+            }
+            continue;
+        }
+        let t = -s / zn;
+        x.axpy(t, &z, 1.0);
+        for (uk, rk) in set.u.iter_mut().zip(r.iter()) {
+            *uk -= t * rk;
+        }
+        if !set.add(d, id, t, true) {
+            let s = cons.dot(id, &x) - b;
+            if s.abs() > violation_tol(id, b, &x) * 1e3 {
+                return fail(QpStatus::Infeasible);
+            }
+        }
+        iterations += 1;
+    }
+
+    let cap = iteration_cap(n, m);
+    let mut active = vec![false; cons.count()];
+    for &id in &set.ids {
+        active[id] = true;
+    }
+    let mut is_preferred = vec![false; cons.count()];
+    for &id in preferred {
+        if id < cons.count() {
+            is_preferred[id] = true;
+        }
+    }
+    loop {
+        if iterations > cap {
+            return finish(&cons, &set, x, iterations, QpStatus::IterationLimit);
+        }
+        // Step 1: choose the most violated constraint (normalized), preferred ones first.
+        let mut best: Option<(ConstraintId, f64, bool)> = None;
+        for id in 0..cons.count() {
+            if active[id] || cons.is_equality_lower(id) || cons.is_equality_upper(id) {
+                continue;
+            }
+            let Some(b) = cons.rhs(id) else { continue };
+            let s = cons.dot(id, &x) - b;
+            if s >= -violation_tol(id, b, &x) {
+                continue;
+            }
+            let score = s / cons.normal_norm(id);
+            let pref = is_preferred[id];
+            let better = match best {
+                None => true,
+                Some((_, bs, bp)) => (pref && !bp) || (pref == bp && score < bs),
+            };
+            if better {
+                best = Some((id, score, pref));
+            }
+        }
+        let Some((ip, _, _)) = best else {
+            return finish(&cons, &set, x, iterations, QpStatus::Optimal);
+        };
+        let b_ip = cons.rhs(ip).unwrap_or(0.0);
+        let mut u_new = 0.0;
+        // Step 2: move until constraint ip is satisfied, dropping blocking ones.
+        loop {
+            iterations += 1;
+            if iterations > cap {
+                return finish(&cons, &set, x, iterations, QpStatus::IterationLimit);
+            }
+            let s = cons.dot(ip, &x) - b_ip;
+            let d = cons.jt_times_normal(ip, &set.j);
+            let (z, r) = set.directions(&d);
+            // Largest dual step keeping the active inequality multipliers non-negative.
+            let mut t1 = f64::INFINITY;
+            let mut drop: Option<usize> = None;
+            for k in 0..set.len() {
+                if !set.equality[k] && r[k] > 0.0 {
+                    let t = set.u[k] / r[k];
+                    if t < t1 {
+                        t1 = t;
+                        drop = Some(k);
+                    }
+                }
+            }
+            let zn = cons.dot(ip, &z);
+            let znorm = z.norm();
+            let t2 = if znorm > 1e-14 * (1.0 + scale_x(&x)) && zn > 0.0 {
+                -s / zn
+            } else {
+                f64::INFINITY
+            };
+            let t = t1.min(t2);
+            if !t.is_finite() {
+                return finish(&cons, &set, x, iterations, QpStatus::Infeasible);
+            }
+            if t2.is_infinite() {
+                // Dual step only.
+                for (uk, rk) in set.u.iter_mut().zip(r.iter()) {
+                    *uk -= t * rk;
+                }
+                u_new += t;
+                let pos = drop.expect("finite t1 has a blocking constraint");
+                active[set.ids[pos]] = false;
+                set.remove(pos);
+                continue;
+            }
+            x.axpy(t, &z, 1.0);
+            for (uk, rk) in set.u.iter_mut().zip(r.iter()) {
+                *uk -= t * rk;
+            }
+            u_new += t;
+            if t2 <= t1 {
+                if set.add(d, ip, u_new, false) {
+                    active[ip] = true;
+                } else {
+                    // Numerically dependent although z ≠ 0: treat as satisfied.
+                }
+                break;
+            }
+            let pos = drop.expect("partial step has a blocking constraint");
+            active[set.ids[pos]] = false;
+            set.remove(pos);
+        }
+    }
+}
+
+/// Maps the active-set multipliers to the shared (λ, z) convention.
+fn finish(
+    cons: &Constraints,
+    set: &ActiveSet,
+    x: DVector<f64>,
+    iterations: usize,
+    status: QpStatus,
+) -> DenseQpResult {
+    let (n, m) = (cons.n, cons.m);
+    let mut lambda = vec![0.0; m];
+    let mut z = vec![0.0; n];
+    for (&id, &u) in set.ids.iter().zip(&set.u) {
+        // Lagrangian ½dᵀHd + gᵀd − Σ u (nᵀd − b): lower sides carry −u, upper sides +u.
+        match side_of(id, n, m) {
+            ConstraintSide::VarLower(j) => z[j] -= u,
+            ConstraintSide::VarUpper(j) => z[j] += u,
+            ConstraintSide::RowLower(i) => lambda[i] -= u,
+            ConstraintSide::RowUpper(i) => lambda[i] += u,
+        }
+    }
+    DenseQpResult {
+        solution: QpSolution {
+            status,
+            d: x.as_slice().to_vec(),
+            lambda,
+            z,
+            iterations,
+        },
+        working_set: set.ids.clone(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra_sparse::{CooMatrix, CsrMatrix};
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    struct Owned {
+        h: DMatrix<f64>,
+        g: Vec<f64>,
+        a: CsrMatrix<f64>,
+        dl: Vec<f64>,
+        du: Vec<f64>,
+        bl: Vec<f64>,
+        bu: Vec<f64>,
+    }
+
+    impl Owned {
+        fn problem(&self) -> QpProblem<'_> {
+            QpProblem {
+                h: super::super::QpHessian::Dense(&self.h),
+                g: &self.g,
+                a: &self.a,
+                dl: &self.dl,
+                du: &self.du,
+                bl: &self.bl,
+                bu: &self.bu,
+            }
+        }
+    }
+
+    fn csr(rows: &DMatrix<f64>) -> CsrMatrix<f64> {
+        let mut coo = CooMatrix::new(rows.nrows(), rows.ncols());
+        for i in 0..rows.nrows() {
+            for j in 0..rows.ncols() {
+                if rows[(i, j)] != 0.0 {
+                    coo.push(i, j, rows[(i, j)]);
+                }
+            }
+        }
+        CsrMatrix::from(&coo)
+    }
+
+    /// A random strictly convex QP that is feasible by construction (bounds around a known
+    /// point), with a mix of equalities, one- and two-sided rows, and variable bounds.
+    fn random_qp(rng: &mut ChaCha8Rng, n: usize, m: usize) -> Owned {
+        let b = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
+        let h = &b * b.transpose() + DMatrix::identity(n, n) * 0.1;
+        let g = (0..n).map(|_| rng.random_range(-5.0..5.0)).collect();
+        let a = DMatrix::from_fn(m, n, |_, _| {
+            if rng.random_range(0.0..1.0) < 0.6 {
+                rng.random_range(-2.0..2.0)
+            } else {
+                0.0
+            }
+        });
+        let x0: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let ax0 = &a * DVector::from_column_slice(&x0);
+        let (mut bl, mut bu) = (vec![0.0; m], vec![0.0; m]);
+        for i in 0..m {
+            match i % 4 {
+                0 => (bl[i], bu[i]) = (ax0[i], ax0[i]),
+                1 => (bl[i], bu[i]) = (ax0[i] - 0.3, f64::INFINITY),
+                2 => (bl[i], bu[i]) = (f64::NEG_INFINITY, ax0[i] + 0.2),
+                _ => (bl[i], bu[i]) = (ax0[i] - 0.1, ax0[i] + 0.1),
+            }
+        }
+        let dl = x0.iter().map(|x| x - 0.5).collect();
+        let du = x0.iter().map(|x| x + 0.4).collect();
+        Owned {
+            h,
+            g,
+            a: csr(&a),
+            dl,
+            du,
+            bl,
+            bu,
+        }
+    }
+
+    /// Largest violation of the KKT conditions of the shared convention.
+    fn kkt_error(p: &Owned, s: &QpSolution) -> f64 {
+        let n = p.g.len();
+        let d = DVector::from_column_slice(&s.d);
+        let dense_a = DMatrix::from(&p.a);
+        let ad = &dense_a * &d;
+        let mut grad = &p.h * &d + DVector::from_column_slice(&p.g);
+        grad += dense_a.transpose() * DVector::from_column_slice(&s.lambda);
+        grad += DVector::from_column_slice(&s.z);
+        let mut err = grad.amax();
+        let tol = 1e-9;
+        for j in 0..n {
+            err = err.max(p.dl[j] - d[j]).max(d[j] - p.du[j]);
+            if s.z[j] < -tol {
+                err = err.max((d[j] - p.dl[j]).abs());
+            }
+            if s.z[j] > tol {
+                err = err.max((d[j] - p.du[j]).abs());
+            }
+        }
+        for i in 0..p.bl.len() {
+            err = err.max(p.bl[i] - ad[i]).max(ad[i] - p.bu[i]);
+            if s.lambda[i] < -tol {
+                err = err.max((ad[i] - p.bl[i]).abs());
+            }
+            if s.lambda[i] > tol {
+                err = err.max((ad[i] - p.bu[i]).abs());
+            }
+        }
+        err
+    }
+
+    #[test]
+    fn random_feasible_qps_satisfy_kkt() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for trial in 0..60 {
+            let n = 2 + trial % 9;
+            let m = trial % 7;
+            let p = random_qp(&mut rng, n, m);
+            let r = solve(&p.h, &p.problem(), &[]);
+            assert_eq!(r.solution.status, QpStatus::Optimal, "trial {trial}");
+            let e = kkt_error(&p, &r.solution);
+            assert!(e < 1e-8, "trial {trial}: KKT error {e}");
+        }
+    }
+
+    #[test]
+    fn warm_start_reproduces_the_solution_in_fewer_steps() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        for _ in 0..20 {
+            let p = random_qp(&mut rng, 8, 6);
+            let cold = solve(&p.h, &p.problem(), &[]);
+            let warm = solve(&p.h, &p.problem(), &cold.working_set);
+            assert_eq!(warm.solution.status, QpStatus::Optimal);
+            for (a, b) in cold.solution.d.iter().zip(&warm.solution.d) {
+                assert!((a - b).abs() < 1e-9);
+            }
+            assert!(warm.solution.iterations <= cold.solution.iterations);
+        }
+    }
+
+    #[test]
+    fn inconsistent_rows_are_infeasible() {
+        // d₀ + d₁ ≥ 1 and d₀ + d₁ ≤ 0 written as two rows, plus a harmless bound.
+        let p = Owned {
+            h: DMatrix::identity(2, 2),
+            g: vec![1.0, -1.0],
+            a: csr(&DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0])),
+            dl: vec![-10.0, f64::NEG_INFINITY],
+            du: vec![10.0, f64::INFINITY],
+            bl: vec![1.0, f64::NEG_INFINITY],
+            bu: vec![f64::INFINITY, 0.0],
+        };
+        assert_eq!(
+            solve(&p.h, &p.problem(), &[]).solution.status,
+            QpStatus::Infeasible
+        );
+    }
+
+    #[test]
+    fn rows_inconsistent_with_bounds_are_infeasible() {
+        // d₀ + d₁ = 3 with 0 ≤ d ≤ 1.
+        let p = Owned {
+            h: DMatrix::identity(2, 2) * 2.0,
+            g: vec![0.0, 0.0],
+            a: csr(&DMatrix::from_row_slice(1, 2, &[1.0, 1.0])),
+            dl: vec![0.0, 0.0],
+            du: vec![1.0, 1.0],
+            bl: vec![3.0],
+            bu: vec![3.0],
+        };
+        assert_eq!(
+            solve(&p.h, &p.problem(), &[]).solution.status,
+            QpStatus::Infeasible
+        );
+        // Dependent, inconsistent equalities.
+        let q = Owned {
+            a: csr(&DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 2.0, 2.0])),
+            dl: vec![f64::NEG_INFINITY; 2],
+            du: vec![f64::INFINITY; 2],
+            bl: vec![1.0, 3.0],
+            bu: vec![1.0, 3.0],
+            ..p
+        };
+        assert_eq!(
+            solve(&q.h, &q.problem(), &[]).solution.status,
+            QpStatus::Infeasible
+        );
+    }
+
+    #[test]
+    fn dependent_consistent_equalities_are_accepted() {
+        let p = Owned {
+            h: DMatrix::identity(3, 3),
+            g: vec![1.0, 2.0, 3.0],
+            a: csr(&DMatrix::from_row_slice(
+                3,
+                3,
+                &[1.0, 1.0, 0.0, 2.0, 2.0, 0.0, 0.0, 1.0, 1.0],
+            )),
+            dl: vec![f64::NEG_INFINITY; 3],
+            du: vec![f64::INFINITY; 3],
+            bl: vec![1.0, 2.0, 0.5],
+            bu: vec![1.0, 2.0, 0.5],
+        };
+        let r = solve(&p.h, &p.problem(), &[]);
+        assert_eq!(r.solution.status, QpStatus::Optimal);
+        assert!(kkt_error(&p, &r.solution) < 1e-9);
+    }
+
+    #[test]
+    fn indefinite_hessian_is_a_numerical_failure() {
+        let p = Owned {
+            h: DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, -1.0]),
+            g: vec![0.0, 0.0],
+            a: csr(&DMatrix::zeros(0, 2)),
+            dl: vec![-1.0; 2],
+            du: vec![1.0; 2],
+            bl: vec![],
+            bu: vec![],
+        };
+        assert_eq!(
+            solve(&p.h, &p.problem(), &[]).solution.status,
+            QpStatus::Numerical
+        );
+    }
+}

@@ -1,0 +1,345 @@
+//! Solver behaviour beyond the test set: infeasible problems, failing evaluations, the
+//! Maratos effect, limits and interruption, the contents of `Solution`.
+
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use optimize::solver::{Dims, EvalError, HessianMode, Nlp, Options, Status, solve};
+
+type Values = dyn Fn(&[f64], &mut [f64]) -> Result<f64, EvalError> + Sync;
+type Derivs = dyn Fn(&[f64], &mut [f64], &mut [f64]) + Sync;
+type Hess = dyn Fn(&[f64], f64, &[f64], &mut [f64]) + Sync;
+
+/// A small problem given by closures; dense row-major Jacobian, dense lower-triangle Hessian.
+struct Small {
+    x0: Vec<f64>,
+    xl: Vec<f64>,
+    xu: Vec<f64>,
+    cl: Vec<f64>,
+    cu: Vec<f64>,
+    values: Box<Values>,
+    derivatives: Box<Derivs>,
+    hessian: Option<Box<Hess>>,
+}
+
+impl Nlp for Small {
+    fn dims(&self) -> Dims {
+        let (n, m) = (self.x0.len(), self.cl.len());
+        Dims {
+            n,
+            m,
+            jac_nnz: n * m,
+            hess_nnz: if self.hessian.is_some() {
+                n * (n + 1) / 2
+            } else {
+                0
+            },
+        }
+    }
+    fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
+        xl.copy_from_slice(&self.xl);
+        xu.copy_from_slice(&self.xu);
+        cl.copy_from_slice(&self.cl);
+        cu.copy_from_slice(&self.cu);
+    }
+    fn start(&self, x: &mut [f64]) {
+        x.copy_from_slice(&self.x0);
+    }
+    fn jacobian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
+        let n = self.x0.len();
+        for k in 0..rows.len() {
+            rows[k] = k / n;
+            cols[k] = k % n;
+        }
+    }
+    fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
+        *f = (self.values)(x, c)?;
+        Ok(())
+    }
+    fn eval_derivatives(&self, x: &[f64], g: &mut [f64], j: &mut [f64]) -> Result<(), EvalError> {
+        (self.derivatives)(x, g, j);
+        Ok(())
+    }
+    fn hessian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
+        let mut k = 0;
+        for i in 0..self.x0.len() {
+            for j in 0..=i {
+                rows[k] = i;
+                cols[k] = j;
+                k += 1;
+            }
+        }
+    }
+    fn eval_hessian(
+        &self,
+        x: &[f64],
+        sigma: f64,
+        lambda: &[f64],
+        values: &mut [f64],
+    ) -> Result<(), EvalError> {
+        (self.hessian.as_ref().expect("offered only with a Hessian"))(x, sigma, lambda, values);
+        Ok(())
+    }
+}
+
+const INF: f64 = f64::INFINITY;
+
+fn quiet() -> Options {
+    Options {
+        verbosity: 0,
+        ..Options::default()
+    }
+}
+
+/// Two disjoint unit disks, centred at (0, 0) and (3, 0): no point satisfies both. The ℓ1
+/// violation (x₁² + x₂² − 1)₊ + ((x₁ − 3)² + x₂² − 1)₊ is least at (1.5, 0).
+fn disjoint_disks() -> Small {
+    Small {
+        x0: vec![0.5, 2.0],
+        xl: vec![-INF; 2],
+        xu: vec![INF; 2],
+        cl: vec![-INF; 2],
+        cu: vec![1.0, 1.0],
+        values: Box::new(|x, c| {
+            c[0] = x[0] * x[0] + x[1] * x[1];
+            c[1] = (x[0] - 3.0).powi(2) + x[1] * x[1];
+            Ok(x[0] + x[1])
+        }),
+        derivatives: Box::new(|x, g, j| {
+            g.copy_from_slice(&[1.0, 1.0]);
+            j.copy_from_slice(&[2.0 * x[0], 2.0 * x[1], 2.0 * (x[0] - 3.0), 2.0 * x[1]]);
+        }),
+        hessian: None,
+    }
+}
+
+#[test]
+fn locally_infeasible_problem_ends_infeasible_at_least_infeasible_point() {
+    for mode in [HessianMode::Bfgs, HessianMode::Lbfgs] {
+        let s = solve(
+            &disjoint_disks(),
+            &Options {
+                hessian: mode,
+                ..quiet()
+            },
+        );
+        println!(
+            "{mode:?}: {:?} at {:?}, violation {}",
+            s.status, s.x, s.max_violation
+        );
+        assert_eq!(s.status, Status::Infeasible);
+        assert!(!s.status.is_success());
+        assert!(
+            (s.x[0] - 1.5).abs() < 1e-4 && s.x[1].abs() < 1e-4,
+            "{:?}",
+            s.x
+        );
+        assert!((s.max_violation - 1.25).abs() < 1e-4);
+    }
+}
+
+#[test]
+fn equality_without_real_solution_is_infeasible() {
+    // x₁² + 1 = 0: the violation x₁² + 1 is least at x₁ = 0.
+    let nlp = Small {
+        x0: vec![2.0, 1.0],
+        xl: vec![-INF; 2],
+        xu: vec![INF; 2],
+        cl: vec![0.0],
+        cu: vec![0.0],
+        values: Box::new(|x, c| {
+            c[0] = x[0] * x[0] + 1.0;
+            Ok((x[1] - 1.0).powi(2))
+        }),
+        derivatives: Box::new(|x, g, j| {
+            g.copy_from_slice(&[0.0, 2.0 * (x[1] - 1.0)]);
+            j.copy_from_slice(&[2.0 * x[0], 0.0]);
+        }),
+        hessian: None,
+    };
+    let s = solve(&nlp, &quiet());
+    assert_eq!(s.status, Status::Infeasible);
+    assert!(s.x[0].abs() < 1e-4, "{:?}", s.x);
+    assert!((s.max_violation - 1.0).abs() < 1e-6);
+}
+
+/// min x₁² + x₂² − ln x₁ from (3, 1): the first quasi-Newton step leaves the domain x₁ > 0.
+/// The minimizer is (1/√2, 0) with f = ½ + ½ ln 2.
+fn log_barrier_like(failure: fn() -> Result<f64, EvalError>) -> Small {
+    Small {
+        x0: vec![3.0, 1.0],
+        xl: vec![-INF; 2],
+        xu: vec![INF; 2],
+        cl: vec![-INF],
+        cu: vec![10.0],
+        values: Box::new(move |x, c| {
+            c[0] = x[0] + x[1];
+            if x[0] <= 0.0 {
+                return failure();
+            }
+            Ok(x[0] * x[0] + x[1] * x[1] - x[0].ln())
+        }),
+        derivatives: Box::new(|x, g, j| {
+            g.copy_from_slice(&[2.0 * x[0] - 1.0 / x[0], 2.0 * x[1]]);
+            j.copy_from_slice(&[1.0, 1.0]);
+        }),
+        hessian: None,
+    }
+}
+
+#[test]
+fn nan_and_domain_errors_make_the_line_search_back_off() {
+    let nan = || Ok(f64::NAN);
+    let domain = || Err(EvalError::Domain("log of a non-positive number".into()));
+    for nlp in [log_barrier_like(nan), log_barrier_like(domain)] {
+        let s = solve(&nlp, &quiet());
+        assert_eq!(s.status, Status::Optimal);
+        assert!((s.x[0] - 0.5_f64.sqrt()).abs() < 1e-6, "{:?}", s.x);
+        assert!((s.objective - (0.5 + 0.5 * 2.0_f64.ln())).abs() < 1e-9);
+        assert!(
+            s.log.iter().any(|r| r.step < 1.0),
+            "no backtracking happened"
+        );
+    }
+}
+
+#[test]
+fn fatal_evaluation_error_stops_with_evaluation_error() {
+    let fatal = || Err(EvalError::Fatal("simulation diverged".into()));
+    let s = solve(&log_barrier_like(fatal), &quiet());
+    assert_eq!(s.status, Status::EvaluationError);
+    assert!(
+        s.x[0] > 0.0 && s.objective.is_finite(),
+        "the last good point is returned"
+    );
+}
+
+/// Powell's example of the Maratos effect (Nocedal & Wright, Example 15.4):
+/// min 2(x₁² + x₂² − 1) − x₁ s.t. x₁² + x₂² = 1, solution (1, 0) with λ* = −3/2.
+fn powell_maratos(angle: f64) -> Small {
+    Small {
+        x0: vec![angle.cos(), angle.sin()],
+        xl: vec![-INF; 2],
+        xu: vec![INF; 2],
+        cl: vec![1.0],
+        cu: vec![1.0],
+        values: Box::new(|x, c| {
+            c[0] = x[0] * x[0] + x[1] * x[1];
+            Ok(2.0 * (x[0] * x[0] + x[1] * x[1] - 1.0) - x[0])
+        }),
+        derivatives: Box::new(|x, g, j| {
+            g.copy_from_slice(&[4.0 * x[0] - 1.0, 4.0 * x[1]]);
+            j.copy_from_slice(&[2.0 * x[0], 2.0 * x[1]]);
+        }),
+        hessian: Some(Box::new(|_x, sigma, lambda, h| {
+            let d = 4.0 * sigma + 2.0 * lambda[0];
+            h.copy_from_slice(&[d, 0.0, d]);
+        })),
+    }
+}
+
+#[test]
+fn maratos_example_takes_full_steps_and_converges_superlinearly() {
+    // Started on the constraint near the solution, the SQP step raises both the objective
+    // and the violation to first order: the ℓ1 merit function rejects it (the Maratos
+    // effect), and the second-order correction restores full steps.
+    let nlp = powell_maratos(0.3);
+    let s = solve(
+        &nlp,
+        &Options {
+            hessian: HessianMode::Exact,
+            ..quiet()
+        },
+    );
+    let steps: Vec<f64> = s.log.iter().skip(1).map(|r| r.step).collect();
+    let errors: Vec<f64> = s.log.iter().map(|r| (r.objective + 1.0).abs()).collect();
+    println!("accepted step lengths: {steps:?}");
+    println!("|f − f*| per iteration: {errors:?}");
+    println!(
+        "{} iterations, {} function evaluations",
+        s.iterations, s.evaluations.functions
+    );
+    assert_eq!(s.status, Status::Optimal);
+    assert!(
+        (s.x[0] - 1.0).abs() < 1e-6 && s.x[1].abs() < 1e-6,
+        "{:?}",
+        s.x
+    );
+    assert!((s.lambda[0] + 1.5).abs() < 1e-6, "λ = {}", s.lambda[0]);
+    // Every accepted step is a full one, although unit steps were rejected (the extra
+    // evaluations are the corrected trial points).
+    assert!(steps.iter().all(|&a| a == 1.0), "{steps:?}");
+    assert!(s.evaluations.functions > s.iterations + 1);
+    assert!(s.iterations <= 8, "{} iterations", s.iterations);
+    // Superlinear: each error is far below the previous one at the end.
+    let n = errors.len();
+    assert!(n >= 3);
+    assert!(errors[n - 1] <= 1e-2 * errors[n - 2], "{errors:?}");
+}
+
+#[test]
+fn limits_and_interrupt_return_the_best_point() {
+    let nlp = powell_maratos(2.0);
+    let one = solve(
+        &nlp,
+        &Options {
+            max_iterations: 1,
+            ..quiet()
+        },
+    );
+    assert_eq!(one.status, Status::IterationLimit);
+    assert_eq!(one.iterations, 1);
+    let timed = solve(
+        &nlp,
+        &Options {
+            max_time: Some(0.0),
+            ..quiet()
+        },
+    );
+    assert_eq!(timed.status, Status::TimeLimit);
+    let flag = Arc::new(AtomicBool::new(true));
+    let stopped = solve(
+        &nlp,
+        &Options {
+            interrupt: Some(flag),
+            ..quiet()
+        },
+    );
+    assert_eq!(stopped.status, Status::Interrupted);
+    assert_eq!(stopped.x, vec![2.0_f64.cos(), 2.0_f64.sin()]);
+}
+
+#[test]
+fn solution_fields_are_filled() {
+    let nlp = powell_maratos(0.5);
+    let s = solve(
+        &nlp,
+        &Options {
+            hessian: HessianMode::Bfgs,
+            ..quiet()
+        },
+    );
+    assert_eq!(s.status, Status::Optimal);
+    assert_eq!(s.log.len(), s.iterations + 1);
+    assert_eq!(s.log[0].iter, 0);
+    assert!(s.log.windows(2).all(|w| w[1].iter == w[0].iter + 1));
+    assert!(s.evaluations.functions > s.iterations);
+    assert!(s.evaluations.derivatives > s.iterations);
+    assert_eq!(s.evaluations.hessians, 0);
+    assert!((s.constraints[0] - 1.0).abs() <= 1e-6);
+    assert!((s.max_violation - (s.constraints[0] - 1.0).abs()).abs() < 1e-15);
+    assert!(s.optimality <= 1e-6);
+    assert!(s.seconds >= 0.0);
+    assert_eq!(s.z, vec![0.0, 0.0]);
+    let exact = solve(
+        &nlp,
+        &Options {
+            hessian: HessianMode::Auto,
+            ..quiet()
+        },
+    );
+    assert!(
+        exact.evaluations.hessians > 0,
+        "Auto uses the exact Hessian when offered"
+    );
+}
