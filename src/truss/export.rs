@@ -6,11 +6,18 @@
 //! SVG: beams drawn with stroke width ∝ √mass (cross-section radius), compression blue, tension
 //! orange, idle beams (below 1e-3 of the largest |λ|) thin grey; anchors as black triangles, load
 //! joints as green discs, free joints as small grey discs.
+//! glTF (`model.glb`, through the shared writer in `crate::io::gltf`): every working beam as a
+//! cylinder whose radius is that of a solid round bar of its cross-section, A = m/(ρ·L) with
+//! steel's ρ = 7850 kg/m³, coloured by compression/tension; joints as spheres, loads as larger
+//! green spheres, anchors as dark blocks under the joint. Idle beams are left out.
 
 use std::fmt::Write;
 
+use super::build::STEEL_DENSITY;
 use super::design::Design;
 use super::model::{JointKind, Vec3};
+use crate::io::gltf::{GltfError, Material, Mesh, Node, Scene};
+use crate::io::shapes;
 
 /// Fraction of the largest |λ| below which a beam is reported idle.
 pub const IDLE_FRACTION: f64 = 1e-3;
@@ -150,6 +157,82 @@ pub fn preview_svg(design: &Design) -> String {
     svg
 }
 
+/// `model.glb` bytes (module header).
+pub fn model_glb(design: &Design) -> Result<Vec<u8>, GltfError> {
+    let joints = &design.structure.joints;
+    let peaks = design.peak_forces();
+    let top = peaks.iter().copied().fold(0.0, f64::max);
+    let f32s = |p: &Vec3| [p.x as f32, p.y as f32, p.z as f32];
+    let mut meshes: Vec<Mesh> = (0..5)
+        .map(|material| Mesh {
+            name: ["compression", "tension", "free joints", "loads", "anchors"][material].into(),
+            material,
+            ..Default::default()
+        })
+        .collect();
+    let mut largest_radius: f64 = 0.0;
+    for (j, beam) in design.structure.beams.iter().enumerate() {
+        let kind = match state(design, j, peaks[j], top) {
+            "compression" => 0,
+            "tension" => 1,
+            _ => continue,
+        };
+        let area = design.masses[j] / (STEEL_DENSITY * design.lengths[j]);
+        let radius = (area / std::f64::consts::PI).sqrt();
+        largest_radius = largest_radius.max(radius);
+        let [a, b] = beam.ends;
+        let bar = shapes::cylinder(
+            f32s(&joints[a].position),
+            f32s(&joints[b].position),
+            radius as f32,
+            12,
+        );
+        shapes::append(&mut meshes[kind], &bar);
+    }
+    let mut lo = Vec3::repeat(f64::INFINITY);
+    let mut hi = Vec3::repeat(f64::NEG_INFINITY);
+    for j in joints {
+        lo = lo.inf(&j.position);
+        hi = hi.sup(&j.position);
+    }
+    let joint_radius = (1.5 * largest_radius).max(2e-3 * (hi - lo).norm());
+    for j in joints {
+        let c = f32s(&j.position);
+        let r = joint_radius as f32;
+        match j.kind {
+            JointKind::Free => shapes::append(&mut meshes[2], &shapes::sphere(c, r, 10)),
+            JointKind::Load => shapes::append(&mut meshes[3], &shapes::sphere(c, 2.0 * r, 14)),
+            JointKind::Anchor(_) => {
+                shapes::append(&mut meshes[4], &shapes::sphere(c, r, 10));
+                let base = [c[0], c[1] - 2.0 * r, c[2]];
+                shapes::append(&mut meshes[4], &shapes::cuboid(base, [2.0 * r, r, 2.0 * r]));
+            }
+        }
+    }
+    let materials = vec![
+        Material::matte("compression", [0.12, 0.44, 0.71, 1.0]),
+        Material::matte("tension", [0.85, 0.51, 0.17, 1.0]),
+        Material::matte("free joint", [0.4, 0.4, 0.4, 1.0]),
+        Material::matte("load", [0.16, 0.62, 0.23, 1.0]),
+        Material::matte("anchor", [0.1, 0.1, 0.1, 1.0]),
+    ];
+    let meshes: Vec<Mesh> = meshes
+        .into_iter()
+        .filter(|m| !m.indices.is_empty())
+        .collect();
+    let nodes: Vec<Node> = (meshes.iter().enumerate())
+        .map(|(k, m)| Node::with_mesh(&m.name, k))
+        .collect();
+    let scene = Scene {
+        materials,
+        roots: (0..nodes.len()).collect(),
+        meshes,
+        nodes,
+        animations: Vec::new(),
+    };
+    scene.to_glb()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -201,5 +284,21 @@ mod tests {
         assert_eq!(svg.matches("<line x1=").count(), 2 * 3 + 1);
         assert_eq!(svg.matches("<polygon").count(), 2);
         assert_eq!(svg.matches("#2a9d3a").count(), 2);
+    }
+
+    #[test]
+    fn glb_holds_the_working_beams_and_the_joints() {
+        let bytes = model_glb(&design()).unwrap();
+        assert_eq!(&bytes[0..4], b"glTF");
+        let (doc, buffers, _) = gltf::import_slice(&bytes).unwrap();
+        let names: Vec<String> = doc
+            .meshes()
+            .map(|m| m.name().unwrap_or_default().to_string())
+            .collect();
+        assert_eq!(
+            names,
+            ["compression", "tension", "free joints", "loads", "anchors"]
+        );
+        assert_eq!(buffers.len(), 1);
     }
 }
