@@ -166,7 +166,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let mut reports = Vec::new();
     let mut iterations = 0;
     let mut evaluations = Evaluations::default();
-    let mut log = Vec::new();
+    let mut logs = Vec::new();
     let solve_start = Instant::now();
     let mut solution: Solution;
     let mut round = 0;
@@ -176,7 +176,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         evaluations.functions += solution.evaluations.functions;
         evaluations.derivatives += solution.evaluations.derivatives;
         evaluations.hessians += solution.evaluations.hessians;
-        log.extend(solution.log.iter().cloned().map(|r| (round, r)));
+        logs.push(solution.log.clone());
         round += 1;
         let interrupted = solution.status == crate::solver::Status::Interrupted;
         if round == rounds || interrupted {
@@ -214,24 +214,8 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         "load_cases": nlp.settings().load_cases,
         "rounds": reports,
     });
-    let mut iterations_csv = String::from(
-        "round,iter,objective,infeasibility,optimality,step,merit,qp_iterations,elapsed\n",
-    );
-    for (r, rec) in &log {
-        iterations_csv.push_str(&format!(
-            "{r},{},{},{},{},{},{},{},{}\n",
-            rec.iter,
-            rec.objective,
-            rec.infeasibility,
-            rec.optimality,
-            rec.step,
-            rec.merit,
-            rec.qp_iterations,
-            rec.elapsed
-        ));
-    }
     let glb = export::model_glb(&design).map_err(|e| Error::Runtime(e.to_string()))?;
-    let artifacts = vec![
+    let mut artifacts = vec![
         Artifact {
             name: "model.glb".into(),
             bytes: glb,
@@ -244,11 +228,16 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             name: "preview.svg".into(),
             bytes: export::preview_svg(&design).into_bytes(),
         },
-        Artifact {
-            name: "iterations.csv".into(),
-            bytes: iterations_csv.into_bytes(),
-        },
     ];
+    // One iteration log per round: iterations.csv, then iterations_round2.csv, ...
+    for (r, round_log) in logs.iter().enumerate() {
+        let file = if r == 0 {
+            "iterations.csv".to_string()
+        } else {
+            format!("iterations_round{}.csv", r + 1)
+        };
+        artifacts.push(crate::io::result::iterations_csv(&file, round_log));
+    }
     timings.insert("export".to_string(), export_start.elapsed().as_secs_f64());
     summary.timings = timings;
     Ok(Outcome {

@@ -44,10 +44,18 @@ fn half_wheel(h: f64) -> Structure {
     Structure { joints, beams }
 }
 
+fn quiet() -> Options {
+    Options {
+        verbosity: 0,
+        max_iterations: 300,
+        ..Options::default()
+    }
+}
+
 fn linear_settings(move_joints: bool) -> super::model::Settings {
     super::model::Settings {
         // σ = 1 Pa and ρ = 1 kg/m³: mass in kg equals volume in m³.
-        mass: MassModel::linear(1.0, 1.0, 1.0, 1e-6),
+        mass: MassModel::linear(1.0, 1.0, 1.0, 1e-3),
         objective: super::model::Objective::Mass,
         self_weight: false,
         max_force: 10.0,
@@ -68,7 +76,7 @@ fn linear_sizing_equals_the_plastic_lp_and_geometry_improves_on_it() {
     let s = half_wheel(0.25);
     let lp = plastic::layout(&s, 0, true, 1.0, 1.0).unwrap();
     let sizing = TrussNlp::new(s.clone(), linear_settings(false), lp.forces.clone()).unwrap();
-    let sol = crate::solver::solve(&sizing, &Options::default());
+    let sol = crate::solver::solve(&sizing, &quiet());
     assert!(sol.status.is_success(), "{:?}", sol.status);
     assert!(
         (sol.objective * sizing.mass_scale() - lp.volume).abs() <= 5e-3 * lp.volume,
@@ -77,7 +85,7 @@ fn linear_sizing_equals_the_plastic_lp_and_geometry_improves_on_it() {
         lp.volume
     );
     let geometry = TrussNlp::new(s, linear_settings(true), lp.forces).unwrap();
-    let sol = crate::solver::solve(&geometry, &Options::default());
+    let sol = crate::solver::solve(&geometry, &quiet());
     assert!(sol.status.is_success(), "{:?}", sol.status);
     let volume = sol.objective * geometry.mass_scale();
     assert!(
@@ -102,10 +110,18 @@ fn every_example_solves_and_balances() {
         let problem = super::load(&path).unwrap();
         let opts = RunOptions {
             quiet: true,
+            max_iter: Some(300),
             ..Default::default()
         };
+        let started = std::time::Instant::now();
         let outcome = super::run(&problem, &opts).unwrap();
         let status = outcome.status.unwrap();
+        println!(
+            "{name}: {status:?}, {} iterations, {:.2} s, mass {} kg",
+            outcome.summary.iterations,
+            started.elapsed().as_secs_f64(),
+            outcome.summary.figures["mass_kg"]
+        );
         assert!(status.is_success(), "{name}: {status:?}");
         // Recompute balance from the written beams.csv, independently of the NLP.
         let csv = outcome
@@ -194,9 +210,41 @@ fn design_from_a_solve_reports_consistent_figures() {
     let s = half_wheel(0.5);
     let forces = vec![0.0; s.beams.len()];
     let nlp = TrussNlp::new(s, linear_settings(true), forces).unwrap();
-    let sol = crate::solver::solve(&nlp, &Options::default());
+    let sol = crate::solver::solve(&nlp, &quiet());
     let design = Design::from_point(&nlp, &sol.x);
     let fig = design.figures(nlp.settings());
     assert!(fig.max_balance_residual_relative < 1e-6);
     assert!(nlp.dims().n > 0);
+}
+
+/// Solves one example with a given Hessian mode and prints the outcome (diagnostics).
+#[test]
+#[ignore = "needs the SQP solver; diagnostics, prints only"]
+fn warren_bridge_by_hessian_mode() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/truss/warren_bridge.toml");
+    let problem = super::load(&path).unwrap();
+    let nlp = problem.nlp(problem.model(), 0).unwrap();
+    for mode in [
+        crate::solver::HessianMode::Bfgs,
+        crate::solver::HessianMode::Exact,
+    ] {
+        let options = Options {
+            hessian: mode,
+            max_time: Some(60.0),
+            ..quiet()
+        };
+        let started = std::time::Instant::now();
+        let sol = crate::solver::solve(&nlp, &options);
+        let design = Design::from_point(&nlp, &sol.x);
+        let fig = design.figures(nlp.settings());
+        println!(
+            "{mode:?}: {:?} after {} iterations, {:.2} s, mass {:.1} kg, violation {:e}, residual {:e}",
+            sol.status,
+            sol.iterations,
+            started.elapsed().as_secs_f64(),
+            fig.mass_kg,
+            sol.max_violation,
+            fig.max_balance_residual_relative
+        );
+    }
 }
