@@ -175,3 +175,30 @@ fn a_minimal_file_loads_and_errors_are_positioned() {
     let e = load_text(&format!("{MINIMAL}[connect]\nextra = [[\"a\", \"b\"]]\n")).unwrap_err();
     assert!(e.message.contains("no joint named `a`"), "{e}");
 }
+
+#[test]
+fn check_mode_runs_the_shared_derivative_checker() {
+    for name in ["roof_fink", "warren_bridge"] {
+        let p = problem(name);
+        let opts = RunOptions {
+            check: true,
+            quiet: true,
+            ..Default::default()
+        };
+        let outcome = super::run(&p, &opts).unwrap();
+        assert!(outcome.check_passed.is_some());
+        assert_eq!(outcome.summary.status, "Checked");
+        let report = &outcome.summary.figures["derivatives"];
+        assert_eq!(report["n"], outcome.summary.figures["variables"]);
+        // Accuracy is asserted in every_example_has_exact_derivatives_at_its_start (fourth-order
+        // differences). The shared checker's second-order differences are inaccurate for forces
+        // within a few blend widths of zero, where the mass curves on the scale ε = 1e-3·F: it
+        // reports errors of order 1e-3 on those entries (printed here, not asserted).
+        println!(
+            "{name}: gradient {}, Jacobian {}, Hessian {} (max errors)",
+            report["gradient"]["max_error"],
+            report["jacobian"]["max_error"],
+            report["hessian"]["max_error"]
+        );
+    }
+}
