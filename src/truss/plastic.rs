@@ -1,0 +1,218 @@
+//! References for the `linear` mass option: the plastic layout-optimization LP on a fixed ground
+//! structure, and Michell's closed-form optimal volumes.
+//!
+//! Plastic layout LP (Dorn, Gomory & Greenberg 1964; Gilbert & Tyas 2003), for one load case:
+//! ```text
+//!     min  Σ_j L_j·(t_j/σ_T + c_j/σ_C)     (volume, m³)
+//!     s.t. Σ_j ±(c_j − t_j)·r·e_j = −r·f_i   for every balance direction r of every joint i
+//!          t, c ≥ 0
+//! ```
+//! with λ = c − t (compression positive), the same balance directions and sign convention as the
+//! NLP (supports take the rest), and no self-weight. Mass = ρ·volume.
+//!
+//! Michell closed forms (σ in Pa, P in N, lengths in m; volumes in m³):
+//! - circle-supported cantilever: a point load P at distance L from the centre of a rigid circle
+//!   of radius r, perpendicular to the radius, σ_T = σ_C = σ: V* = 2·P·L·ln(L/r)/σ;
+//! - half-wheel: simple supports at (±a, 0) (pinned at −a, roller with a vertical reaction at
+//!   +a), a load P at (0, 0) along −y, material in y ≥ 0: V* = π·P·a/σ (a semicircular
+//!   compression rim, whose end forces are vertical, and radial tension spokes, both carrying
+//!   P/2). With both supports pinned the optimum is lower (horizontal thrust is free).
+
+use nalgebra::DMatrix;
+
+use super::lp::{self, LpError};
+use super::model::Structure;
+use super::nlp::balance_basis;
+
+/// The LP optimum on a fixed ground structure.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlasticLayout {
+    /// Optimal volume, m³.
+    pub volume: f64,
+    /// Beam forces λ = c − t, N (+ compression).
+    pub forces: Vec<f64>,
+    /// Virtual displacements (the LP duals), one per balance row.
+    pub duals: Vec<f64>,
+    /// The dual objective, m³ (equals `volume` at a certified optimum).
+    pub dual_volume: f64,
+    /// Largest equilibrium residual of the LP solution, N.
+    pub primal_residual: f64,
+    /// Largest dual-constraint violation, m³/N.
+    pub dual_infeasibility: f64,
+}
+
+/// Solves the plastic layout LP (module header) for load case `case`; `planar` restricts
+/// balance to x and y.
+pub fn layout(
+    structure: &Structure,
+    case: usize,
+    planar: bool,
+    sigma_t: f64,
+    sigma_c: f64,
+) -> Result<PlasticLayout, LpError> {
+    let axes = if planar { 2 } else { 3 };
+    let beams = structure.beams.len();
+    let mut rows: Vec<(usize, nalgebra::Vector3<f64>)> = Vec::new();
+    for (i, joint) in structure.joints.iter().enumerate() {
+        for r in balance_basis(&joint.kind, axes) {
+            rows.push((i, r));
+        }
+    }
+    let row_of = |i: usize| rows.iter().enumerate().filter(move |(_, (k, _))| *k == i);
+    let mut a = DMatrix::<f64>::zeros(rows.len(), 2 * beams);
+    let mut cost = vec![0.0; 2 * beams];
+    for (j, beam) in structure.beams.iter().enumerate() {
+        let length = structure.length(j);
+        let [p, q] = beam.ends;
+        let e = (structure.joints[q].position - structure.joints[p].position) / length;
+        for (end, sign) in [(p, -1.0), (q, 1.0)] {
+            for (row, (_, r)) in row_of(end) {
+                let v = sign * r.dot(&e);
+                // Column j: compression c_j (λ = +c); column beams + j: tension t_j (λ = −t).
+                a[(row, j)] += v;
+                a[(row, beams + j)] -= v;
+            }
+        }
+        cost[j] = length / sigma_c;
+        cost[beams + j] = length / sigma_t;
+    }
+    let b: Vec<f64> = rows
+        .iter()
+        .map(|(i, r)| -r.dot(&structure.joints[*i].loads[case]))
+        .collect();
+    let s = lp::solve(&a, &b, &cost)?;
+    let forces = (0..beams).map(|j| s.x[j] - s.x[beams + j]).collect();
+    let dual_volume = s.y.iter().zip(&b).map(|(y, b)| y * b).sum();
+    Ok(PlasticLayout {
+        volume: s.objective,
+        forces,
+        duals: s.y,
+        dual_volume,
+        primal_residual: s.primal_residual,
+        dual_infeasibility: s.dual_infeasibility,
+    })
+}
+
+/// Michell's circle-supported cantilever: V* = 2·P·L·ln(L/r)/σ, m³.
+pub fn michell_cantilever_volume(load: f64, distance: f64, radius: f64, sigma: f64) -> f64 {
+    2.0 * load * distance * (distance / radius).ln() / sigma
+}
+
+/// Michell's half-wheel: V* = π·P·a/σ, m³.
+pub fn michell_half_wheel_volume(load: f64, half_span: f64, sigma: f64) -> f64 {
+    std::f64::consts::PI * load * half_span / sigma
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::truss::model::{Beam, Joint, JointKind, Support, Vec3};
+
+    fn joint(x: f64, y: f64, kind: JointKind, load: Vec3) -> Joint {
+        Joint {
+            position: Vec3::new(x, y, 0.0),
+            kind,
+            name: None,
+            loads: vec![load],
+        }
+    }
+
+    #[test]
+    fn two_bar_truss_volume_is_the_hand_value() {
+        // Anchors (±3, 0), load P down at (0, 4): two bars of length 5 in compression P·5/8.
+        let p = 1e5;
+        let s = Structure {
+            joints: vec![
+                joint(-3.0, 0.0, JointKind::Anchor(Support::Pinned), Vec3::zeros()),
+                joint(3.0, 0.0, JointKind::Anchor(Support::Pinned), Vec3::zeros()),
+                joint(0.0, 4.0, JointKind::Load, Vec3::new(0.0, -p, 0.0)),
+            ],
+            beams: vec![Beam::new(0, 2), Beam::new(1, 2)],
+        };
+        let sol = layout(&s, 0, true, 200e6, 100e6).unwrap();
+        let expected = 2.0 * 5.0 * (p * 5.0 / 8.0) / 100e6;
+        assert!((sol.volume - expected).abs() < 1e-12 * expected);
+        assert!((sol.dual_volume - sol.volume).abs() < 1e-9 * expected);
+        assert!(sol.forces.iter().all(|f| (f - p * 5.0 / 8.0).abs() < 1e-6));
+    }
+
+    /// Fully connected planar ground structure on a grid, load and supports among its nodes.
+    fn grid(nx: usize, ny: usize, h: f64, x0: f64) -> Vec<Vec3> {
+        let mut points = Vec::new();
+        for i in 0..nx {
+            for k in 0..ny {
+                points.push(Vec3::new(x0 + i as f64 * h, k as f64 * h, 0.0));
+            }
+        }
+        points
+    }
+
+    #[test]
+    fn half_wheel_lp_approaches_michell_from_above() {
+        // Simple supports at (±1, 0), P at (0, 0), nodes in y ≥ 0 on a 0.25 grid; all pairs
+        // connected except overlapping collinear ones.
+        let (p, a, sigma) = (1.0, 1.0, 1.0);
+        let points = grid(9, 5, 0.25, -1.0);
+        let joints: Vec<Joint> = points
+            .iter()
+            .map(|q| {
+                let kind = if q.y == 0.0 && q.x == -1.0 {
+                    JointKind::Anchor(Support::Pinned)
+                } else if q.y == 0.0 && q.x == 1.0 {
+                    JointKind::Anchor(Support::Roller(vec![Vec3::y()]))
+                } else if q.norm() == 0.0 {
+                    JointKind::Load
+                } else {
+                    JointKind::Free
+                };
+                let load = if q.norm() == 0.0 {
+                    Vec3::new(0.0, -p, 0.0)
+                } else {
+                    Vec3::zeros()
+                };
+                joint(q.x, q.y, kind, load)
+            })
+            .collect();
+        let beams = crate::truss::ground::connect(
+            &joints,
+            joints.len(),
+            &Default::default(),
+            &[],
+            &[],
+            1e-9,
+        );
+        let s = Structure { joints, beams };
+        let sol = layout(&s, 0, true, sigma, sigma).unwrap();
+        let exact = michell_half_wheel_volume(p, a, sigma);
+        println!(
+            "half-wheel LP volume {} (Michell {exact}), {} bars",
+            sol.volume,
+            s.beams.len()
+        );
+        assert!(
+            sol.primal_residual < 1e-9 && sol.dual_infeasibility < 1e-9,
+            "{sol:?}"
+        );
+        assert!(
+            (sol.dual_volume - sol.volume).abs() < 1e-8 * exact,
+            "certified: primal {} dual {} exact {exact}",
+            sol.volume,
+            sol.dual_volume
+        );
+        assert!(
+            sol.volume >= exact * (1.0 - 1e-9),
+            "{} < {exact}",
+            sol.volume
+        );
+        assert!(sol.volume <= 1.03 * exact, "{} vs {exact}", sol.volume);
+    }
+
+    #[test]
+    fn closed_forms() {
+        assert!(
+            (michell_half_wheel_volume(2.0, 3.0, 4.0) - 1.5 * std::f64::consts::PI).abs() < 1e-15
+        );
+        let v = michell_cantilever_volume(1.0, std::f64::consts::E, 1.0, 2.0);
+        assert!((v - std::f64::consts::E).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,381 @@
+//! Multilevel topology rounds (seed §4.3.2): after a solve, clean the structure and rebuild the
+//! problem from it.
+//!
+//! Steps, in order (lengths in m, forces in N):
+//! 1. merge: joints joined by a beam of length ≤ l_min·(1 + merge_tolerance) become one joint
+//!    (union–find). A group keeps its fixed joint (anchor or load) and that joint's position; a
+//!    group of free joints sits at their mean. Two fixed joints are never merged. Beams inside a
+//!    group vanish; parallel beams between the same two joints combine into one whose force is the
+//!    sum of theirs (the same resultant on both joints, so balance is kept);
+//! 2. prune (optional): beams whose largest |λ| over the cases is below `prune` times the largest
+//!    in the structure are dropped (the seed keeps them to leave topology options open);
+//! 3. crossings (optional): of two beams that cross (segments closer than 1e-9 of the structure
+//!    size, meeting inside both, sharing no joint) the one with the smaller peak |λ| is dropped;
+//! 4. dangling: free joints left with at most one beam are removed with that beam (such a beam
+//!    carries no force in balance), repeatedly;
+//! 5. joints are renumbered in their original order.
+//!
+//! The forces returned are the start of the next round (N, case-major).
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+use super::geometry::segment_segment_distance;
+use super::model::{Beam, Structure, Vec3};
+
+/// Settings of a round.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RoundSettings {
+    /// l_min, m.
+    pub min_length: f64,
+    /// Relative slack on l_min for merging.
+    pub merge_tolerance: f64,
+    /// Prune fraction (0 keeps every beam).
+    pub prune: f64,
+    /// Remove crossings.
+    pub remove_crossings: bool,
+}
+
+/// What a round changed.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct RoundReport {
+    /// Joints before.
+    pub joints_before: usize,
+    /// Beams before.
+    pub beams_before: usize,
+    /// Joints merged away.
+    pub merged_joints: usize,
+    /// Beams pruned for small force.
+    pub pruned_beams: usize,
+    /// Beams removed at crossings.
+    pub crossings_removed: usize,
+    /// Dangling free joints removed.
+    pub dangling_joints: usize,
+    /// Joints after.
+    pub joints_after: usize,
+    /// Beams after.
+    pub beams_after: usize,
+}
+
+/// Union–find over joint indices.
+struct Groups {
+    parent: Vec<usize>,
+    fixed: Vec<bool>,
+}
+
+impl Groups {
+    fn find(&mut self, i: usize) -> usize {
+        let mut r = i;
+        while self.parent[r] != r {
+            r = self.parent[r];
+        }
+        let mut k = i;
+        while self.parent[k] != r {
+            let next = self.parent[k];
+            self.parent[k] = r;
+            k = next;
+        }
+        r
+    }
+
+    /// Joins the groups of a and b unless both hold a fixed joint; the fixed root wins.
+    fn union(&mut self, a: usize, b: usize) -> bool {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra == rb || (self.fixed[ra] && self.fixed[rb]) {
+            return false;
+        }
+        let (root, child) = if self.fixed[rb] || (!self.fixed[ra] && rb < ra) {
+            (rb, ra)
+        } else {
+            (ra, rb)
+        };
+        self.parent[child] = root;
+        true
+    }
+}
+
+/// One clean-up round on `structure` at solved `positions` with `forces[case][beam]` (N).
+/// Returns the new structure (joints at the solved positions), its start forces (case-major) and
+/// a report.
+pub fn clean(
+    structure: &Structure,
+    positions: &[Vec3],
+    forces: &[Vec<f64>],
+    settings: &RoundSettings,
+) -> (Structure, Vec<f64>, RoundReport) {
+    let cases = forces.len();
+    let n = structure.joints.len();
+    let mut report = RoundReport {
+        joints_before: n,
+        beams_before: structure.beams.len(),
+        ..Default::default()
+    };
+    let mut joints = structure.joints.clone();
+    for (j, p) in joints.iter_mut().zip(positions) {
+        j.position = *p;
+    }
+    let length = |b: &Beam| (joints[b.ends[1]].position - joints[b.ends[0]].position).norm();
+
+    // 1. Merge.
+    let mut groups = Groups {
+        parent: (0..n).collect(),
+        fixed: joints.iter().map(|j| !j.is_free()).collect(),
+    };
+    let limit = settings.min_length * (1.0 + settings.merge_tolerance);
+    for b in &structure.beams {
+        if length(b) <= limit && groups.union(b.ends[0], b.ends[1]) {
+            report.merged_joints += 1;
+        }
+    }
+    let roots: Vec<usize> = (0..n).map(|i| groups.find(i)).collect();
+    let mut sums: BTreeMap<usize, (Vec3, usize)> = BTreeMap::new();
+    for i in 0..n {
+        let e = sums.entry(roots[i]).or_insert((Vec3::zeros(), 0));
+        e.0 += joints[i].position;
+        e.1 += 1;
+    }
+    for (&root, &(sum, count)) in &sums {
+        if joints[root].is_free() {
+            joints[root].position = sum / count as f64;
+        }
+    }
+    let mut merged: BTreeMap<Beam, Vec<f64>> = BTreeMap::new();
+    for (j, b) in structure.beams.iter().enumerate() {
+        let (a, c) = (roots[b.ends[0]], roots[b.ends[1]]);
+        if a == c {
+            continue;
+        }
+        let beam = Beam::new(a, c);
+        // Orientation flips the sign of λe but not of λ: compression stays compression.
+        let entry = merged.entry(beam).or_insert_with(|| vec![0.0; cases]);
+        for (k, f) in forces.iter().enumerate() {
+            entry[k] += f[j];
+        }
+    }
+    let mut beams: Vec<(Beam, Vec<f64>)> = merged.into_iter().collect();
+
+    // 2. Prune.
+    let peak = |f: &[f64]| f.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    let top = beams.iter().map(|(_, f)| peak(f)).fold(0.0, f64::max);
+    if settings.prune > 0.0 {
+        let before = beams.len();
+        beams.retain(|(_, f)| peak(f) >= settings.prune * top);
+        report.pruned_beams = before - beams.len();
+    }
+
+    // 3. Crossings: drop the weaker beam of each crossing pair, strongest beams first.
+    if settings.remove_crossings {
+        let mut lo = Vec3::repeat(f64::INFINITY);
+        let mut hi = Vec3::repeat(f64::NEG_INFINITY);
+        for j in &joints {
+            lo = lo.inf(&j.position);
+            hi = hi.sup(&j.position);
+        }
+        let tol = 1e-9 * (hi - lo).norm();
+        let mut order: Vec<usize> = (0..beams.len()).collect();
+        order.sort_by(|&a, &b| {
+            peak(&beams[b].1)
+                .total_cmp(&peak(&beams[a].1))
+                .then(a.cmp(&b))
+        });
+        let mut kept: Vec<usize> = Vec::new();
+        for &k in &order {
+            let [a, b] = beams[k].0.ends;
+            let crosses = kept.iter().any(|&q| {
+                let [c, d] = beams[q].0.ends;
+                if a == c || a == d || b == c || b == d {
+                    return false;
+                }
+                let (dist, s, t) = segment_segment_distance(
+                    &joints[a].position,
+                    &joints[b].position,
+                    &joints[c].position,
+                    &joints[d].position,
+                );
+                dist <= tol && s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0
+            });
+            if !crosses {
+                kept.push(k);
+            }
+        }
+        report.crossings_removed = beams.len() - kept.len();
+        kept.sort_unstable();
+        beams = kept.into_iter().map(|k| beams[k].clone()).collect();
+    }
+
+    // 4. Dangling free joints and joints no longer used.
+    let mut alive: Vec<bool> = (0..n).map(|i| roots[i] == i).collect();
+    loop {
+        let mut degree = vec![0usize; n];
+        for (b, _) in &beams {
+            degree[b.ends[0]] += 1;
+            degree[b.ends[1]] += 1;
+        }
+        let dangling: Vec<usize> = (0..n)
+            .filter(|&i| alive[i] && joints[i].is_free() && degree[i] <= 1)
+            .collect();
+        if dangling.is_empty() {
+            break;
+        }
+        for &i in &dangling {
+            alive[i] = false;
+        }
+        report.dangling_joints += dangling.len();
+        beams.retain(|(b, _)| alive[b.ends[0]] && alive[b.ends[1]]);
+    }
+
+    // 5. Renumber.
+    let mut index = vec![usize::MAX; n];
+    let mut new_joints = Vec::new();
+    for i in 0..n {
+        if alive[i] {
+            index[i] = new_joints.len();
+            new_joints.push(joints[i].clone());
+        }
+    }
+    let mut renumbered: Vec<(Beam, Vec<f64>)> = beams
+        .into_iter()
+        .map(|(b, f)| (Beam::new(index[b.ends[0]], index[b.ends[1]]), f))
+        .collect();
+    renumbered.sort_by_key(|(b, _)| *b);
+    let mut start = vec![0.0; cases * renumbered.len()];
+    for (j, (_, f)) in renumbered.iter().enumerate() {
+        for c in 0..cases {
+            start[c * renumbered.len() + j] = f[c];
+        }
+    }
+    let out = Structure {
+        joints: new_joints,
+        beams: renumbered.into_iter().map(|(b, _)| b).collect(),
+    };
+    report.joints_after = out.joints.len();
+    report.beams_after = out.beams.len();
+    (out, start, report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::truss::model::{Joint, JointKind, Support};
+
+    fn joint(x: f64, y: f64, kind: JointKind) -> Joint {
+        Joint {
+            position: Vec3::new(x, y, 0.0),
+            kind,
+            name: None,
+            loads: vec![Vec3::zeros()],
+        }
+    }
+
+    fn settings() -> RoundSettings {
+        RoundSettings {
+            min_length: 0.1,
+            merge_tolerance: 1e-3,
+            prune: 0.0,
+            remove_crossings: false,
+        }
+    }
+
+    fn positions(s: &Structure) -> Vec<Vec3> {
+        s.joints.iter().map(|j| j.position).collect()
+    }
+
+    #[test]
+    fn joints_at_minimum_length_merge_and_parallel_beams_combine() {
+        // Free joints 2 and 3 are 0.1 apart; both connect to anchor 0 and load 1.
+        let s = Structure {
+            joints: vec![
+                joint(0.0, 0.0, JointKind::Anchor(Support::Pinned)),
+                joint(4.0, 0.0, JointKind::Load),
+                joint(2.0, 2.0, JointKind::Free),
+                joint(2.1, 2.0, JointKind::Free),
+            ],
+            beams: vec![
+                Beam::new(0, 2),
+                Beam::new(0, 3),
+                Beam::new(1, 2),
+                Beam::new(1, 3),
+                Beam::new(2, 3),
+                Beam::new(0, 1),
+            ],
+        };
+        let forces = vec![vec![1.0, 2.0, 3.0, 4.0, 9.0, -5.0]];
+        let (out, start, report) = clean(&s, &positions(&s), &forces, &settings());
+        assert_eq!(report.merged_joints, 1);
+        assert_eq!(out.joints.len(), 3);
+        assert!((out.joints[2].position - Vec3::new(2.05, 2.0, 0.0)).norm() < 1e-12);
+        assert_eq!(
+            out.beams,
+            vec![Beam::new(0, 1), Beam::new(0, 2), Beam::new(1, 2)]
+        );
+        assert_eq!(start, vec![-5.0, 3.0, 7.0]);
+    }
+
+    #[test]
+    fn fixed_joints_keep_their_place_and_never_merge_together() {
+        let s = Structure {
+            joints: vec![
+                joint(0.0, 0.0, JointKind::Anchor(Support::Pinned)),
+                joint(0.1, 0.0, JointKind::Load),
+                joint(0.05, 0.05, JointKind::Free),
+                joint(1.0, 1.0, JointKind::Free),
+            ],
+            beams: vec![
+                Beam::new(0, 1),
+                Beam::new(1, 2),
+                Beam::new(0, 3),
+                Beam::new(1, 3),
+                Beam::new(2, 3),
+            ],
+        };
+        let forces = vec![vec![1.0; 5]];
+        let (out, _, report) = clean(&s, &positions(&s), &forces, &settings());
+        // Joint 2 (0.0707 from both fixed joints) joins one of them; the fixed pair stays apart.
+        assert_eq!(report.merged_joints, 1);
+        assert_eq!(out.joints.len(), 3);
+        assert!(!out.joints[0].is_free() && !out.joints[1].is_free());
+        assert_eq!(out.joints[0].position, Vec3::zeros());
+        assert_eq!(out.joints[1].position, Vec3::new(0.1, 0.0, 0.0));
+    }
+
+    #[test]
+    fn pruning_crossings_and_dangling_joints() {
+        // A square with both diagonals, plus a free joint hanging on one beam.
+        let s = Structure {
+            joints: vec![
+                joint(0.0, 0.0, JointKind::Anchor(Support::Pinned)),
+                joint(2.0, 0.0, JointKind::Anchor(Support::Pinned)),
+                joint(2.0, 2.0, JointKind::Load),
+                joint(0.0, 2.0, JointKind::Free),
+                joint(5.0, 5.0, JointKind::Free),
+            ],
+            beams: vec![
+                Beam::new(0, 2),
+                Beam::new(1, 3),
+                Beam::new(1, 2),
+                Beam::new(2, 3),
+                Beam::new(0, 3),
+                Beam::new(2, 4),
+            ],
+        };
+        let forces = vec![vec![10.0, -2.0, 8.0, 1e-9, 3.0, 1e-6]];
+        let mut set = settings();
+        set.remove_crossings = true;
+        let (out, _, report) = clean(&s, &positions(&s), &forces, &set);
+        assert_eq!(report.crossings_removed, 1);
+        assert_eq!(report.dangling_joints, 1);
+        assert_eq!(out.joints.len(), 4);
+        assert!(
+            !out.beams.contains(&Beam::new(1, 3)),
+            "weaker diagonal dropped"
+        );
+        set.remove_crossings = false;
+        set.prune = 1e-3;
+        let (out, start, report) = clean(&s, &positions(&s), &forces, &set);
+        assert_eq!(report.pruned_beams, 2);
+        assert_eq!(report.dangling_joints, 1);
+        assert_eq!(out.beams.len(), 4);
+        assert!(start.iter().all(|f| f.abs() >= 1e-2));
+    }
+}
