@@ -171,14 +171,20 @@ impl Outcome {
 /// nothing.
 pub fn execute(kind: Kind, path: &Path, opts: &RunOptions) -> Result<(String, Outcome), Error> {
     match kind {
+        Kind::Gait => {
+            let problem = crate::gait::load(path)?;
+            let outcome = crate::gait::run(&problem, opts)?;
+            Ok((problem.name().to_string(), outcome))
+        }
+        Kind::Truss => {
+            let problem = crate::truss::load(path)?;
+            let outcome = crate::truss::run(&problem, opts)?;
+            Ok((problem.name().to_string(), outcome))
+        }
         Kind::Cmc => {
             let problem = crate::cmc::load(path)?;
             let outcome = crate::cmc::run(&problem, opts)?;
             Ok((problem.name().to_string(), outcome))
         }
-        Kind::Gait | Kind::Truss => Err(Error::Runtime(format!(
-            "the {} module is not available in this build",
-            kind.name()
-        ))),
     }
 }

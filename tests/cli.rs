@@ -1,0 +1,175 @@
+//! The command line as a user meets it: exit codes and one-line, positioned errors for bad
+//! problem files, `--check`, `--json`, and the files a run writes.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const SHIPPED: &str = "problems/truss/roof_fink.toml";
+
+/// A scratch folder per test, removed on drop.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(tag: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("optimize-cli-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+
+    /// Writes `text` as a problem file and returns its path.
+    fn file(&self, name: &str, text: &str) -> PathBuf {
+        let path = self.0.join(name);
+        std::fs::write(&path, text).unwrap();
+        path
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn optimize(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_optimize"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("the binary runs")
+}
+
+fn shipped() -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(SHIPPED)).unwrap()
+}
+
+/// 1-based line of the first occurrence of `needle` in `text`.
+fn line_of(text: &str, needle: &str) -> usize {
+    text[..text.find(needle).expect("needle present")]
+        .matches('\n')
+        .count()
+        + 1
+}
+
+/// Asserts exit code 2 and a single stderr line `error: <file>:<line>:<col>: ...` containing
+/// every `expected` fragment; returns the line.
+fn assert_input_error(out: &Output, file: &Path, line: Option<usize>, expected: &[&str]) -> String {
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
+    assert_eq!(stderr.lines().count(), 1, "one line expected: {stderr}");
+    let prefix = match line {
+        Some(l) => format!("error: {}:{l}:", file.display()),
+        None => format!("error: {}:", file.display()),
+    };
+    assert!(
+        stderr.starts_with(&prefix),
+        "expected prefix `{prefix}` in: {stderr}"
+    );
+    for e in expected {
+        assert!(stderr.contains(e), "expected `{e}` in: {stderr}");
+    }
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    stderr
+}
+
+#[test]
+fn missing_file_exits_2() {
+    let scratch = Scratch::new("missing");
+    let path = scratch.0.join("nope.toml");
+    let out = optimize(&["truss", path.to_str().unwrap()]);
+    assert_input_error(&out, &path, None, &["no such file"]);
+}
+
+#[test]
+fn toml_syntax_error_names_line_and_column() {
+    let scratch = Scratch::new("syntax");
+    let text = shipped().replacen("max_force = 1e6", "max_force = = 1e6", 1);
+    let path = scratch.file("bad.toml", &text);
+    let out = optimize(&["truss", path.to_str().unwrap()]);
+    assert_input_error(&out, &path, Some(line_of(&text, "max_force = =")), &[]);
+}
+
+#[test]
+fn unknown_key_suggests_the_closest_valid_key() {
+    let scratch = Scratch::new("unknown");
+    let text = shipped().replacen("min_length", "min_lenght", 1);
+    let path = scratch.file("bad.toml", &text);
+    let out = optimize(&["truss", path.to_str().unwrap()]);
+    let line = line_of(&text, "min_lenght");
+    assert_input_error(
+        &out,
+        &path,
+        Some(line),
+        &["`min_lenght`", "did you mean `min_length`"],
+    );
+}
+
+#[test]
+fn unknown_key_in_the_solver_table_suggests_too() {
+    let scratch = Scratch::new("solverkey");
+    let text = format!("{}\n[solver]\ntolerence = 1e-6\n", shipped());
+    let path = scratch.file("bad.toml", &text);
+    let out = optimize(&["truss", path.to_str().unwrap()]);
+    let line = line_of(&text, "tolerence");
+    assert_input_error(&out, &path, Some(line), &["did you mean `tolerance`"]);
+}
+
+#[test]
+fn wrong_type_names_line_and_column() {
+    let scratch = Scratch::new("type");
+    let text = shipped().replacen("max_force = 1e6", "max_force = \"large\"", 1);
+    let path = scratch.file("bad.toml", &text);
+    let out = optimize(&["truss", path.to_str().unwrap()]);
+    assert_input_error(
+        &out,
+        &path,
+        Some(line_of(&text, "max_force")),
+        &["wrong type"],
+    );
+}
+
+#[test]
+fn out_of_range_value_names_line_and_column() {
+    let scratch = Scratch::new("range");
+    let text = format!("{}\n[solver]\ntolerance = 2.0\n", shipped());
+    let path = scratch.file("bad.toml", &text);
+    let out = optimize(&["truss", path.to_str().unwrap()]);
+    let line = line_of(&text, "tolerance = 2.0");
+    assert_input_error(&out, &path, Some(line), &["`tolerance` must be in (0, 1)"]);
+}
+
+#[test]
+fn check_on_a_valid_file_exits_0() {
+    let scratch = Scratch::new("check");
+    let out = optimize(&[
+        "truss",
+        SHIPPED,
+        "--check",
+        "-q",
+        "-o",
+        scratch.0.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn usage_errors_exit_2_and_help_shows_an_example() {
+    assert_eq!(optimize(&["truss"]).status.code(), Some(2));
+    assert_eq!(optimize(&["bridge", "x.toml"]).status.code(), Some(2));
+    let help = optimize(&["--help"]);
+    assert_eq!(help.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&help.stdout).contains("optimize truss problems/truss/"));
+    for kind in ["gait", "truss", "cmc"] {
+        let help = optimize(&[kind, "--help"]);
+        let text = String::from_utf8_lossy(&help.stdout).into_owned();
+        assert!(
+            text.contains(&format!("optimize {kind} problems/{kind}/")),
+            "{text}"
+        );
+    }
+}
