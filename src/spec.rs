@@ -199,7 +199,7 @@ impl SolverSpec {
             }
         }
         if let Some(t) = self.max_time
-            && !(t > 0.0)
+            && (t.is_nan() || t <= 0.0)
         {
             return Err(at(
                 "max_time",

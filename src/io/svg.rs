@@ -135,7 +135,7 @@ impl Svg {
 
     /// A grid of lines every `step` metres over the visible rectangle.
     pub fn grid(&mut self, step: f64, style: &Style<'_>) {
-        if !(step > 0.0) {
+        if step.is_nan() || step <= 0.0 {
             return;
         }
         let (x1, y0) = (
