@@ -246,7 +246,10 @@ impl Scene {
         }
         for anim in &self.animations {
             let t = anim.times.len();
-            if t == 0 || anim.times.windows(2).any(|w| w[1].is_nan() || w[1] <= w[0]) {
+            if t == 0
+                || anim.times.iter().any(|t| !t.is_finite())
+                || anim.times.windows(2).any(|w| w[1] <= w[0])
+            {
                 return bad(format!("animation `{}` needs increasing times", anim.name));
             }
             for track in &anim.tracks {
