@@ -36,6 +36,7 @@
 //! dense QP O(n³) anyway), L-BFGS above. `HessianMode::Exact` on a problem without a Hessian
 //! makes the same quasi-Newton choice.
 
+use std::cell::RefCell;
 use std::io::Write;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
@@ -49,7 +50,7 @@ use super::hessian::{self, DenseBfgs, InertiaShift, Lbfgs, Model};
 use super::log;
 use super::merit;
 use super::multipliers::{self, LinearizedPoint};
-use super::qp::{self, QpProblem, QpSolution, QpStatus, WarmStart};
+use super::qp::{self, QpHessian, QpProblem, QpSolution, QpStatus, WarmStart};
 use super::termination::{self, Kkt, KktInput};
 use super::{EvalError, HessianMode, IterationRecord, Nlp, Options, Solution, Status};
 
@@ -136,6 +137,8 @@ struct Sqp<'a> {
     lambda: Vec<f64>,
     warm: WarmStart,
     elastic_warm: WarmStart,
+    /// For the least-violation subproblems (their own shape, so their own sparse analysis).
+    feasibility_warm: RefCell<WarmStart>,
     jac_shape: (Vec<usize>, Vec<usize>),
 }
 
@@ -173,14 +176,26 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
         log: Vec::new(),
         model,
         rho: vec![0.0; m],
-        warm: WarmStart::default(),
-        elastic_warm: WarmStart::default(),
+        warm: WarmStart::new(options.qp_method),
+        elastic_warm: WarmStart::new(options.qp_method),
+        feasibility_warm: RefCell::new(WarmStart::new(options.qp_method)),
         jac_shape,
     };
     sqp.run()
 }
 
 impl<'a> Sqp<'a> {
+    /// Relative tolerance handed to the QP method (the sparse one stops at it; two orders
+    /// tighter than the outer test so that QP multipliers do not limit the final accuracy).
+    fn qp_tolerance(&self) -> f64 {
+        (0.01 * self.options.tolerance).clamp(1e-12, 1e-8)
+    }
+
+    /// Whether QPs go to the sparse method (no n×n matrices).
+    fn sparse_qp(&self) -> bool {
+        self.options.qp_method.is_sparse(self.ev.dims.n)
+    }
+
     fn elapsed(&self) -> f64 {
         self.started.elapsed().as_secs_f64()
     }
@@ -519,7 +534,8 @@ impl<'a> Sqp<'a> {
         };
         let now = lin.violation_now();
         let radius = point.x.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
-        match elastic::least_violation(&lin, radius, self.options.tolerance) {
+        let mut warm = self.feasibility_warm.borrow_mut();
+        match elastic::least_violation(&lin, radius, &mut warm, self.qp_tolerance()) {
             Some((least, _)) => (now - least <= self.options.tolerance * now, least),
             None => (false, now),
         }
@@ -529,7 +545,7 @@ impl<'a> Sqp<'a> {
     fn choose_step(&mut self, point: &Point, jac: &CsrMatrix<f64>) -> StepChoice {
         let (dl, du, bl, bu) = self.bounds_of_step(point);
         let g = &point.derivatives.grad;
-        let tol = self.options.tolerance;
+        let tol = self.qp_tolerance();
         let problem = QpProblem {
             h: self.model.qp_hessian(),
             g,
@@ -571,7 +587,10 @@ impl<'a> Sqp<'a> {
             let (kkt, _) = self.kkt(point, jac, &vec![0.0; self.ev.dims.m]);
             kkt.primal > self.options.constraint_tolerance
         };
-        let h = self.model.dense(self.ev.dims.n);
+        let dense = (!self.sparse_qp()).then(|| self.model.dense(self.ev.dims.n));
+        let h = dense
+            .as_ref()
+            .map_or_else(|| self.model.qp_hessian(), QpHessian::Dense);
         let floor = self
             .rho
             .iter()
@@ -584,7 +603,7 @@ impl<'a> Sqp<'a> {
             .map(|w| w.clamp(floor, ELASTIC_WEIGHT.max(floor)))
             .collect();
         let best_reduction = (now - least).max(0.0);
-        let mut sol = elastic::solve_elastic(&h, g, &lin, &rho, &mut self.elastic_warm, tol);
+        let mut sol = elastic::solve_elastic(h, g, &lin, &rho, &mut self.elastic_warm, tol);
         iterations += sol.iterations;
         for _ in 0..MAX_STEERING {
             let after = lin.violation_after(&sol.d);
@@ -595,7 +614,7 @@ impl<'a> Sqp<'a> {
             for w in &mut rho {
                 *w *= 10.0;
             }
-            sol = elastic::solve_elastic(&h, g, &lin, &rho, &mut self.elastic_warm, tol);
+            sol = elastic::solve_elastic(h, g, &lin, &rho, &mut self.elastic_warm, tol);
             iterations += sol.iterations;
         }
         self.rho = rho;
@@ -761,8 +780,10 @@ impl<'a> Sqp<'a> {
             bl: &bl,
             bu: &bu,
         };
-        let mut warm = self.warm.clone();
-        let sol = qp::solve(&problem, &mut warm, self.options.tolerance);
+        let working_set = self.warm.snapshot();
+        let tol = self.qp_tolerance();
+        let sol = qp::solve(&problem, &mut self.warm, tol);
+        self.warm.restore(working_set);
         if sol.status != QpStatus::Optimal {
             return Ok(None);
         }
@@ -782,6 +803,7 @@ impl<'a> Sqp<'a> {
             return Ok(());
         };
         let n = self.ev.dims.n;
+        let sparse_qp = self.sparse_qp();
         let values = self.ev.hessian(&point.x, &self.lambda)?;
         let (rows, cols) = (&self.ev.hess_rows, &self.ev.hess_cols);
         let Model::Exact {
@@ -792,7 +814,7 @@ impl<'a> Sqp<'a> {
         else {
             unreachable!()
         };
-        if n <= qp::DENSE_LIMIT {
+        if !sparse_qp {
             let h = hessian::assemble_dense(n, rows, cols, &values);
             // Rows expected active: equalities and rows with a nonzero multiplier.
             let active: Vec<usize> = (0..self.ev.dims.m)

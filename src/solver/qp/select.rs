@@ -1,39 +1,115 @@
 //! The one entry point through which the SQP solves every QP subproblem.
 //!
-//! It picks the method from the size and the Hessian representation: the dense
-//! Goldfarb–Idnani method ([`super::dense`]) for small problems. Problems above
-//! [`DENSE_LIMIT`] variables belong to the sparse interior-point method, which is not yet
-//! part of this module: until it is, they are also densified here, so this path is for
-//! n up to a few thousand only. A `SparseLower` Hessian (possibly indefinite: the sparse
-//! method convexifies it by inertia correction) is densified and shifted by `δI` until its
-//! Cholesky factorization exists, with δ growing geometrically from `1e-8·(1+max|Hᵢᵢ|)`.
-//! A `LowRank` compact quasi-Newton Hessian `δI − W M Wᵀ` is formed densely on this path.
+//! It picks the method from the size and the Hessian representation ([`QpMethod`]): the dense
+//! Goldfarb–Idnani method ([`super::dense`]) for n ≤ [`DENSE_LIMIT`] variables, warm-started
+//! from the previous working set; the sparse primal-dual interior-point method
+//! ([`super::sparse`]) above, with one [`SparseQp`] kept in the [`WarmStart`] so that its
+//! symbolic analysis is reused by every QP of the same sparsity pattern. No n×n matrix is
+//! formed on the sparse path: a `LowRank` Hessian stays in compact form, a `SparseLower` one
+//! (possibly indefinite) is convexified by the sparse method's inertia correction.
+//!
+//! On the dense path a `SparseLower` Hessian is densified and shifted by `δI` until its
+//! Cholesky factorization exists, with δ growing geometrically from `1e-8·(1+max|Hᵢᵢ|)`; a
+//! `LowRank` Hessian `δI − W M Wᵀ` is formed densely.
+//!
+//! The sparse method returns an interior solution: multipliers of inactive inequalities are
+//! O(μ) rather than exactly 0, and the step is accurate to the relative tolerance passed
+//! down, which the SQP sets two orders tighter than its own.
+
+use std::fmt;
 
 use nalgebra::DMatrix;
+use serde::{Deserialize, Serialize};
 
 use super::dense::{self, ConstraintId};
+use super::sparse::SparseQp;
 use super::{QpHessian, QpProblem, QpSolution, QpStatus};
 
-/// Variables above which the sparse method is meant to take over.
+/// Variables above which [`QpMethod::Auto`] takes the sparse method.
 pub const DENSE_LIMIT: usize = 2000;
 
-/// What is carried from one QP solve to the next: the working set of the dense method.
-#[derive(Debug, Clone, Default)]
-pub struct WarmStart {
-    working_set: Vec<ConstraintId>,
+/// Which QP method solves the subproblems.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum QpMethod {
+    /// Dense for n ≤ [`DENSE_LIMIT`], sparse above.
+    #[default]
+    Auto,
+    /// Always the dense Goldfarb–Idnani method (forms n×n matrices).
+    Dense,
+    /// Always the sparse interior-point method.
+    Sparse,
 }
 
-impl WarmStart {
-    /// Forgets the working set (for a QP of a different shape).
-    pub fn clear(&mut self) {
-        self.working_set.clear();
+impl QpMethod {
+    /// Whether QPs with `n` variables go to the sparse method.
+    pub fn is_sparse(self, n: usize) -> bool {
+        match self {
+            QpMethod::Auto => n > DENSE_LIMIT,
+            QpMethod::Dense => false,
+            QpMethod::Sparse => true,
+        }
     }
 }
 
-/// Solves `problem`; `tolerance` is the optimality tolerance passed to iterative methods.
-pub fn solve(problem: &QpProblem, warm: &mut WarmStart, _tolerance: f64) -> QpSolution {
-    let h = dense_hessian(&problem.h);
+/// What is carried from one QP solve to the next: the working set of the dense method, or
+/// the sparse solver with its symbolic analysis.
+#[derive(Default)]
+pub struct WarmStart {
+    method: QpMethod,
+    working_set: Vec<ConstraintId>,
+    sparse: Option<Box<SparseQp>>,
+}
+
+impl fmt::Debug for WarmStart {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("WarmStart")
+            .field("method", &self.method)
+            .field("working_set", &self.working_set)
+            .field("sparse", &self.sparse.is_some())
+            .finish()
+    }
+}
+
+impl WarmStart {
+    /// An empty warm start for QPs solved by `method`.
+    pub fn new(method: QpMethod) -> Self {
+        WarmStart {
+            method,
+            ..WarmStart::default()
+        }
+    }
+
+    /// Forgets the working set (for a QP of a different shape). The sparse solver's symbolic
+    /// analysis is kept: it is redone by itself when the pattern changes.
+    pub fn clear(&mut self) {
+        self.working_set.clear();
+    }
+
+    /// The dense working set, to be put back with [`WarmStart::restore`] after a QP whose
+    /// working set must not carry over (a second-order correction).
+    pub fn snapshot(&self) -> Vec<ConstraintId> {
+        self.working_set.clone()
+    }
+
+    /// Puts back a working set taken by [`WarmStart::snapshot`].
+    pub fn restore(&mut self, working_set: Vec<ConstraintId>) {
+        self.working_set = working_set;
+    }
+}
+
+/// Solves `problem`; `tolerance` is the relative KKT tolerance of the sparse method.
+pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSolution {
     let n = problem.g.len();
+    if warm.method.is_sparse(n) {
+        let solver = warm.sparse.get_or_insert_with(|| Box::new(SparseQp::new()));
+        let mut solution = solver.solve(problem, tolerance).0;
+        if solution.status == QpStatus::Optimal {
+            identify_active_set(problem, &mut solution);
+        }
+        return solution;
+    }
+    let h = dense_hessian(&problem.h);
     let convexify = matches!(problem.h, QpHessian::SparseLower(_));
     let mut shift = 0.0;
     let base = 1e-8 * (1.0 + (0..n).map(|i| h[(i, i)].abs()).fold(0.0, f64::max));
@@ -49,6 +125,37 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, _tolerance: f64) -> QpSo
         }
         warm.working_set = result.working_set;
         return result.solution;
+    }
+}
+
+/// Turns an interior-point solution into the form an active-set method returns, which the
+/// SQP's termination test and penalty weights expect: a bound or row is taken as active when
+/// its multiplier exceeds its distance to the bound (`|zⱼ| ≥ gapⱼ`; at a strictly
+/// complementary solution the multiplier is O(1) and the gap O(μ), at an inactive one the
+/// reverse). Active variable bounds are hit exactly (d snapped onto them, so the iterate lands
+/// on the bound); multipliers of inactive bounds and rows, O(μ), are set to 0.
+fn identify_active_set(problem: &QpProblem, solution: &mut QpSolution) {
+    for j in 0..solution.d.len() {
+        let (l, u, d, z) = (problem.dl[j], problem.du[j], solution.d[j], solution.z[j]);
+        let (gap_l, gap_u) = (d - l, u - d);
+        if z < 0.0 && gap_l <= -z {
+            solution.d[j] = l;
+        } else if z > 0.0 && gap_u <= z {
+            solution.d[j] = u;
+        } else if l != u {
+            solution.z[j] = 0.0;
+        }
+    }
+    let ad = problem.a * &nalgebra::DVector::from_column_slice(&solution.d);
+    for (i, lambda) in solution.lambda.iter_mut().enumerate() {
+        let (l, u) = (problem.bl[i], problem.bu[i]);
+        if l == u {
+            continue;
+        }
+        let gap = if *lambda < 0.0 { ad[i] - l } else { u - ad[i] };
+        if gap > lambda.abs() {
+            *lambda = 0.0;
+        }
     }
 }
 

@@ -288,6 +288,10 @@ impl NewtonSystem {
         };
         let (n, dim) = (self.n, self.dim());
         let p = m.nrows();
+        if p == 0 {
+            // An empty update (L-BFGS before its first pair): H = δI, nothing to correct.
+            return Ok(());
+        }
         let (utx, rhs) = self.small.split_at_mut(p);
         for (k, slot) in utx.iter_mut().enumerate() {
             *slot = dot(&self.u[k * n..(k + 1) * n], &x[..n]);
