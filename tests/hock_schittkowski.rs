@@ -5,7 +5,7 @@
 mod hs;
 
 use optimize::solver::qp::QpMethod;
-use optimize::solver::{HessianMode, Nlp, Options, Solution, solve};
+use optimize::solver::{HessianMode, Nlp, Options, Solution, Status, solve};
 
 fn options(mode: HessianMode) -> Options {
     Options {
@@ -143,9 +143,11 @@ fn run_set_with(mode: HessianMode, qp_method: QpMethod) -> SetOutcome {
         if !expected {
             failures.push(p.name.to_string());
         }
+        // `Acceptable` promises the tolerances within a factor 100 only.
+        let slack = if s.status == Status::Acceptable { 100.0 } else { 1.0 };
         if s.status.is_success()
             && !NO_KKT_POINT.contains(&p.name)
-            && (p.violation(&s.x) > 1e-6 || kkt > KKT_TOLERANCE)
+            && (p.violation(&s.x) > 1e-6 * slack || kkt > KKT_TOLERANCE * slack)
         {
             false_successes.push(p.name.to_string());
         }
@@ -162,8 +164,9 @@ fn run_set_with(mode: HessianMode, qp_method: QpMethod) -> SetOutcome {
 }
 
 /// The whole set through the sparse interior-point QP (the large-problem path, forced):
-/// every success must be a verified KKT point, and at least `least` problems must reach the
-/// book's optimum.
+/// every success must be a verified KKT point (to the factor 100 `Acceptable` allows), and at
+/// least `least` problems must reach the book's optimum (the counts measured when the sparse
+/// path was introduced; BENCHMARKS.md lists the problems that differ from the dense path).
 fn sparse_path(mode: HessianMode, least: usize) {
     let outcome = run_set_with(mode, QpMethod::Sparse);
     println!("{mode:?} sparse-path outcomes differing from the dense path: {:?}", outcome.failures);
@@ -370,15 +373,15 @@ fn hs_random_starts_never_report_false_success() {
 
 #[test]
 fn hs_set_with_bfgs_through_the_sparse_qp() {
-    sparse_path(HessianMode::Bfgs, 0);
+    sparse_path(HessianMode::Bfgs, 76);
 }
 
 #[test]
 fn hs_set_with_lbfgs_through_the_sparse_qp() {
-    sparse_path(HessianMode::Lbfgs, 0);
+    sparse_path(HessianMode::Lbfgs, 75);
 }
 
 #[test]
 fn hs_set_with_exact_hessians_through_the_sparse_qp() {
-    sparse_path(HessianMode::Exact, 0);
+    sparse_path(HessianMode::Exact, 72);
 }

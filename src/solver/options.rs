@@ -14,7 +14,7 @@ pub enum HessianMode {
     /// Exact if the problem provides it, else dense damped BFGS for small n, L-BFGS for large n.
     #[default]
     Auto,
-    /// Dense damped (Powell) BFGS.
+    /// Dense damped (Powell) BFGS (L-BFGS is used instead above `qp::DENSE_LIMIT` variables).
     Bfgs,
     /// Limited-memory BFGS (no dense n×n matrix).
     Lbfgs,

@@ -34,7 +34,13 @@
 //! Hessian choice in `HessianMode::Auto`: the exact Hessian when the problem has one; else
 //! dense BFGS for n ≤ [`DENSE_BFGS_LIMIT`] (an n×n update costs O(n²) per iteration and the
 //! dense QP O(n³) anyway), L-BFGS above. `HessianMode::Exact` on a problem without a Hessian
-//! makes the same quasi-Newton choice.
+//! makes the same quasi-Newton choice. `HessianMode::Bfgs` above [`qp::DENSE_LIMIT`] variables
+//! is served by L-BFGS (no n×n matrix on the large-problem path).
+//!
+//! QP method ([`Options::qp_method`], see `qp::select`): the dense active-set method up to
+//! [`qp::DENSE_LIMIT`] variables, the sparse interior-point method above, with the exact
+//! Hessian kept as a sparse lower triangle (convexified inside the QP) and L-BFGS in compact
+//! form; elastic and least-violation subproblems use the same method.
 
 use std::cell::RefCell;
 use std::io::Write;
@@ -155,6 +161,8 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
     let mode = match options.hessian {
         HessianMode::Auto | HessianMode::Exact if ev.dims.hess_nnz > 0 => HessianMode::Exact,
         HessianMode::Auto | HessianMode::Exact => quasi_newton,
+        // No n×n matrix above the dense QP's size limit: L-BFGS instead of dense BFGS.
+        HessianMode::Bfgs if n > qp::DENSE_LIMIT => HessianMode::Lbfgs,
         other => other,
     };
     let model = match mode {
@@ -684,7 +692,16 @@ impl<'a> Sqp<'a> {
 
     /// Whether values at `x + αd` pass the sufficient-decrease tests.
     fn accepts(&self, test: &Acceptance, values: &Values, alpha: f64) -> bool {
-        let merit_ok = self.merit(values) <= test.phi0 + ARMIJO * alpha * test.slope;
+        // When the predicted decrease of the full step is itself at the rounding level of φ
+        // (near a solution of a problem with a large objective), changes within 10·ε_mach·|φ₀|
+        // count as no increase (IPOPT's relaxation), or the line search could only fail.
+        let resolution = 10.0 * f64::EPSILON * test.phi0.abs();
+        let noise = if -test.slope <= 100.0 * resolution {
+            resolution
+        } else {
+            0.0
+        };
+        let merit_ok = self.merit(values) <= test.phi0 + ARMIJO * alpha * test.slope + noise;
         let violation_ok = test.violation_slope.is_none_or(|vs| {
             merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu)
                 <= test.v0 + ARMIJO * alpha * vs
