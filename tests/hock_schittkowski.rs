@@ -383,5 +383,5 @@ fn hs_set_with_lbfgs_through_the_sparse_qp() {
 
 #[test]
 fn hs_set_with_exact_hessians_through_the_sparse_qp() {
-    sparse_path(HessianMode::Exact, 72);
+    sparse_path(HessianMode::Exact, 74);
 }

@@ -19,6 +19,7 @@
 use std::fmt;
 
 use nalgebra::DMatrix;
+use nalgebra_sparse::{CooMatrix, CscMatrix};
 use serde::{Deserialize, Serialize};
 
 use super::dense::{self, ConstraintId};
@@ -104,6 +105,25 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
     if warm.method.is_sparse(n) {
         let solver = warm.sparse.get_or_insert_with(|| Box::new(SparseQp::new()));
         let mut solution = solver.solve(problem, tolerance).0;
+        if let QpHessian::SparseLower(h) = problem.h {
+            // The inertia correction makes the reduced Hessian non-singular, not positive
+            // definite on every direction of recession: an exact Hessian without curvature
+            // along a descent direction gives an unbounded QP. As on the dense path, the
+            // Hessian is then shifted by δI, δ = 1e-4·(1 + max|Hᵢᵢ|) growing ×100.
+            let base = 1e-4 * (1.0 + max_diagonal(h));
+            let mut shift = base;
+            while matches!(solution.status, QpStatus::Unbounded | QpStatus::Numerical)
+                && shift < 1e12 * base
+            {
+                let shifted = shifted_lower(h, shift);
+                let retry = QpProblem {
+                    h: QpHessian::SparseLower(&shifted),
+                    ..*problem
+                };
+                solution = SparseQp::new().solve(&retry, tolerance).0;
+                shift *= 100.0;
+            }
+        }
         if solution.status == QpStatus::Optimal {
             identify_active_set(problem, &mut solution);
         }
@@ -157,6 +177,26 @@ fn identify_active_set(problem: &QpProblem, solution: &mut QpSolution) {
             *lambda = 0.0;
         }
     }
+}
+
+/// max |Hᵢᵢ| of a lower triangle.
+fn max_diagonal(h: &CscMatrix<f64>) -> f64 {
+    h.triplet_iter()
+        .filter(|(r, c, _)| r == c)
+        .fold(0.0, |a, (_, _, v)| a.max(v.abs()))
+}
+
+/// H + δI as a lower triangle (diagonal entries added where the pattern lacks them).
+fn shifted_lower(h: &CscMatrix<f64>, delta: f64) -> CscMatrix<f64> {
+    let n = h.nrows();
+    let mut coo = CooMatrix::new(n, n);
+    for (r, c, &v) in h.triplet_iter() {
+        coo.push(r, c, v);
+    }
+    for i in 0..n {
+        coo.push(i, i, delta);
+    }
+    CscMatrix::from(&coo)
 }
 
 /// The Hessian as a dense symmetric matrix.
