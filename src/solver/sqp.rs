@@ -356,7 +356,14 @@ impl<'a> Sqp<'a> {
                 .zip(d)
                 .map(|(a, b)| a * b)
                 .sum();
-            let dhd: f64 = self.model.times(d).iter().zip(d).map(|(a, b)| a * b).sum();
+            // The curvature the QP used: a sparse exact Hessian is convexified inside the QP.
+            let shift = if step.elastic {
+                self.elastic_warm.convexification()
+            } else {
+                self.warm.convexification()
+            };
+            let dhd: f64 = self.model.times(d).iter().zip(d).map(|(a, b)| a * b).sum::<f64>()
+                + shift * d.iter().map(|v| v * v).sum::<f64>();
             // Byrd–Nocedal safeguard: the weighted linearized violation decrease must pay for
             // a tenth more than the model's objective change, or the weights of the rows that
             // decrease are raised uniformly (Powell's rule decays the excess later).

@@ -29,6 +29,11 @@ use super::{QpHessian, QpProblem, QpSolution, QpStatus};
 /// Variables above which [`QpMethod::Auto`] takes the sparse method.
 pub const DENSE_LIMIT: usize = 2000;
 
+/// First relative convexification shift of the sparse method (see
+/// [`SparseQp::first_shift`]); a Hessian lacking curvature along a direction of recession is
+/// caught by the unbounded-QP retry with δ₀ = 1 instead.
+const FIRST_SHIFT: f64 = 1e-4;
+
 /// Which QP method solves the subproblems.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
@@ -60,6 +65,8 @@ pub struct WarmStart {
     method: QpMethod,
     working_set: Vec<ConstraintId>,
     sparse: Option<Box<SparseQp>>,
+    /// δ of the last sparse solve: the QP solved had `H + δI` (0 on the dense path).
+    convexification: f64,
 }
 
 impl fmt::Debug for WarmStart {
@@ -93,6 +100,12 @@ impl WarmStart {
         self.working_set.clone()
     }
 
+    /// The shift δ ≥ 0 the last sparse solve added to a `SparseLower` Hessian (the step is
+    /// that of `H + δI`); 0 after a dense solve, which receives H already convexified.
+    pub fn convexification(&self) -> f64 {
+        self.convexification
+    }
+
     /// Puts back a working set taken by [`WarmStart::snapshot`].
     pub fn restore(&mut self, working_set: Vec<ConstraintId>) {
         self.working_set = working_set;
@@ -103,24 +116,28 @@ impl WarmStart {
 pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSolution {
     let n = problem.g.len();
     if warm.method.is_sparse(n) {
-        let solver = warm.sparse.get_or_insert_with(|| Box::new(SparseQp::new()));
-        let mut solution = solver.solve(problem, tolerance).0;
+        let solver = warm.sparse.get_or_insert_with(|| Box::new(sqp_sparse_solver()));
+        let (mut solution, info) = solver.solve(problem, tolerance);
+        warm.convexification = info.convexification;
         if let QpHessian::SparseLower(h) = problem.h {
             // The inertia correction makes the reduced Hessian non-singular, not positive
             // definite on every direction of recession: an exact Hessian without curvature
             // along a descent direction gives an unbounded QP. As on the dense path, the
-            // Hessian is then shifted by δI, δ = 1e-4·(1 + max|Hᵢᵢ|) growing ×100.
-            let base = 1e-4 * (1.0 + max_diagonal(h));
+            // Hessian is then shifted by δI, δ = 1 + max|Hᵢᵢ| growing ×100 (δ₀ = 1 relative, as
+            // in `hessian::exact`).
+            let base = 1.0 + max_diagonal(h);
             let mut shift = base;
             while matches!(solution.status, QpStatus::Unbounded | QpStatus::Numerical)
-                && shift < 1e12 * base
+                && shift < 1e8 * base
             {
                 let shifted = shifted_lower(h, shift);
                 let retry = QpProblem {
                     h: QpHessian::SparseLower(&shifted),
                     ..*problem
                 };
-                solution = SparseQp::new().solve(&retry, tolerance).0;
+                let (retried, info) = sqp_sparse_solver().solve(&retry, tolerance);
+                solution = retried;
+                warm.convexification = shift + info.convexification;
                 shift *= 100.0;
             }
         }
@@ -130,6 +147,7 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
         return solution;
     }
     let h = dense_hessian(&problem.h);
+    warm.convexification = 0.0;
     let convexify = matches!(problem.h, QpHessian::SparseLower(_));
     let mut shift = 0.0;
     let base = 1e-8 * (1.0 + (0..n).map(|i| h[(i, i)].abs()).fold(0.0, f64::max));
@@ -177,6 +195,13 @@ fn identify_active_set(problem: &QpProblem, solution: &mut QpSolution) {
             *lambda = 0.0;
         }
     }
+}
+
+/// The sparse solver as the SQP uses it.
+fn sqp_sparse_solver() -> SparseQp {
+    let mut solver = SparseQp::new();
+    solver.first_shift = FIRST_SHIFT;
+    solver
 }
 
 /// max |Hᵢᵢ| of a lower triangle.

@@ -345,6 +345,7 @@ impl NewtonSystem {
         &mut self,
         qp: &QpProblem<'_>,
         layout: &Layout,
+        first_shift: f64,
         scratch_n: &mut [f64],
         scratch_m: &mut [f64],
     ) -> Result<Option<f64>, KktError> {
@@ -376,7 +377,7 @@ impl NewtonSystem {
                 return Ok(Some(shift));
             }
             shift = if shift == 0.0 {
-                1e-4 * diag_scale
+                first_shift * diag_scale
             } else {
                 10.0 * shift
             };
