@@ -137,6 +137,8 @@ struct Sqp<'a> {
     options: &'a Options,
     started: Instant,
     log: Vec<IterationRecord>,
+    /// What of the log is shown live (stderr; a status line for long runs on a terminal).
+    live: RefCell<log::LiveLog>,
     model: Model,
     /// Penalty weights of the merit function, one per row.
     rho: Vec<f64>,
@@ -182,6 +184,7 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
         options,
         started,
         log: Vec::new(),
+        live: RefCell::new(log::LiveLog::stderr(options.verbosity)),
         model,
         rho: vec![0.0; m],
         warm: WarmStart::new(options.qp_method),
@@ -209,9 +212,7 @@ impl<'a> Sqp<'a> {
     }
 
     fn say(&self, text: &str) {
-        if self.options.verbosity >= 1 {
-            let _ = writeln!(std::io::stderr(), "{text}");
-        }
+        self.live.borrow_mut().message(text);
     }
 
     fn jacobian(&self, values: &[f64]) -> CsrMatrix<f64> {
@@ -264,7 +265,7 @@ impl<'a> Sqp<'a> {
             Err((status, x)) => return self.failed_start(status, x),
         };
         if self.options.verbosity >= 1 {
-            let _ = log::write_header(&mut std::io::stderr());
+            self.live.borrow_mut().header();
         }
         if !self.model.is_quasi_newton() {
             self.lambda = multipliers::least_squares(&LinearizedPoint {
@@ -908,9 +909,7 @@ impl<'a> Sqp<'a> {
             qp_iterations,
             elapsed: self.elapsed(),
         };
-        if self.options.verbosity >= 1 {
-            let _ = log::write_record(&mut std::io::stderr(), &r);
-        }
+        self.live.borrow_mut().record(&r);
         self.log.push(r);
     }
 
