@@ -30,7 +30,10 @@ fn main() {
         let chain = Chain { links, exact };
         let options = Options {
             hessian: mode,
-            verbosity: std::env::var("VERBOSITY").ok().and_then(|v| v.parse().ok()).unwrap_or(0),
+            verbosity: std::env::var("VERBOSITY")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(0),
             qp_method,
             ..Options::default()
         };

@@ -44,11 +44,10 @@ fn main() {
         ..Options::default()
     };
     let s = solve(&nlp, &options);
-    let error = s
-        .x
-        .iter()
-        .zip(nlp.solution())
-        .fold(0.0_f64, |a, (x, y)| a.max((x - y).abs()));
+    let error =
+        s.x.iter()
+            .zip(nlp.solution())
+            .fold(0.0_f64, |a, (x, y)| a.max((x - y).abs()));
     println!(
         "n = {n}, m = {}, {mode:?}: {:?} in {:.2} s, {} iterations, {} evaluations, f = {:.10e} (f* = {:.10e}), violation {:.1e}, optimality {:.1e}, max|x − x*| = {error:.1e}, peak memory {}",
         nlp.dims().m,

@@ -144,7 +144,11 @@ fn run_set_with(mode: HessianMode, qp_method: QpMethod) -> SetOutcome {
             failures.push(p.name.to_string());
         }
         // `Acceptable` promises the tolerances within a factor 100 only.
-        let slack = if s.status == Status::Acceptable { 100.0 } else { 1.0 };
+        let slack = if s.status == Status::Acceptable {
+            100.0
+        } else {
+            1.0
+        };
         if s.status.is_success()
             && !NO_KKT_POINT.contains(&p.name)
             && (p.violation(&s.x) > 1e-6 * slack || kkt > KKT_TOLERANCE * slack)
@@ -169,7 +173,10 @@ fn run_set_with(mode: HessianMode, qp_method: QpMethod) -> SetOutcome {
 /// path was introduced; BENCHMARKS.md lists the problems that differ from the dense path).
 fn sparse_path(mode: HessianMode, least: usize) {
     let outcome = run_set_with(mode, QpMethod::Sparse);
-    println!("{mode:?} sparse-path outcomes differing from the dense path: {:?}", outcome.failures);
+    println!(
+        "{mode:?} sparse-path outcomes differing from the dense path: {:?}",
+        outcome.failures
+    );
     assert!(
         outcome.false_successes.is_empty(),
         "false successes through the sparse QP with {mode:?}: {:?}",

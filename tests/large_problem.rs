@@ -383,11 +383,10 @@ fn sqp_solves_the_generated_problem_with_the_exact_hessian() {
     assert!(s.max_violation <= 1e-6);
     let f_star = nlp.optimal_objective();
     assert!((s.objective - f_star).abs() <= 1e-6 * f_star.abs().max(1.0));
-    let error = s
-        .x
-        .iter()
-        .zip(nlp.solution())
-        .fold(0.0_f64, |a, (x, y)| a.max((x - y).abs()));
+    let error =
+        s.x.iter()
+            .zip(nlp.solution())
+            .fold(0.0_f64, |a, (x, y)| a.max((x - y).abs()));
     assert!(error < 1e-6, "max |x − x*| = {error:e}");
     assert!(independent_kkt_error(&nlp, &s) < 1e-6);
     assert!(s.iterations <= 30, "{} iterations", s.iterations);

@@ -349,7 +349,6 @@ fn solution_fields_are_filled() {
     );
 }
 
-
 #[test]
 fn hanging_chain_with_sparse_derivatives() {
     let mut objectives = Vec::new();

@@ -178,7 +178,10 @@ mod tests {
     fn long_solves_on_a_terminal_switch_to_one_status_line() {
         let text = run(1, true);
         // Full lines for iterations 0..=19 (before 2 s), then status redraws every ≥ 0.25 s.
-        let full_lines = text.lines().filter(|l| l.ends_with(|c: char| c.is_ascii_digit()) && !l.contains('\r')).count();
+        let full_lines = text
+            .lines()
+            .filter(|l| l.ends_with(|c: char| c.is_ascii_digit()) && !l.contains('\r'))
+            .count();
         let redraws = text.matches("\r\x1b[2K  iteration").count();
         assert_eq!(redraws, 7, "{text:?}");
         assert!(full_lines >= 20);

@@ -363,7 +363,13 @@ impl<'a> Sqp<'a> {
             } else {
                 self.warm.convexification()
             };
-            let dhd: f64 = self.model.times(d).iter().zip(d).map(|(a, b)| a * b).sum::<f64>()
+            let dhd: f64 = self
+                .model
+                .times(d)
+                .iter()
+                .zip(d)
+                .map(|(a, b)| a * b)
+                .sum::<f64>()
                 + shift * d.iter().map(|v| v * v).sum::<f64>();
             // Byrd–Nocedal safeguard: the weighted linearized violation decrease must pay for
             // a tenth more than the model's objective change, or the weights of the rows that

@@ -116,7 +116,9 @@ impl WarmStart {
 pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSolution {
     let n = problem.g.len();
     if warm.method.is_sparse(n) {
-        let solver = warm.sparse.get_or_insert_with(|| Box::new(sqp_sparse_solver()));
+        let solver = warm
+            .sparse
+            .get_or_insert_with(|| Box::new(sqp_sparse_solver()));
         let (mut solution, info) = solver.solve(problem, tolerance);
         warm.convexification = info.convexification;
         if let QpHessian::SparseLower(h) = problem.h {

@@ -299,7 +299,13 @@ impl SparseQp {
         let ws = &mut self.ws;
         let layout = &self.layout;
         ws.resize(n, m, p);
-        let shift = match system.convexify(qp, layout, self.first_shift, &mut ws.sig_d, &mut ws.dual_diag) {
+        let shift = match system.convexify(
+            qp,
+            layout,
+            self.first_shift,
+            &mut ws.sig_d,
+            &mut ws.dual_diag,
+        ) {
             Ok(Some(shift)) => shift,
             _ => return (fail(QpStatus::Numerical), info),
         };
