@@ -4,13 +4,14 @@
 //! `cargo run --release --example large_solve -- [n] [lbfgs|exact] [max_iterations]`
 //! (defaults: n = 50000, exact; m = ⌊2n/5⌋ nonlinear equalities). Peak memory is the
 //! process's resident high-water mark `VmHWM` from /proc/self/status (Linux). `VERBOSITY=0`
-//! silences the iteration log.
+//! silences the iteration log; `QP=dense|sparse` forces the QP method.
 
 #[path = "../tests/common/large.rs"]
 #[allow(dead_code)]
 mod large;
 
 use large::ChainedRosenbrock;
+use optimize::solver::qp::QpMethod;
 use optimize::solver::{HessianMode, Nlp, Options, solve};
 
 fn peak_memory() -> String {
@@ -41,6 +42,11 @@ fn main() {
         hessian: mode,
         max_iterations,
         verbosity,
+        qp_method: match std::env::var("QP").as_deref() {
+            Ok("dense") => QpMethod::Dense,
+            Ok("sparse") => QpMethod::Sparse,
+            _ => QpMethod::Auto,
+        },
         ..Options::default()
     };
     let s = solve(&nlp, &options);
