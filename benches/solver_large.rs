@@ -7,7 +7,11 @@
 //!   (fresh solver, symbolic analysis included), and `..._reused_symbolic` with a solver that
 //!   already analysed the pattern (the situation of SQP iterations after the first);
 //! - `qp_first_subproblem_lowrank p=20`: the same QP with the compact limited-memory Hessian
-//!   `H = δI − W M Wᵀ` (p = 20 columns, as L-BFGS with 10 pairs) instead of the exact one.
+//!   `H = δI − W M Wᵀ` (p = 20 columns, as L-BFGS with 10 pairs) instead of the exact one;
+//! - `solve_exact` / `solve_lbfgs`: the whole SQP solve from the standard start with the
+//!   exact Hessian and with L-BFGS (sparse QP path), 10 samples each. Status, iterations and
+//!   final accuracy are printed once before timing; peak memory of one solve is printed by
+//!   `cargo run --release --example large_solve -- 50000 exact|lbfgs`.
 //!
 //! Run: `cargo bench --bench solver_large` (size via `LARGE_N`, default 50000).
 
@@ -24,6 +28,7 @@ use nalgebra::DMatrix;
 use optimize::solver::kkt::{KktSolver, Regularization};
 use optimize::solver::qp::sparse::SparseQp;
 use optimize::solver::qp::{QpHessian, QpProblem, QpStatus};
+use optimize::solver::{HessianMode, Options, solve};
 
 fn size() -> usize {
     std::env::var("LARGE_N")
@@ -169,9 +174,41 @@ fn bench_low_rank(c: &mut Criterion) {
     );
 }
 
+fn bench_solve(c: &mut Criterion) {
+    let n = size();
+    let nlp = ChainedRosenbrock::new(n);
+    for (name, hessian) in [("exact", HessianMode::Exact), ("lbfgs", HessianMode::Lbfgs)] {
+        let options = Options {
+            hessian,
+            verbosity: 0,
+            ..Options::default()
+        };
+        let s = solve(&nlp, &options);
+        assert!(s.status.is_success(), "{name}: {:?}", s.status);
+        eprintln!(
+            "solve {name} n={n}: {:?}, {} iterations, {:.2} s, f = {:.10e} (f* = {:.10e}), violation {:.1e}",
+            s.status,
+            s.iterations,
+            s.seconds,
+            s.objective,
+            nlp.optimal_objective(),
+            s.max_violation
+        );
+        c.bench_function(&format!("solve_{name} n={n}"), |b| {
+            b.iter(|| black_box(solve(&nlp, &options)))
+        });
+    }
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().sample_size(10).measurement_time(Duration::from_secs(10));
     targets = bench_large, bench_low_rank
 }
-criterion_main!(benches);
+
+criterion_group! {
+    name = solves;
+    config = Criterion::default().sample_size(10).measurement_time(Duration::from_secs(60));
+    targets = bench_solve
+}
+criterion_main!(benches, solves);

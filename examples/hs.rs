@@ -1,11 +1,12 @@
 //! Solves one Hock–Schittkowski problem with the live iteration log on stderr.
 //!
 //! `cargo run --release --example hs -- HS71 [bfgs|lbfgs|exact] [max_iterations] [x0,x1,…]`
-//! (verbosity 2 adds the step, penalty and Hessian-shift details under each line).
+//! (`QP=sparse|dense` forces the QP method; verbosity 2 adds the step, penalty and Hessian-shift details under each line).
 
 #[path = "../tests/common/hs.rs"]
 mod hs;
 
+use optimize::solver::qp::QpMethod;
 use optimize::solver::{HessianMode, Options, solve};
 
 fn main() {
@@ -33,6 +34,11 @@ fn main() {
         hessian: mode,
         verbosity,
         max_iterations: iterations,
+        qp_method: match std::env::var("QP").as_deref() {
+            Ok("sparse") => QpMethod::Sparse,
+            Ok("dense") => QpMethod::Dense,
+            _ => QpMethod::Auto,
+        },
         ..Options::default()
     };
     let s = solve(&problem.nlp(mode == HessianMode::Exact), &options);

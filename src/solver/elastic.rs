@@ -11,9 +11,16 @@
 //! The feasibility subproblem drops the objective: with H = εI and a box |d|∞ ≤ Δ it computes
 //! the least linearized violation reachable, which measures how far x is from being a
 //! stationary point of the violation (Byrd, Curtis & Nocedal 2010, steering rules).
+//!
+//! The extended Hessian keeps the representation of H, so no n×n matrix appears when H is
+//! sparse or limited-memory: a dense H gets ε on the new diagonal entries, a sparse lower
+//! triangle likewise. The compact form `δI − W M Wᵀ` has one diagonal scale δ for all
+//! variables, so there each slack is scaled, v = σu with σ = √(δ/ε): the slack column of the
+//! row becomes ±σ, its linear cost ρσ and its curvature δ, i.e. exactly ½ε v² again
+//! (W gets zero rows). Row multipliers are unchanged by the substitution.
 
 use nalgebra::DMatrix;
-use nalgebra_sparse::{CooMatrix, CsrMatrix};
+use nalgebra_sparse::{CooMatrix, CscMatrix, CsrMatrix};
 
 use super::merit::{l1_violation, row_violation};
 use super::qp::{self, QpHessian, QpProblem, QpSolution, QpStatus, WarmStart};
@@ -63,21 +70,23 @@ impl Linearization<'_> {
 /// Solves the elastic subproblem with penalty weight `rho[i]` on the slacks of row i; returns
 /// the solution restricted to d (length n) with the row multipliers of the original rows.
 pub fn solve_elastic(
-    h: &DMatrix<f64>,
+    h: QpHessian,
     g: &[f64],
     lin: &Linearization,
     rho: &[f64],
     warm: &mut WarmStart,
     tolerance: f64,
 ) -> QpSolution {
-    let he = extended_hessian(h, lin, SLACK_REGULARIZATION * (1.0 + h.diagonal().amax()));
-    let (ae, slack_count) = extended_rows(lin);
     let n = g.len();
+    let slacks = slack_columns(lin);
+    let extended = ExtendedHessian::new(h, slacks.len());
+    let scale = extended.slack_scale;
+    let ae = extended_rows(lin, &slacks, scale);
     let mut ge = g.to_vec();
-    ge.extend(slack_columns(lin).iter().map(|&(row, _)| rho[row]));
-    let (dl, du) = extended_bounds(lin.dl, lin.du, slack_count);
+    ge.extend(slacks.iter().map(|&(row, _)| rho[row] * scale));
+    let (dl, du) = extended_bounds(lin.dl, lin.du, slacks.len());
     let problem = QpProblem {
-        h: QpHessian::Dense(&he),
+        h: extended.as_qp(),
         g: &ge,
         a: &ae,
         dl: &dl,
@@ -93,9 +102,15 @@ pub fn solve_elastic(
 
 /// The least linearized ℓ1 violation reachable within `dl ≤ d ≤ du`, `|d|∞ ≤ radius`.
 /// Returns None if the subproblem fails numerically.
-pub fn least_violation(lin: &Linearization, radius: f64, tolerance: f64) -> Option<(f64, usize)> {
+pub fn least_violation(
+    lin: &Linearization,
+    radius: f64,
+    warm: &mut WarmStart,
+    tolerance: f64,
+) -> Option<(f64, usize)> {
     let n = lin.dl.len();
-    let h = DMatrix::identity(n, n) * SLACK_REGULARIZATION;
+    let mut h = CscMatrix::identity(n);
+    h.values_mut().fill(SLACK_REGULARIZATION);
     let dl: Vec<f64> = lin.dl.iter().map(|&l| l.max(-radius)).collect();
     let du: Vec<f64> = lin.du.iter().map(|&u| u.min(radius)).collect();
     let boxed = Linearization {
@@ -106,21 +121,94 @@ pub fn least_violation(lin: &Linearization, radius: f64, tolerance: f64) -> Opti
         bu: lin.bu,
     };
     let g = vec![0.0; n];
-    let mut warm = WarmStart::default();
     let ones = vec![1.0; lin.bl.len()];
-    let sol = solve_elastic(&h, &g, &boxed, &ones, &mut warm, tolerance);
+    let sol = solve_elastic(
+        QpHessian::SparseLower(&h),
+        &g,
+        &boxed,
+        &ones,
+        warm,
+        tolerance,
+    );
     (sol.status == QpStatus::Optimal).then(|| (boxed.violation_after(&sol.d), sol.iterations))
 }
 
-fn extended_hessian(h: &DMatrix<f64>, lin: &Linearization, eps: f64) -> DMatrix<f64> {
-    let n = h.nrows();
-    let k = slack_columns(lin).len();
-    let mut he = DMatrix::zeros(n + k, n + k);
-    he.view_mut((0, 0), (n, n)).copy_from(h);
-    for i in n..n + k {
-        he[(i, i)] = eps;
+/// H extended by k slack variables with curvature ε each, in H's own representation.
+struct ExtendedHessian<'a> {
+    kind: Extended<'a>,
+    /// σ with v = σu (1 unless H is in compact form).
+    slack_scale: f64,
+}
+
+enum Extended<'a> {
+    Dense(DMatrix<f64>),
+    Sparse(CscMatrix<f64>),
+    LowRank {
+        delta: f64,
+        w: DMatrix<f64>,
+        m: &'a DMatrix<f64>,
+    },
+}
+
+impl<'a> ExtendedHessian<'a> {
+    fn new(h: QpHessian<'a>, k: usize) -> Self {
+        match h {
+            QpHessian::Dense(h) => {
+                let n = h.nrows();
+                let eps = SLACK_REGULARIZATION * (1.0 + h.diagonal().amax());
+                let mut he = DMatrix::zeros(n + k, n + k);
+                he.view_mut((0, 0), (n, n)).copy_from(h);
+                for i in n..n + k {
+                    he[(i, i)] = eps;
+                }
+                ExtendedHessian {
+                    kind: Extended::Dense(he),
+                    slack_scale: 1.0,
+                }
+            }
+            QpHessian::SparseLower(h) => {
+                let n = h.nrows();
+                let diag_max = h
+                    .triplet_iter()
+                    .filter(|(r, c, _)| r == c)
+                    .fold(0.0_f64, |a, (_, _, v)| a.max(v.abs()));
+                let eps = SLACK_REGULARIZATION * (1.0 + diag_max);
+                let mut coo = CooMatrix::new(n + k, n + k);
+                for (r, c, &v) in h.triplet_iter() {
+                    coo.push(r, c, v);
+                }
+                for i in n..n + k {
+                    coo.push(i, i, eps);
+                }
+                ExtendedHessian {
+                    kind: Extended::Sparse(CscMatrix::from(&coo)),
+                    slack_scale: 1.0,
+                }
+            }
+            QpHessian::LowRank { delta, w, m } => {
+                let (n, p) = w.shape();
+                let eps = SLACK_REGULARIZATION * (1.0 + delta);
+                let mut we = DMatrix::zeros(n + k, p);
+                we.view_mut((0, 0), (n, p)).copy_from(w);
+                ExtendedHessian {
+                    kind: Extended::LowRank { delta, w: we, m },
+                    slack_scale: (delta / eps).sqrt(),
+                }
+            }
+        }
     }
-    he
+
+    fn as_qp(&self) -> QpHessian<'_> {
+        match &self.kind {
+            Extended::Dense(h) => QpHessian::Dense(h),
+            Extended::Sparse(h) => QpHessian::SparseLower(h),
+            Extended::LowRank { delta, w, m } => QpHessian::LowRank {
+                delta: *delta,
+                w,
+                m,
+            },
+        }
+    }
 }
 
 /// (row, sign) of each slack column: +1 for v (lower side), −1 for w (upper side).
@@ -137,17 +225,17 @@ fn slack_columns(lin: &Linearization) -> Vec<(usize, f64)> {
     cols
 }
 
-fn extended_rows(lin: &Linearization) -> (CsrMatrix<f64>, usize) {
+/// [A, slack columns]: column n+k is `sign·scale` in its row.
+fn extended_rows(lin: &Linearization, cols: &[(usize, f64)], scale: f64) -> CsrMatrix<f64> {
     let (m, n) = (lin.a.nrows(), lin.a.ncols());
-    let cols = slack_columns(lin);
     let mut coo = CooMatrix::new(m, n + cols.len());
     for (r, c, &v) in lin.a.triplet_iter() {
         coo.push(r, c, v);
     }
     for (k, &(row, sign)) in cols.iter().enumerate() {
-        coo.push(row, n + k, sign);
+        coo.push(row, n + k, sign * scale);
     }
-    (CsrMatrix::from(&coo), cols.len())
+    CsrMatrix::from(&coo)
 }
 
 fn extended_bounds(dl: &[f64], du: &[f64], slacks: usize) -> (Vec<f64>, Vec<f64>) {

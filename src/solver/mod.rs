@@ -8,7 +8,8 @@
 //! [`Solution`], never an `Err`.
 //!
 //! The method (see `sqp.rs`) is a line-search SQP on an automatically scaled problem: convex
-//! QP subproblems solved by a dual active-set method, an ℓ1 merit function with second-order
+//! QP subproblems solved by a dual active-set method (small n) or a sparse interior-point
+//! method (large n, see [`qp::QpMethod`]), an ℓ1 merit function with second-order
 //! correction, elastic mode for inconsistent linearizations (ending `Infeasible` at a
 //! stationary point of the violation), and damped BFGS, L-BFGS or the exact Hessian with
 //! inertia correction ([`HessianMode`]). Multipliers follow the Lagrangian

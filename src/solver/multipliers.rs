@@ -5,14 +5,19 @@
 //! multipliers of the wrong sign (the convention of `Solution`: λ ≤ 0 at a lower bound) are
 //! set to 0. They give an exact Hessian its constraint curvature from the first iteration on.
 //! All quantities are those of the scaled problem.
+//!
+//! Small problems form the normal equations `J Jᵀ λ = −J ∇f` densely; when `rows × n` exceeds
+//! [`DENSE_ENTRIES`] they are formed and factored sparse (J stays sparse, no rows×n matrix).
 
 use nalgebra::{DMatrix, DVector};
+use nalgebra_sparse::factorization::CscCholesky;
+use nalgebra_sparse::{CooMatrix, CscMatrix, CsrMatrix};
 
 /// Largest initial least-squares multiplier kept (IPOPT's `constr_mult_init_max`).
 pub const MAX_INITIAL_MULTIPLIER: f64 = 1e3;
 
-/// Largest number of rows for which the dense normal equations are formed.
-const MAX_ROWS: usize = 2000;
+/// Largest `rows × n` for which J is formed densely.
+const DENSE_ENTRIES: usize = 4_000_000;
 
 /// First-order data at one point.
 pub struct LinearizedPoint<'a> {
@@ -39,29 +44,21 @@ pub fn least_squares(p: &LinearizedPoint) -> Vec<f64> {
     let rows: Vec<usize> = (0..m)
         .filter(|&i| p.cl[i] == p.cu[i] || p.c[i] <= p.cl[i] || p.c[i] >= p.cu[i])
         .collect();
-    if rows.is_empty() || rows.len() > n || rows.len() > MAX_ROWS {
+    if rows.is_empty() || rows.len() > n {
         return lambda;
     }
     let mut position = vec![usize::MAX; m];
     for (k, &i) in rows.iter().enumerate() {
         position[i] = k;
     }
-    let mut j: DMatrix<f64> = DMatrix::zeros(rows.len(), n);
-    for (k, (&r, &c)) in p.jac_rows.iter().zip(p.jac_cols).enumerate() {
-        if position[r] != usize::MAX {
-            j[(position[r], c)] += p.jac[k];
-        }
-    }
-    let g = DVector::from_column_slice(p.grad);
-    let mut normal: DMatrix<f64> = &j * j.transpose();
-    let scale = normal.diagonal().amax().max(1e-300);
-    for k in 0..rows.len() {
-        normal[(k, k)] += 1e-12 * scale;
-    }
-    let Some(chol) = normal.cholesky() else {
+    let estimate = if rows.len() * n <= DENSE_ENTRIES {
+        dense_estimate(p, &position, rows.len())
+    } else {
+        sparse_estimate(p, &position, rows.len())
+    };
+    let Some(estimate) = estimate else {
         return lambda;
     };
-    let estimate = chol.solve(&(-(&j * g)));
     if estimate.amax() > MAX_INITIAL_MULTIPLIER || !estimate.iter().all(|v| v.is_finite()) {
         return lambda;
     }
@@ -72,6 +69,53 @@ pub fn least_squares(p: &LinearizedPoint) -> Vec<f64> {
         lambda[i] = if sign_ok { v } else { 0.0 };
     }
     lambda
+}
+
+/// The least-squares estimate on the selected rows (`position[i]` = index among them) with
+/// dense normal equations regularized by `1e-12·max diag`; None if singular.
+fn dense_estimate(p: &LinearizedPoint, position: &[usize], count: usize) -> Option<DVector<f64>> {
+    let n = p.grad.len();
+    let mut j: DMatrix<f64> = DMatrix::zeros(count, n);
+    for (k, (&r, &c)) in p.jac_rows.iter().zip(p.jac_cols).enumerate() {
+        if position[r] != usize::MAX {
+            j[(position[r], c)] += p.jac[k];
+        }
+    }
+    let g = DVector::from_column_slice(p.grad);
+    let mut normal: DMatrix<f64> = &j * j.transpose();
+    let scale = normal.diagonal().amax().max(1e-300);
+    for k in 0..count {
+        normal[(k, k)] += 1e-12 * scale;
+    }
+    Some(normal.cholesky()?.solve(&(-(&j * g))))
+}
+
+/// As [`dense_estimate`] with sparse J and a sparse Cholesky factorization of J Jᵀ.
+fn sparse_estimate(p: &LinearizedPoint, position: &[usize], count: usize) -> Option<DVector<f64>> {
+    let n = p.grad.len();
+    let mut coo = CooMatrix::new(count, n);
+    for (k, (&r, &c)) in p.jac_rows.iter().zip(p.jac_cols).enumerate() {
+        if position[r] != usize::MAX {
+            coo.push(position[r], c, p.jac[k]);
+        }
+    }
+    let j = CsrMatrix::from(&coo);
+    let normal = &j * &j.transpose();
+    let scale = normal
+        .diagonal_as_csr()
+        .values()
+        .iter()
+        .fold(1e-300_f64, |a, v| a.max(v.abs()));
+    let mut regularized = CooMatrix::new(count, count);
+    for (r, c, &v) in normal.triplet_iter() {
+        regularized.push(r, c, v);
+    }
+    for k in 0..count {
+        regularized.push(k, k, 1e-12 * scale);
+    }
+    let chol = CscCholesky::factor(&CscMatrix::from(&regularized)).ok()?;
+    let jg = &j * &DVector::from_column_slice(p.grad);
+    Some(chol.solve(&(-jg)).column(0).into_owned())
 }
 
 #[cfg(test)]
@@ -91,6 +135,37 @@ mod tests {
             cu: &[2.0],
         });
         assert!((lambda[0] - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn sparse_and_dense_normal_equations_agree() {
+        // 300 rows over 20,000 variables (above DENSE_ENTRIES): row i touches x_i, x_{i+1}.
+        let (m, n) = (300, 20_000);
+        let (mut rows, mut cols, mut jac) = (vec![], vec![], vec![]);
+        for i in 0..m {
+            for (c, v) in [(i, 1.0 + 0.01 * i as f64), (i + 1, -0.5)] {
+                rows.push(i);
+                cols.push(c);
+                jac.push(v);
+            }
+        }
+        let grad: Vec<f64> = (0..n).map(|j| (0.1 * j as f64).sin()).collect();
+        let zeros = vec![0.0; m];
+        let point = LinearizedPoint {
+            grad: &grad,
+            jac_rows: &rows,
+            jac_cols: &cols,
+            jac: &jac,
+            c: &zeros,
+            cl: &zeros,
+            cu: &zeros,
+        };
+        assert!(m * n > DENSE_ENTRIES);
+        let position: Vec<usize> = (0..m).collect();
+        let sparse = sparse_estimate(&point, &position, m).unwrap();
+        let dense = dense_estimate(&point, &position, m).unwrap();
+        assert!((&sparse - &dense).amax() < 1e-10 * (1.0 + dense.amax()));
+        assert_eq!(least_squares(&point), sparse.as_slice());
     }
 
     #[test]

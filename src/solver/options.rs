@@ -5,6 +5,8 @@ use std::sync::atomic::AtomicBool;
 
 use serde::{Deserialize, Serialize};
 
+use super::qp::QpMethod;
+
 /// How the solver obtains second-order information.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
@@ -12,7 +14,7 @@ pub enum HessianMode {
     /// Exact if the problem provides it, else dense damped BFGS for small n, L-BFGS for large n.
     #[default]
     Auto,
-    /// Dense damped (Powell) BFGS.
+    /// Dense damped (Powell) BFGS (L-BFGS is used instead above `qp::DENSE_LIMIT` variables).
     Bfgs,
     /// Limited-memory BFGS (no dense n×n matrix).
     Lbfgs,
@@ -35,6 +37,9 @@ pub struct Options {
     pub hessian: HessianMode,
     /// Correction pairs kept by L-BFGS.
     pub lbfgs_memory: usize,
+    /// QP subproblem method: `Auto` (dense Goldfarb–Idnani for n ≤ [`crate::solver::qp::DENSE_LIMIT`],
+    /// sparse interior point above), or either one forced (`Sparse` never forms an n×n matrix).
+    pub qp_method: QpMethod,
     /// 0 silent, 1 one line per iteration, 2 more detail. The log goes to stderr.
     pub verbosity: u8,
     /// Set from outside (Ctrl-C) to stop at the end of the current iteration with status
@@ -51,6 +56,7 @@ impl Default for Options {
             max_time: None,
             hessian: HessianMode::Auto,
             lbfgs_memory: 10,
+            qp_method: QpMethod::Auto,
             verbosity: 1,
             interrupt: None,
         }

@@ -34,8 +34,15 @@
 //! Hessian choice in `HessianMode::Auto`: the exact Hessian when the problem has one; else
 //! dense BFGS for n ≤ [`DENSE_BFGS_LIMIT`] (an n×n update costs O(n²) per iteration and the
 //! dense QP O(n³) anyway), L-BFGS above. `HessianMode::Exact` on a problem without a Hessian
-//! makes the same quasi-Newton choice.
+//! makes the same quasi-Newton choice. `HessianMode::Bfgs` above [`qp::DENSE_LIMIT`] variables
+//! is served by L-BFGS (no n×n matrix on the large-problem path).
+//!
+//! QP method ([`Options::qp_method`], see `qp::select`): the dense active-set method up to
+//! [`qp::DENSE_LIMIT`] variables, the sparse interior-point method above, with the exact
+//! Hessian kept as a sparse lower triangle (convexified inside the QP) and L-BFGS in compact
+//! form; elastic and least-violation subproblems use the same method.
 
+use std::cell::RefCell;
 use std::io::Write;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
@@ -49,7 +56,7 @@ use super::hessian::{self, DenseBfgs, InertiaShift, Lbfgs, Model};
 use super::log;
 use super::merit;
 use super::multipliers::{self, LinearizedPoint};
-use super::qp::{self, QpProblem, QpSolution, QpStatus, WarmStart};
+use super::qp::{self, QpHessian, QpProblem, QpSolution, QpStatus, WarmStart};
 use super::termination::{self, Kkt, KktInput};
 use super::{EvalError, HessianMode, IterationRecord, Nlp, Options, Solution, Status};
 
@@ -130,12 +137,16 @@ struct Sqp<'a> {
     options: &'a Options,
     started: Instant,
     log: Vec<IterationRecord>,
+    /// What of the log is shown live (stderr; a status line for long runs on a terminal).
+    live: RefCell<log::LiveLog>,
     model: Model,
     /// Penalty weights of the merit function, one per row.
     rho: Vec<f64>,
     lambda: Vec<f64>,
     warm: WarmStart,
     elastic_warm: WarmStart,
+    /// For the least-violation subproblems (their own shape, so their own sparse analysis).
+    feasibility_warm: RefCell<WarmStart>,
     jac_shape: (Vec<usize>, Vec<usize>),
 }
 
@@ -152,6 +163,8 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
     let mode = match options.hessian {
         HessianMode::Auto | HessianMode::Exact if ev.dims.hess_nnz > 0 => HessianMode::Exact,
         HessianMode::Auto | HessianMode::Exact => quasi_newton,
+        // No n×n matrix above the dense QP's size limit: L-BFGS instead of dense BFGS.
+        HessianMode::Bfgs if n > qp::DENSE_LIMIT => HessianMode::Lbfgs,
         other => other,
     };
     let model = match mode {
@@ -171,24 +184,35 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
         options,
         started,
         log: Vec::new(),
+        live: RefCell::new(log::LiveLog::stderr(options.verbosity)),
         model,
         rho: vec![0.0; m],
-        warm: WarmStart::default(),
-        elastic_warm: WarmStart::default(),
+        warm: WarmStart::new(options.qp_method),
+        elastic_warm: WarmStart::new(options.qp_method),
+        feasibility_warm: RefCell::new(WarmStart::new(options.qp_method)),
         jac_shape,
     };
     sqp.run()
 }
 
 impl<'a> Sqp<'a> {
+    /// Relative tolerance handed to the QP method (the sparse one stops at it; two orders
+    /// tighter than the outer test so that QP multipliers do not limit the final accuracy).
+    fn qp_tolerance(&self) -> f64 {
+        (0.01 * self.options.tolerance).clamp(1e-12, 1e-8)
+    }
+
+    /// Whether QPs go to the sparse method (no n×n matrices).
+    fn sparse_qp(&self) -> bool {
+        self.options.qp_method.is_sparse(self.ev.dims.n)
+    }
+
     fn elapsed(&self) -> f64 {
         self.started.elapsed().as_secs_f64()
     }
 
     fn say(&self, text: &str) {
-        if self.options.verbosity >= 1 {
-            let _ = writeln!(std::io::stderr(), "{text}");
-        }
+        self.live.borrow_mut().message(text);
     }
 
     fn jacobian(&self, values: &[f64]) -> CsrMatrix<f64> {
@@ -241,7 +265,7 @@ impl<'a> Sqp<'a> {
             Err((status, x)) => return self.failed_start(status, x),
         };
         if self.options.verbosity >= 1 {
-            let _ = log::write_header(&mut std::io::stderr());
+            self.live.borrow_mut().header();
         }
         if !self.model.is_quasi_newton() {
             self.lambda = multipliers::least_squares(&LinearizedPoint {
@@ -333,7 +357,20 @@ impl<'a> Sqp<'a> {
                 .zip(d)
                 .map(|(a, b)| a * b)
                 .sum();
-            let dhd: f64 = self.model.times(d).iter().zip(d).map(|(a, b)| a * b).sum();
+            // The curvature the QP used: a sparse exact Hessian is convexified inside the QP.
+            let shift = if step.elastic {
+                self.elastic_warm.convexification()
+            } else {
+                self.warm.convexification()
+            };
+            let dhd: f64 = self
+                .model
+                .times(d)
+                .iter()
+                .zip(d)
+                .map(|(a, b)| a * b)
+                .sum::<f64>()
+                + shift * d.iter().map(|v| v * v).sum::<f64>();
             // Byrd–Nocedal safeguard: the weighted linearized violation decrease must pay for
             // a tenth more than the model's objective change, or the weights of the rows that
             // decrease are raised uniformly (Powell's rule decays the excess later).
@@ -519,7 +556,8 @@ impl<'a> Sqp<'a> {
         };
         let now = lin.violation_now();
         let radius = point.x.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
-        match elastic::least_violation(&lin, radius, self.options.tolerance) {
+        let mut warm = self.feasibility_warm.borrow_mut();
+        match elastic::least_violation(&lin, radius, &mut warm, self.qp_tolerance()) {
             Some((least, _)) => (now - least <= self.options.tolerance * now, least),
             None => (false, now),
         }
@@ -529,7 +567,7 @@ impl<'a> Sqp<'a> {
     fn choose_step(&mut self, point: &Point, jac: &CsrMatrix<f64>) -> StepChoice {
         let (dl, du, bl, bu) = self.bounds_of_step(point);
         let g = &point.derivatives.grad;
-        let tol = self.options.tolerance;
+        let tol = self.qp_tolerance();
         let problem = QpProblem {
             h: self.model.qp_hessian(),
             g,
@@ -571,7 +609,10 @@ impl<'a> Sqp<'a> {
             let (kkt, _) = self.kkt(point, jac, &vec![0.0; self.ev.dims.m]);
             kkt.primal > self.options.constraint_tolerance
         };
-        let h = self.model.dense(self.ev.dims.n);
+        let dense = (!self.sparse_qp()).then(|| self.model.dense(self.ev.dims.n));
+        let h = dense
+            .as_ref()
+            .map_or_else(|| self.model.qp_hessian(), QpHessian::Dense);
         let floor = self
             .rho
             .iter()
@@ -584,7 +625,7 @@ impl<'a> Sqp<'a> {
             .map(|w| w.clamp(floor, ELASTIC_WEIGHT.max(floor)))
             .collect();
         let best_reduction = (now - least).max(0.0);
-        let mut sol = elastic::solve_elastic(&h, g, &lin, &rho, &mut self.elastic_warm, tol);
+        let mut sol = elastic::solve_elastic(h, g, &lin, &rho, &mut self.elastic_warm, tol);
         iterations += sol.iterations;
         for _ in 0..MAX_STEERING {
             let after = lin.violation_after(&sol.d);
@@ -595,7 +636,7 @@ impl<'a> Sqp<'a> {
             for w in &mut rho {
                 *w *= 10.0;
             }
-            sol = elastic::solve_elastic(&h, g, &lin, &rho, &mut self.elastic_warm, tol);
+            sol = elastic::solve_elastic(h, g, &lin, &rho, &mut self.elastic_warm, tol);
             iterations += sol.iterations;
         }
         self.rho = rho;
@@ -665,7 +706,16 @@ impl<'a> Sqp<'a> {
 
     /// Whether values at `x + αd` pass the sufficient-decrease tests.
     fn accepts(&self, test: &Acceptance, values: &Values, alpha: f64) -> bool {
-        let merit_ok = self.merit(values) <= test.phi0 + ARMIJO * alpha * test.slope;
+        // When the predicted decrease of the full step is itself at the rounding level of φ
+        // (near a solution of a problem with a large objective), changes within 10·ε_mach·|φ₀|
+        // count as no increase (IPOPT's relaxation), or the line search could only fail.
+        let resolution = 10.0 * f64::EPSILON * test.phi0.abs();
+        let noise = if -test.slope <= 100.0 * resolution {
+            resolution
+        } else {
+            0.0
+        };
+        let merit_ok = self.merit(values) <= test.phi0 + ARMIJO * alpha * test.slope + noise;
         let violation_ok = test.violation_slope.is_none_or(|vs| {
             merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu)
                 <= test.v0 + ARMIJO * alpha * vs
@@ -761,8 +811,10 @@ impl<'a> Sqp<'a> {
             bl: &bl,
             bu: &bu,
         };
-        let mut warm = self.warm.clone();
-        let sol = qp::solve(&problem, &mut warm, self.options.tolerance);
+        let working_set = self.warm.snapshot();
+        let tol = self.qp_tolerance();
+        let sol = qp::solve(&problem, &mut self.warm, tol);
+        self.warm.restore(working_set);
         if sol.status != QpStatus::Optimal {
             return Ok(None);
         }
@@ -782,6 +834,7 @@ impl<'a> Sqp<'a> {
             return Ok(());
         };
         let n = self.ev.dims.n;
+        let sparse_qp = self.sparse_qp();
         let values = self.ev.hessian(&point.x, &self.lambda)?;
         let (rows, cols) = (&self.ev.hess_rows, &self.ev.hess_cols);
         let Model::Exact {
@@ -792,7 +845,7 @@ impl<'a> Sqp<'a> {
         else {
             unreachable!()
         };
-        if n <= qp::DENSE_LIMIT {
+        if !sparse_qp {
             let h = hessian::assemble_dense(n, rows, cols, &values);
             // Rows expected active: equalities and rows with a nonzero multiplier.
             let active: Vec<usize> = (0..self.ev.dims.m)
@@ -862,9 +915,7 @@ impl<'a> Sqp<'a> {
             qp_iterations,
             elapsed: self.elapsed(),
         };
-        if self.options.verbosity >= 1 {
-            let _ = log::write_record(&mut std::io::stderr(), &r);
-        }
+        self.live.borrow_mut().record(&r);
         self.log.push(r);
     }
 

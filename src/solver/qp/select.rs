@@ -1,39 +1,155 @@
 //! The one entry point through which the SQP solves every QP subproblem.
 //!
-//! It picks the method from the size and the Hessian representation: the dense
-//! Goldfarb–Idnani method ([`super::dense`]) for small problems. Problems above
-//! [`DENSE_LIMIT`] variables belong to the sparse interior-point method, which is not yet
-//! part of this module: until it is, they are also densified here, so this path is for
-//! n up to a few thousand only. A `SparseLower` Hessian (possibly indefinite: the sparse
-//! method convexifies it by inertia correction) is densified and shifted by `δI` until its
-//! Cholesky factorization exists, with δ growing geometrically from `1e-8·(1+max|Hᵢᵢ|)`.
-//! A `LowRank` compact quasi-Newton Hessian `δI − W M Wᵀ` is formed densely on this path.
+//! It picks the method from the size and the Hessian representation ([`QpMethod`]): the dense
+//! Goldfarb–Idnani method ([`super::dense`]) for n ≤ [`DENSE_LIMIT`] variables, warm-started
+//! from the previous working set; the sparse primal-dual interior-point method
+//! ([`super::sparse`]) above, with one [`SparseQp`] kept in the [`WarmStart`] so that its
+//! symbolic analysis is reused by every QP of the same sparsity pattern. No n×n matrix is
+//! formed on the sparse path: a `LowRank` Hessian stays in compact form, a `SparseLower` one
+//! (possibly indefinite) is convexified by the sparse method's inertia correction.
+//!
+//! On the dense path a `SparseLower` Hessian is densified and shifted by `δI` until its
+//! Cholesky factorization exists, with δ growing geometrically from `1e-8·(1+max|Hᵢᵢ|)`; a
+//! `LowRank` Hessian `δI − W M Wᵀ` is formed densely.
+//!
+//! The sparse method returns an interior solution: multipliers of inactive inequalities are
+//! O(μ) rather than exactly 0, and the step is accurate to the relative tolerance passed
+//! down, which the SQP sets two orders tighter than its own.
+
+use std::fmt;
 
 use nalgebra::DMatrix;
+use nalgebra_sparse::{CooMatrix, CscMatrix};
+use serde::{Deserialize, Serialize};
 
 use super::dense::{self, ConstraintId};
+use super::sparse::SparseQp;
 use super::{QpHessian, QpProblem, QpSolution, QpStatus};
 
-/// Variables above which the sparse method is meant to take over.
+/// Variables above which [`QpMethod::Auto`] takes the sparse method.
 pub const DENSE_LIMIT: usize = 2000;
 
-/// What is carried from one QP solve to the next: the working set of the dense method.
-#[derive(Debug, Clone, Default)]
-pub struct WarmStart {
-    working_set: Vec<ConstraintId>,
+/// First relative convexification shift of the sparse method (see
+/// [`SparseQp::first_shift`]); a Hessian lacking curvature along a direction of recession is
+/// caught by the unbounded-QP retry with δ₀ = 1 instead.
+const FIRST_SHIFT: f64 = 1e-4;
+
+/// Which QP method solves the subproblems.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum QpMethod {
+    /// Dense for n ≤ [`DENSE_LIMIT`], sparse above.
+    #[default]
+    Auto,
+    /// Always the dense Goldfarb–Idnani method (forms n×n matrices).
+    Dense,
+    /// Always the sparse interior-point method.
+    Sparse,
 }
 
-impl WarmStart {
-    /// Forgets the working set (for a QP of a different shape).
-    pub fn clear(&mut self) {
-        self.working_set.clear();
+impl QpMethod {
+    /// Whether QPs with `n` variables go to the sparse method.
+    pub fn is_sparse(self, n: usize) -> bool {
+        match self {
+            QpMethod::Auto => n > DENSE_LIMIT,
+            QpMethod::Dense => false,
+            QpMethod::Sparse => true,
+        }
     }
 }
 
-/// Solves `problem`; `tolerance` is the optimality tolerance passed to iterative methods.
-pub fn solve(problem: &QpProblem, warm: &mut WarmStart, _tolerance: f64) -> QpSolution {
-    let h = dense_hessian(&problem.h);
+/// What is carried from one QP solve to the next: the working set of the dense method, or
+/// the sparse solver with its symbolic analysis.
+#[derive(Default)]
+pub struct WarmStart {
+    method: QpMethod,
+    working_set: Vec<ConstraintId>,
+    sparse: Option<Box<SparseQp>>,
+    /// δ of the last sparse solve: the QP solved had `H + δI` (0 on the dense path).
+    convexification: f64,
+}
+
+impl fmt::Debug for WarmStart {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("WarmStart")
+            .field("method", &self.method)
+            .field("working_set", &self.working_set)
+            .field("sparse", &self.sparse.is_some())
+            .finish()
+    }
+}
+
+impl WarmStart {
+    /// An empty warm start for QPs solved by `method`.
+    pub fn new(method: QpMethod) -> Self {
+        WarmStart {
+            method,
+            ..WarmStart::default()
+        }
+    }
+
+    /// Forgets the working set (for a QP of a different shape). The sparse solver's symbolic
+    /// analysis is kept: it is redone by itself when the pattern changes.
+    pub fn clear(&mut self) {
+        self.working_set.clear();
+    }
+
+    /// The dense working set, to be put back with [`WarmStart::restore`] after a QP whose
+    /// working set must not carry over (a second-order correction).
+    pub fn snapshot(&self) -> Vec<ConstraintId> {
+        self.working_set.clone()
+    }
+
+    /// The shift δ ≥ 0 the last sparse solve added to a `SparseLower` Hessian (the step is
+    /// that of `H + δI`); 0 after a dense solve, which receives H already convexified.
+    pub fn convexification(&self) -> f64 {
+        self.convexification
+    }
+
+    /// Puts back a working set taken by [`WarmStart::snapshot`].
+    pub fn restore(&mut self, working_set: Vec<ConstraintId>) {
+        self.working_set = working_set;
+    }
+}
+
+/// Solves `problem`; `tolerance` is the relative KKT tolerance of the sparse method.
+pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSolution {
     let n = problem.g.len();
+    if warm.method.is_sparse(n) {
+        let solver = warm
+            .sparse
+            .get_or_insert_with(|| Box::new(sqp_sparse_solver()));
+        let (mut solution, info) = solver.solve(problem, tolerance);
+        warm.convexification = info.convexification;
+        if let QpHessian::SparseLower(h) = problem.h {
+            // The inertia correction makes the reduced Hessian non-singular, not positive
+            // definite on every direction of recession: an exact Hessian without curvature
+            // along a descent direction gives an unbounded QP. As on the dense path, the
+            // Hessian is then shifted by δI, δ = 1 + max|Hᵢᵢ| growing ×100 (δ₀ = 1 relative, as
+            // in `hessian::exact`).
+            let base = 1.0 + max_diagonal(h);
+            let mut shift = base;
+            while matches!(solution.status, QpStatus::Unbounded | QpStatus::Numerical)
+                && shift < 1e8 * base
+            {
+                let shifted = shifted_lower(h, shift);
+                let retry = QpProblem {
+                    h: QpHessian::SparseLower(&shifted),
+                    ..*problem
+                };
+                let (retried, info) = sqp_sparse_solver().solve(&retry, tolerance);
+                solution = retried;
+                warm.convexification = shift + info.convexification;
+                shift *= 100.0;
+            }
+        }
+        if solution.status == QpStatus::Optimal {
+            identify_active_set(problem, &mut solution);
+        }
+        return solution;
+    }
+    let h = dense_hessian(&problem.h);
+    warm.convexification = 0.0;
     let convexify = matches!(problem.h, QpHessian::SparseLower(_));
     let mut shift = 0.0;
     let base = 1e-8 * (1.0 + (0..n).map(|i| h[(i, i)].abs()).fold(0.0, f64::max));
@@ -50,6 +166,64 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, _tolerance: f64) -> QpSo
         warm.working_set = result.working_set;
         return result.solution;
     }
+}
+
+/// Turns an interior-point solution into the form an active-set method returns, which the
+/// SQP's termination test and penalty weights expect: a bound or row is taken as active when
+/// its multiplier exceeds its distance to the bound (`|zⱼ| ≥ gapⱼ`; at a strictly
+/// complementary solution the multiplier is O(1) and the gap O(μ), at an inactive one the
+/// reverse). Active variable bounds are hit exactly (d snapped onto them, so the iterate lands
+/// on the bound); multipliers of inactive bounds and rows, O(μ), are set to 0.
+fn identify_active_set(problem: &QpProblem, solution: &mut QpSolution) {
+    for j in 0..solution.d.len() {
+        let (l, u, d, z) = (problem.dl[j], problem.du[j], solution.d[j], solution.z[j]);
+        let (gap_l, gap_u) = (d - l, u - d);
+        if z < 0.0 && gap_l <= -z {
+            solution.d[j] = l;
+        } else if z > 0.0 && gap_u <= z {
+            solution.d[j] = u;
+        } else if l != u {
+            solution.z[j] = 0.0;
+        }
+    }
+    let ad = problem.a * &nalgebra::DVector::from_column_slice(&solution.d);
+    for (i, lambda) in solution.lambda.iter_mut().enumerate() {
+        let (l, u) = (problem.bl[i], problem.bu[i]);
+        if l == u {
+            continue;
+        }
+        let gap = if *lambda < 0.0 { ad[i] - l } else { u - ad[i] };
+        if gap > lambda.abs() {
+            *lambda = 0.0;
+        }
+    }
+}
+
+/// The sparse solver as the SQP uses it.
+fn sqp_sparse_solver() -> SparseQp {
+    let mut solver = SparseQp::new();
+    solver.first_shift = FIRST_SHIFT;
+    solver
+}
+
+/// max |Hᵢᵢ| of a lower triangle.
+fn max_diagonal(h: &CscMatrix<f64>) -> f64 {
+    h.triplet_iter()
+        .filter(|(r, c, _)| r == c)
+        .fold(0.0, |a, (_, _, v)| a.max(v.abs()))
+}
+
+/// H + δI as a lower triangle (diagonal entries added where the pattern lacks them).
+fn shifted_lower(h: &CscMatrix<f64>, delta: f64) -> CscMatrix<f64> {
+    let n = h.nrows();
+    let mut coo = CooMatrix::new(n, n);
+    for (r, c, &v) in h.triplet_iter() {
+        coo.push(r, c, v);
+    }
+    for i in 0..n {
+        coo.push(i, i, delta);
+    }
+    CscMatrix::from(&coo)
 }
 
 /// The Hessian as a dense symmetric matrix.

@@ -65,6 +65,9 @@ use super::{QpHessian, QpProblem, QpSolution, QpStatus};
 /// Iterations over which a primal residual that fails to halve counts as stalled.
 const STALL_WINDOW: usize = 5;
 
+/// Default first convexification shift (relative), see [`SparseQp::first_shift`].
+pub const DEFAULT_FIRST_SHIFT: f64 = 1e-4;
+
 /// Default iteration limit.
 pub const DEFAULT_MAX_ITERATIONS: usize = 200;
 
@@ -119,6 +122,10 @@ pub fn solve(problem: &QpProblem<'_>, tolerance: f64) -> QpSolution {
 pub struct SparseQp {
     /// Iteration limit.
     pub max_iterations: usize,
+    /// First nonzero convexification shift tried, relative to `max(1, maxⱼ|Hⱼⱼ|)`
+    /// ([`DEFAULT_FIRST_SHIFT`], IPOPT's 1e-4); later trials grow ×10. An SQP without barrier
+    /// curvature wants 1 (a singular H must not give steps of length ‖g‖/δ).
+    pub first_shift: f64,
     system: Option<NewtonSystem>,
     layout: Layout,
     ws: Workspace,
@@ -239,6 +246,7 @@ impl SparseQp {
     pub fn new() -> Self {
         SparseQp {
             max_iterations: DEFAULT_MAX_ITERATIONS,
+            first_shift: DEFAULT_FIRST_SHIFT,
             system: None,
             layout: Layout::default(),
             ws: Workspace::default(),
@@ -291,7 +299,13 @@ impl SparseQp {
         let ws = &mut self.ws;
         let layout = &self.layout;
         ws.resize(n, m, p);
-        let shift = match system.convexify(qp, layout, &mut ws.sig_d, &mut ws.dual_diag) {
+        let shift = match system.convexify(
+            qp,
+            layout,
+            self.first_shift,
+            &mut ws.sig_d,
+            &mut ws.dual_diag,
+        ) {
             Ok(Some(shift)) => shift,
             _ => return (fail(QpStatus::Numerical), info),
         };

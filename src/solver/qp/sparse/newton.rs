@@ -288,6 +288,10 @@ impl NewtonSystem {
         };
         let (n, dim) = (self.n, self.dim());
         let p = m.nrows();
+        if p == 0 {
+            // An empty update (L-BFGS before its first pair): H = δI, nothing to correct.
+            return Ok(());
+        }
         let (utx, rhs) = self.small.split_at_mut(p);
         for (k, slot) in utx.iter_mut().enumerate() {
             *slot = dot(&self.u[k * n..(k + 1) * n], &x[..n]);
@@ -341,6 +345,7 @@ impl NewtonSystem {
         &mut self,
         qp: &QpProblem<'_>,
         layout: &Layout,
+        first_shift: f64,
         scratch_n: &mut [f64],
         scratch_m: &mut [f64],
     ) -> Result<Option<f64>, KktError> {
@@ -372,7 +377,7 @@ impl NewtonSystem {
                 return Ok(Some(shift));
             }
             shift = if shift == 0.0 {
-                1e-4 * diag_scale
+                first_shift * diag_scale
             } else {
                 10.0 * shift
             };
