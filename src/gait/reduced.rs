@@ -22,6 +22,8 @@ use super::spec::Problem;
 use super::spline::{KnotGrid, SplineControls};
 use crate::solver::{Dims, EvalError, Nlp};
 
+mod sensitivity;
+
 /// Directions propagated per dual rollout.
 pub const CHUNK: usize = 8;
 
@@ -365,7 +367,9 @@ impl Nlp for Reduced<'_> {
     ) -> Result<(), EvalError> {
         self.objective(x, Some(grad));
         jac.fill(0.0);
-        self.jacobian_by_parameter_duals(x, jac).map_err(domain)?;
+        if !self.jacobian_by_sensitivities(x, jac).map_err(domain)? {
+            self.jacobian_by_parameter_duals(x, jac).map_err(domain)?;
+        }
         if grad.iter().chain(jac.iter()).all(|v| v.is_finite()) {
             Ok(())
         } else {
@@ -459,7 +463,7 @@ mod tests {
     use std::path::PathBuf;
 
     /// A problem file with its key times (and horizon) scaled by `factor`.
-    fn shortened(name: &str, factor: f64) -> Problem {
+    pub(super) fn shortened(name: &str, factor: f64) -> Problem {
         let path =
             PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("problems/gait/{name}.toml"));
         let mut p = crate::gait::load(&path).unwrap();

@@ -319,6 +319,7 @@ impl<'m> StageLinearizer<'m> {
         let m = self.model;
         let nv = m.nv;
         let up = &self.dynamics.up;
+        self.chol.fill(0.0);
         for (i, body) in self.inertia.iter().enumerate() {
             self.composite[i] = body.to_articulated();
         }
