@@ -84,6 +84,8 @@ pub struct StageLinearizer<'m> {
     xi: Vec<Motion<f64>>,
     df: Vec<Force<f64>>,
     inside: Vec<bool>,
+    /// Whether a link's subtree carries contact points (its pose perturbation matters).
+    touches: Vec<bool>,
 }
 
 impl<'m> StageLinearizer<'m> {
@@ -121,6 +123,7 @@ impl<'m> StageLinearizer<'m> {
             xi: mz,
             df: fz,
             inside: vec![false; n],
+            touches: subtree_contacts(model),
         })
     }
 
@@ -358,8 +361,10 @@ impl<'m> StageLinearizer<'m> {
         let links = &m.links;
         let s = links[i].joint.subspace::<f64>(k);
         let neg = |x: Motion<f64>| x.scale(-1.0);
-        for j in 0..links.len() {
-            self.inside[j] = j == i || (j > i && links[j].parent.is_some_and(|p| self.inside[p]));
+        self.inside[..i].fill(false);
+        self.df[..i].fill(Force::zero());
+        for j in i..links.len() {
+            self.inside[j] = j == i || links[j].parent.is_some_and(|p| self.inside[p]);
             if !self.inside[j] {
                 self.df[j] = Force::zero();
                 continue;
@@ -379,7 +384,12 @@ impl<'m> StageLinearizer<'m> {
                 let x = &d.up[j];
                 let dv = x.apply_motion(&self.dv[p]);
                 let da = x.apply_motion(&self.da[p]) + dv.cross_motion(&vj);
-                (dv, da, x.apply_motion(&self.xi[p]))
+                let xi = if position && self.touches[j] {
+                    x.apply_motion(&self.xi[p])
+                } else {
+                    Motion::zero()
+                };
+                (dv, da, xi)
             };
             self.dv[j] = dv;
             self.da[j] = da;
@@ -423,6 +433,17 @@ impl<'m> StageLinearizer<'m> {
             }
         }
     }
+}
+
+/// For each link, whether it or a descendant has contact points.
+fn subtree_contacts(model: &Model) -> Vec<bool> {
+    let mut out: Vec<bool> = model.links.iter().map(|l| !l.contacts.is_empty()).collect();
+    for i in (0..model.links.len()).rev() {
+        if let Some(p) = model.links[i].parent {
+            out[p] |= out[i];
+        }
+    }
+    out
 }
 
 /// `∂τ/∂q` of [`crate::gait::character::Limits::torque`]:

@@ -132,6 +132,8 @@ impl Reduced<'_> {
                     step_t[r * ncol + r] += 1.0;
                 }
                 // S⁺ = Φ·S + Σ G_s·W_s.
+                let basis: [_; 3] =
+                    std::array::from_fn(|st| self.grid.weights(t0 + 0.5 * h * st as f64));
                 for r in 0..nx {
                     let row = &mut next[r * n_par..(r + 1) * n_par];
                     row.fill(0.0);
@@ -144,11 +146,10 @@ impl Reduced<'_> {
                             }
                         }
                     }
-                    for st in 0..3 {
-                        let (idx, wts) = self.grid.weights(t0 + 0.5 * h * st as f64);
+                    for (st, (idx, wts)) in basis.iter().enumerate() {
                         for a in 0..na {
                             let g = step_t[r * ncol + nx + st * na + a];
-                            for (c, wc) in idx.iter().zip(&wts) {
+                            for (c, wc) in idx.iter().zip(wts) {
                                 row[a * block + c] += g * wc;
                             }
                         }
