@@ -86,6 +86,8 @@ pub struct StageLinearizer<'m> {
     inside: Vec<bool>,
     /// Whether a link's subtree carries contact points (its pose perturbation matters).
     touches: Vec<bool>,
+    /// Each velocity coordinate's link and motion-subspace column (link coordinates).
+    columns: Vec<(usize, Motion<f64>)>,
 }
 
 impl<'m> StageLinearizer<'m> {
@@ -124,6 +126,12 @@ impl<'m> StageLinearizer<'m> {
             df: fz,
             inside: vec![false; n],
             touches: subtree_contacts(model),
+            columns: model
+                .links
+                .iter()
+                .enumerate()
+                .flat_map(|(i, l)| (0..l.joint.nv()).map(move |k| (i, l.joint.subspace(k))))
+                .collect(),
         })
     }
 
@@ -359,7 +367,7 @@ impl<'m> StageLinearizer<'m> {
         let m = self.model;
         let d = &self.dynamics;
         let links = &m.links;
-        let s = links[i].joint.subspace::<f64>(k);
+        let s = self.columns[links[i].v_index + k].1;
         let neg = |x: Motion<f64>| x.scale(-1.0);
         self.inside[..i].fill(false);
         self.df[..i].fill(Force::zero());
@@ -427,10 +435,8 @@ impl<'m> StageLinearizer<'m> {
                 self.df[p] += f;
             }
         }
-        for (j, l) in links.iter().enumerate() {
-            for kk in 0..l.joint.nv() {
-                out[l.v_index + kk] = -l.joint.subspace::<f64>(kk).dot(&self.df[j]);
-            }
+        for (o, (j, col)) in out.iter_mut().zip(&self.columns) {
+            *o = -col.dot(&self.df[*j]);
         }
     }
 }
