@@ -6,7 +6,7 @@
 //! where `p` are the Hermite spline parameters of the actuator forces ([`crate::gait::spline`])
 //! and `x(t; p)` is the RK4 simulation from the fixed initial state. `eval` simulates only to the
 //! last constraint time. `eval_derivatives` differentiates the whole rollout exactly by forward
-//! sensitivities of the RK4 map with analytical ABA derivatives ([`sensitivity`]; ≈ 6× one
+//! sensitivities of the RK4 map with analytical ABA derivatives (`reduced/sensitivity.rs`; ≈ 6× one
 //! simulation on the Luxo leap). The reference oracle, and the fallback for floating bases, is
 //! forward dual numbers (`DualSVec64<8>`): the columns are split into chunks of 8 directions, ordered by
 //! knot so that a chunk of late knots runs a short rollout — a knot whose support starts at or
