@@ -545,7 +545,7 @@ mod tests {
                 }
             }
             println!(
-                "{name}: n = {}, m = {}, nnz = {}, max relative |dual − central| = {worst:.2e}, gradient {worst_g:.2e}",
+                "{name}: n = {}, m = {}, nnz = {}, max relative |exact − central| = {worst:.2e}, gradient {worst_g:.2e}",
                 d.n, d.m, d.jac_nnz
             );
             assert!(worst < 1e-5, "{name}: {worst}");
