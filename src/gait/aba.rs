@@ -18,6 +18,8 @@
 // Index loops below mirror the algorithm's subscripts (joint columns k, j of S, U and D⁻¹).
 #![allow(clippy::needless_range_loop)]
 
+pub mod derivatives;
+
 use super::character::Model;
 use super::spatial::{ArticulatedInertia, Force, Motion, Real, Vec3, Xform};
 
