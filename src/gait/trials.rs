@@ -1,0 +1,338 @@
+//! Trials (seed §3.7, Table 3.7): the same task solved from several initial force profiles,
+//! each classified by how well its final motion meets the pose constraints.
+//!
+//! Trial 1 starts from the hand-made profile (`[[actuator]] start`); trial `k ≥ 2` from that
+//! profile plus a uniform random perturbation of every knot value by up to
+//! `spread·(hi − lo)/2` (slopes start at zero), clamped into the spline box of
+//! [`Formulation`]. All starts are drawn up front, in trial order, from one `ChaCha8Rng` seeded
+//! with the run's seed, and trials are solved in parallel (rayon): results do not depend on the
+//! number of threads.
+//!
+//! Classification, with `tol` = `[trials] tolerance` in each constraint's unit and the violation
+//! of row `r` = `max(lower − c, c − upper, 0)`:
+//! - Success: every violation ≤ tol; Marginal: every violation ≤ 10·tol;
+//! - Unimproved: otherwise, if the violation sum did not fall below 99.9% of the start's;
+//! - Failure: otherwise.
+//!
+//! Cost is `∫ΣF²dt` (N²·s, seed eq. 3.1).
+
+use std::fmt::Write as _;
+use std::time::Instant;
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::formulation::Formulation;
+use super::spec::Problem;
+use crate::solver::{Evaluations, Nlp, Options, Solution, Status, solve};
+
+/// How a trial's final motion meets the pose constraints (module header).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum TrialStatus {
+    /// Every pose constraint within tolerance.
+    Success,
+    /// Every pose constraint within 10× tolerance.
+    Marginal,
+    /// Some constraint beyond 10× tolerance, but the violation fell.
+    Failure,
+    /// No progress from the start.
+    Unimproved,
+}
+
+/// How a point meets the pose constraints.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Assessment {
+    /// `∫ΣF²dt` (N²·s).
+    pub cost: f64,
+    /// Violation of each constraint row (its unit).
+    pub violations: Vec<f64>,
+}
+
+impl Assessment {
+    /// Rows violated by more than `tol`.
+    pub fn violated(&self, tol: f64) -> usize {
+        self.violations.iter().filter(|&&v| v > tol).count()
+    }
+
+    /// Sum of the violations.
+    pub fn sum(&self) -> f64 {
+        self.violations.iter().sum()
+    }
+
+    /// The largest violation.
+    pub fn max(&self) -> f64 {
+        self.violations.iter().copied().fold(0.0, f64::max)
+    }
+}
+
+/// Evaluates physical spline parameters `x`; `None` if the simulation fails.
+pub fn assess(f: &Formulation<'_>, x: &[f64]) -> Option<Assessment> {
+    let nlp = f.reduced();
+    let d = nlp.dims();
+    let (mut cost, mut c) = (0.0, vec![0.0; d.m]);
+    nlp.eval(x, &mut cost, &mut c).ok()?;
+    let (mut xl, mut xu, mut cl, mut cu) = (
+        vec![0.0; d.n],
+        vec![0.0; d.n],
+        vec![0.0; d.m],
+        vec![0.0; d.m],
+    );
+    nlp.bounds(&mut xl, &mut xu, &mut cl, &mut cu);
+    let violations = c
+        .iter()
+        .zip(cl.iter().zip(&cu))
+        .map(|(v, (lo, hi))| (lo - v).max(v - hi).max(0.0))
+        .collect();
+    Some(Assessment { cost, violations })
+}
+
+/// One solved trial.
+#[derive(Debug, Clone, Serialize)]
+pub struct TrialResult {
+    /// Trial number (1-based).
+    pub trial: usize,
+    /// "hand-made" or "random".
+    pub origin: &'static str,
+    /// Final spline parameters (physical units).
+    pub x: Vec<f64>,
+    /// The start's assessment.
+    pub start: Option<Assessment>,
+    /// The final assessment.
+    pub end: Option<Assessment>,
+    /// Classification.
+    pub status: TrialStatus,
+    /// Solver status.
+    #[serde(skip)]
+    pub solver_status: Status,
+    /// Solver iterations.
+    pub iterations: usize,
+    /// Wall time (s).
+    pub seconds: f64,
+    /// Solver evaluation counts.
+    #[serde(skip)]
+    pub evaluations: Evaluations,
+    /// The solver's iteration log.
+    #[serde(skip)]
+    pub solution: Solution,
+}
+
+impl TrialResult {
+    /// Final cost (N²·s), +∞ if the final point could not be simulated.
+    pub fn cost(&self) -> f64 {
+        self.end.as_ref().map_or(f64::INFINITY, |a| a.cost)
+    }
+
+    /// Final violation sum, +∞ if the final point could not be simulated.
+    pub fn violation_sum(&self) -> f64 {
+        self.end.as_ref().map_or(f64::INFINITY, |a| a.sum())
+    }
+}
+
+/// Classifies a trial (module header).
+pub fn classify(start: Option<&Assessment>, end: Option<&Assessment>, tol: f64) -> TrialStatus {
+    let Some(end) = end else {
+        return TrialStatus::Unimproved;
+    };
+    let worst = end.max();
+    if worst <= tol {
+        return TrialStatus::Success;
+    }
+    if worst <= 10.0 * tol {
+        return TrialStatus::Marginal;
+    }
+    let before = start.map_or(f64::INFINITY, |s| s.sum());
+    if end.sum() >= 0.999 * before {
+        TrialStatus::Unimproved
+    } else {
+        TrialStatus::Failure
+    }
+}
+
+/// The starting spline parameters (physical units) of every trial, in trial order.
+pub fn starts(problem: &Problem, f: &Formulation<'_>, seed: u64) -> Vec<Vec<f64>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let hand = f.hand_made_start().to_vec();
+    let grid = f.reduced().grid();
+    let (k, block) = (grid.knots, grid.per_actuator());
+    let (lo, hi) = f.physical_bounds();
+    let spread = problem.trials.spread;
+    (0..problem.trials.count)
+        .map(|t| {
+            let mut x = hand.clone();
+            if t > 0 {
+                for (a, act) in problem.model.actuators.iter().enumerate() {
+                    let half = 0.5 * (act.bounds[1] - act.bounds[0]);
+                    for i in 0..k {
+                        let j = a * block + i;
+                        let r: f64 = rng.random_range(-1.0..=1.0);
+                        x[j] = (x[j] + r * spread * half).clamp(lo[j], hi[j]);
+                    }
+                }
+            }
+            x
+        })
+        .collect()
+}
+
+/// Solves one trial from physical start `x0`.
+pub fn solve_trial(
+    problem: &Problem,
+    f: &Formulation<'_>,
+    trial: usize,
+    x0: &[f64],
+    options: &Options,
+) -> TrialResult {
+    let clock = Instant::now();
+    let nlp = f.starting_at(x0);
+    let start = assess(f, nlp.hand_made_start());
+    let solution = solve(&nlp, options);
+    let x = nlp.physical(&solution.x);
+    let end = assess(f, &x);
+    let status = classify(start.as_ref(), end.as_ref(), problem.trials.tolerance);
+    TrialResult {
+        trial,
+        origin: if trial == 1 { "hand-made" } else { "random" },
+        x,
+        start,
+        end,
+        status,
+        solver_status: solution.status,
+        iterations: solution.iterations,
+        seconds: clock.elapsed().as_secs_f64(),
+        evaluations: solution.evaluations,
+        solution,
+    }
+}
+
+/// Solves trials `which` (1-based; all when `None`) in parallel.
+pub fn run_trials(
+    problem: &Problem,
+    seed: u64,
+    which: Option<usize>,
+    options: &Options,
+) -> Vec<TrialResult> {
+    let f = Formulation::new(problem);
+    let all = starts(problem, &f, seed);
+    let chosen: Vec<usize> = match which {
+        Some(k) => vec![k],
+        None => (1..=all.len()).collect(),
+    };
+    chosen
+        .par_iter()
+        .map(|&k| solve_trial(problem, &f, k, &all[k - 1], options))
+        .collect()
+}
+
+/// Index of the best trial: the lowest cost among the best class present (Success, then
+/// Marginal), else the lowest violation sum.
+pub fn best(results: &[TrialResult]) -> Option<usize> {
+    let rank = |r: &TrialResult| match r.status {
+        TrialStatus::Success => 0,
+        TrialStatus::Marginal => 1,
+        _ => 2,
+    };
+    (0..results.len()).min_by(|&a, &b| {
+        let (ra, rb) = (&results[a], &results[b]);
+        let key = |r: &TrialResult| {
+            if rank(r) < 2 {
+                r.cost()
+            } else {
+                r.violation_sum()
+            }
+        };
+        rank(ra)
+            .cmp(&rank(rb))
+            .then(key(ra).total_cmp(&key(rb)))
+            .then(ra.trial.cmp(&rb.trial))
+    })
+}
+
+/// The table of the seed's Table 3.7 as text.
+pub fn table(results: &[TrialResult], tol: f64) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{:>5}  {:<9}  {:>12}  {:>8}  {:>12}  {:>8}  {:>5}  {:<10}  solver",
+        "trial", "start", "cost N²s", "violated", "sum viol.", "time s", "iter", "status"
+    );
+    for r in results {
+        let violated = r
+            .end
+            .as_ref()
+            .map_or("-".to_string(), |a| a.violated(tol).to_string());
+        let _ = writeln!(
+            s,
+            "{:>5}  {:<9}  {:>12.4}  {:>8}  {:>12.3e}  {:>8.2}  {:>5}  {:<10}  {:?}",
+            r.trial,
+            r.origin,
+            r.cost(),
+            violated,
+            r.violation_sum(),
+            r.seconds,
+            r.iterations,
+            format!("{:?}", r.status),
+            r.solver_status
+        );
+    }
+    s
+}
+
+/// The table as JSON rows for `result.json`.
+pub fn table_json(results: &[TrialResult], tol: f64) -> serde_json::Value {
+    serde_json::Value::Array(
+        results
+            .iter()
+            .map(|r| {
+                serde_json::json!({
+                    "trial": r.trial,
+                    "start": r.origin,
+                    "cost": r.cost(),
+                    "violated": r.end.as_ref().map(|a| a.violated(tol)),
+                    "violation_sum": r.violation_sum(),
+                    "max_violation": r.end.as_ref().map(|a| a.max()),
+                    "seconds": r.seconds,
+                    "iterations": r.iterations,
+                    "status": format!("{:?}", r.status),
+                    "solver_status": format!("{:?}", r.solver_status),
+                })
+            })
+            .collect(),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn a(v: &[f64]) -> Assessment {
+        Assessment {
+            cost: 1.0,
+            violations: v.to_vec(),
+        }
+    }
+
+    #[test]
+    fn classification_follows_the_tolerances() {
+        let tol = 1e-3;
+        let start = a(&[0.5, 0.2]);
+        assert_eq!(
+            classify(Some(&start), Some(&a(&[1e-3, 0.0])), tol),
+            TrialStatus::Success
+        );
+        assert_eq!(
+            classify(Some(&start), Some(&a(&[9e-3, 0.0])), tol),
+            TrialStatus::Marginal
+        );
+        assert_eq!(
+            classify(Some(&start), Some(&a(&[0.1, 0.0])), tol),
+            TrialStatus::Failure
+        );
+        assert_eq!(
+            classify(Some(&start), Some(&a(&[0.6, 0.1])), tol),
+            TrialStatus::Unimproved
+        );
+        assert_eq!(classify(Some(&start), None, tol), TrialStatus::Unimproved);
+    }
+}
