@@ -328,3 +328,102 @@ pub fn artifacts(problem: &Problem, x: &[f64]) -> Result<Vec<Artifact>, String> 
         forces_csv(problem, &motion),
     ])
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gltf::animation::util::ReadOutputs;
+    use std::path::PathBuf;
+
+    fn problem(name: &str) -> Problem {
+        let path =
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("problems/gait/{name}.toml"));
+        crate::gait::load(&path).unwrap()
+    }
+
+    /// The hand-made pogo jump start, exported and read back with the `gltf` crate: one node per
+    /// link plus the ground, translation and rotation channels at 30 fps over the horizon, and
+    /// the head's keyframes equal to the simulated head positions.
+    #[test]
+    fn glb_animation_reads_back_with_the_gltf_crate() {
+        let mut p = problem("pogo_jump");
+        p.horizon = 0.3;
+        let f = crate::gait::formulation::Formulation::new(&p);
+        let x = f.hand_made_start().to_vec();
+        let motion = sample(&p, &x, 1.0 / FPS).unwrap();
+        assert_eq!(motion.times.len(), 10, "0.3 s at 30 fps: frames 0..=9");
+        let bytes = scene(&p, &motion).to_glb().unwrap();
+        let (doc, buffers, _) = gltf::import_slice(&bytes).expect("valid glb");
+        assert_eq!(doc.nodes().count(), p.model.links.len() + 1);
+        let anim = doc.animations().next().unwrap();
+        assert_eq!(anim.channels().count(), 2 * p.model.links.len());
+        let head = p.model.links.iter().position(|l| l.name == "head").unwrap();
+        let mut checked = 0;
+        for ch in anim
+            .channels()
+            .filter(|c| c.target().node().index() == head)
+        {
+            let reader = ch.reader(|b| Some(&buffers[b.index()]));
+            let times: Vec<f32> = reader.read_inputs().unwrap().collect();
+            assert_eq!(times.len(), motion.times.len());
+            assert!((times[3] - 0.1).abs() < 1e-6);
+            match reader.read_outputs().unwrap() {
+                ReadOutputs::Translations(t) => {
+                    for (k, v) in t.enumerate() {
+                        let want = motion.poses[k][head].r.0;
+                        for i in 0..3 {
+                            assert!((v[i] as f64 - want[i]).abs() < 1e-6);
+                        }
+                    }
+                    checked += 1;
+                }
+                ReadOutputs::Rotations(r) => {
+                    // Upright pogo: identity rotation throughout.
+                    for q in r.into_f32() {
+                        assert!((q[3].abs() - 1.0).abs() < 1e-5, "{q:?}");
+                    }
+                    checked += 1;
+                }
+                _ => panic!("unexpected channel"),
+            }
+        }
+        assert_eq!(checked, 2);
+        // The head rises during the hand-made push (0.2–0.3 s).
+        assert!(motion.poses[9][head].r.0[1] > motion.poses[6][head].r.0[1]);
+    }
+
+    /// A rotated link's glTF rotation maps link axes to world axes as the simulation does.
+    #[test]
+    fn link_rotation_matches_world_points() {
+        let p = problem("luxo_leap");
+        let motion = sample(&p, &vec![0.0; 3 * 14], 0.1).unwrap();
+        for frame in &motion.poses {
+            for x in frame {
+                let (q, r) = pose(x);
+                let local = nalgebra::Vector3::new(0.1, 0.2, -0.05);
+                let by_quat = q * local + nalgebra::Vector3::from(r);
+                let by_xform = world_point(x, [0.1, 0.2, -0.05]);
+                for i in 0..3 {
+                    assert!((by_quat[i] - by_xform[i]).abs() < 1e-12);
+                }
+            }
+        }
+    }
+
+    /// The filmstrip has one frame every 1/4 s and the CSVs one row per 30 fps sample.
+    #[test]
+    fn filmstrip_and_csvs_have_one_entry_per_frame() {
+        let p = problem("pogo_crouch");
+        let x = crate::gait::formulation::Formulation::new(&p)
+            .hand_made_start()
+            .to_vec();
+        let strip = sample(&p, &x, FILMSTRIP_INTERVAL).unwrap();
+        let svg = filmstrip(&p, &strip);
+        assert_eq!(svg.matches("t = ").count(), 5, "frames at 0, 0.25, …, 1 s");
+        let motion = sample(&p, &x, 1.0 / FPS).unwrap();
+        let forces = forces_csv(&p, &motion);
+        let text = String::from_utf8(forces.bytes).unwrap();
+        assert_eq!(text.lines().count(), 1 + 31);
+        assert!(text.starts_with("t_s,leg"));
+    }
+}

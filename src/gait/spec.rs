@@ -93,6 +93,8 @@ pub struct TrialsSpec {
     /// Fraction of half the force range reserved for the spline's excursion between knots;
     /// default 0.2, in (0, 1).
     pub slope_margin: Option<f64>,
+    /// Re-solves of a trial that stopped short of success (not by a budget); default 1.
+    pub restarts: Option<usize>,
 }
 
 /// Validated `[trials]` settings.
@@ -106,6 +108,8 @@ pub struct TrialSettings {
     pub spread: f64,
     /// Fraction of the half force range kept free for between-knot excursions.
     pub slope_margin: f64,
+    /// Re-solves from the end point of a trial that stopped short of success.
+    pub restarts: usize,
 }
 
 fn default_gravity() -> [f64; 3] {
@@ -746,11 +750,19 @@ fn build_trials(source: &Source, t: &TrialsSpec) -> Result<TrialSettings, InputE
             format!("`slope_margin` must be in (0, 1), got {slope_margin}"),
         ));
     }
+    let restarts = t.restarts.unwrap_or(1);
+    if restarts > 10 {
+        return Err(at(
+            "restarts",
+            format!("`restarts` must be in 0..=10, got {restarts}"),
+        ));
+    }
     Ok(TrialSettings {
         count,
         tolerance,
         spread,
         slope_margin,
+        restarts,
     })
 }
 

@@ -8,6 +8,11 @@
 //! with the run's seed, and trials are solved in parallel (rayon): results do not depend on the
 //! number of threads.
 //!
+//! A trial that ends short of Success with its solver stopped early (Stalled, Infeasible,
+//! Acceptable, ...) is re-solved from its end point up to `[trials] restarts` times (a fresh
+//! quasi-Newton model); the better end point (lower violation sum, or lower cost when feasible)
+//! is kept.
+//!
 //! Classification, with `tol` = `[trials] tolerance` in each constraint's unit and the violation
 //! of row `r` = `max(lower − c, c − upper, 0)`:
 //! - Success: every violation ≤ tol; Marginal: every violation ≤ 10·tol;
@@ -185,12 +190,53 @@ pub fn solve_trial(
     options: &Options,
 ) -> TrialResult {
     let clock = Instant::now();
-    let nlp = f.starting_at(x0);
+    let tol = problem.trials.tolerance;
+    let mut nlp = f.starting_at(x0);
     let start = assess(f, nlp.hand_made_start());
-    let solution = solve(&nlp, options);
-    let x = nlp.physical(&solution.x);
-    let end = assess(f, &x);
-    let status = classify(start.as_ref(), end.as_ref(), problem.trials.tolerance);
+    let mut solution = solve(&nlp, options);
+    let mut x = nlp.physical(&solution.x);
+    let mut end = assess(f, &x);
+    let mut status = classify(start.as_ref(), end.as_ref(), tol);
+    let (mut iterations, mut evaluations) = (solution.iterations, solution.evaluations);
+    let mut log = solution.log.clone();
+    for _ in 0..problem.trials.restarts {
+        // A restart drops the quasi-Newton model, which stalls on the kinks of the contact
+        // dynamics; a solve stopped by a budget is not restarted.
+        let budget = matches!(
+            solution.status,
+            Status::IterationLimit | Status::TimeLimit | Status::Interrupted
+        );
+        if status == TrialStatus::Success || budget {
+            break;
+        }
+        nlp = f.starting_at(&x);
+        let again = solve(&nlp, options);
+        iterations += again.iterations;
+        evaluations.functions += again.evaluations.functions;
+        evaluations.derivatives += again.evaluations.derivatives;
+        evaluations.hessians += again.evaluations.hessians;
+        let offset = log.last().map_or(0, |r| r.iter + 1);
+        let elapsed = log.last().map_or(0.0, |r| r.elapsed);
+        log.extend(again.log.iter().cloned().map(|mut r| {
+            r.iter += offset;
+            r.elapsed += elapsed;
+            r
+        }));
+        let x_again = nlp.physical(&again.x);
+        let end_again = assess(f, &x_again);
+        let better = match (&end, &end_again) {
+            (_, None) => false,
+            (None, Some(_)) => true,
+            (Some(a), Some(b)) => b.sum() < a.sum() || (b.max() <= tol && b.cost < a.cost),
+        };
+        solution = again;
+        if better {
+            x = x_again;
+            end = end_again;
+            status = classify(start.as_ref(), end.as_ref(), tol);
+        }
+    }
+    solution.log = log;
     TrialResult {
         trial,
         origin: if trial == 1 { "hand-made" } else { "random" },
@@ -199,9 +245,9 @@ pub fn solve_trial(
         end,
         status,
         solver_status: solution.status,
-        iterations: solution.iterations,
+        iterations,
         seconds: clock.elapsed().as_secs_f64(),
-        evaluations: solution.evaluations,
+        evaluations,
         solution,
     }
 }
