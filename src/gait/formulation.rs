@@ -4,9 +4,11 @@
 //!
 //! **Force bounds between knots.** On a segment of length `h` the Hermite force is
 //! `F(u) = h₀₀(u)·y₀ + h₀₁(u)·y₁ + h·(h₁₀(u)·s₀ + h₁₁(u)·s₁)` with `h₀₀ + h₀₁ = 1`,
-//! `h₀₀, h₀₁ ≥ 0` and `max |h₁₀| = max |h₁₁| = 4/27` on `[0, 1]`. With knot values in
-//! `[lo + δ, hi − δ]` and slopes `|s| ≤ S`, the first part stays in `[lo + δ, hi − δ]` and the
-//! second is at most `8/27·h·S` in size, so `S = 27·δ/(8h)` keeps `F(t) ∈ [lo, hi]` for all `t`.
+//! `h₀₀, h₀₁ ≥ 0` and `|h₁₀(u)| + |h₁₁(u)| = u(1 − u)² + u²(1 − u) = u(1 − u) ≤ 1/4` on
+//! `[0, 1]`. With knot values in `[lo + δ, hi − δ]` and slopes `|s| ≤ S`, the first part stays in
+//! `[lo + δ, hi − δ]` and the second is at most `h·S/4` in size, so `S = 4δ/h` keeps
+//! `F(t) ∈ [lo, hi]` for all `t`, tightly (`y₀ = y₁ = hi − δ`, `s₀ = S`, `s₁ = −S` reach `hi` at
+//! mid-segment).
 //! `δ = margin·(hi − lo)/2` (`[trials] slope_margin`). Box bounds only: no extra constraints.
 //!
 //! **Scaling.** Variable `z_j = x_j / σ_j` with `σ = (hi − lo)/2` for knot values and `σ = S`
@@ -48,7 +50,7 @@ impl<'p> Formulation<'p> {
             let [lo, hi] = act.bounds;
             let half = 0.5 * (hi - lo);
             let delta = margin * half;
-            let slope = 27.0 * delta / (8.0 * grid.spacing());
+            let slope = 4.0 * delta / grid.spacing();
             objective_scale += half * half * grid.horizon;
             for j in 0..block {
                 let i = a * block + j;

@@ -359,6 +359,57 @@ mod tests {
         }
     }
 
+    fn golden(name: &str) -> Problem {
+        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join(format!("tests/golden/problems/gait/{name}.toml"));
+        crate::gait::load(&path).unwrap()
+    }
+
+    /// Starts are reproducible, distinct and within the spline box; trial 1 is the hand-made one.
+    #[test]
+    fn starts_are_seeded_and_bounded() {
+        let mut p = golden("luxo_leap_short");
+        p.trials.count = 5;
+        let f = Formulation::new(&p);
+        let a = starts(&p, &f, 8);
+        assert_eq!(a, starts(&p, &f, 8));
+        assert_ne!(a[1], starts(&p, &f, 9)[1]);
+        assert_eq!(a[0], f.hand_made_start());
+        let (lo, hi) = f.physical_bounds();
+        for x in &a {
+            for j in 0..x.len() {
+                assert!(x[j] >= lo[j] && x[j] <= hi[j]);
+            }
+        }
+        assert!(a[1] != a[2]);
+    }
+
+    /// A short solve gives bit-identical results on one thread and on two.
+    #[test]
+    fn results_do_not_depend_on_the_thread_count() {
+        let mut p = golden("pogo_crouch_short");
+        p.trials.count = 2;
+        let options = Options {
+            max_iterations: 4,
+            verbosity: 0,
+            ..Options::default()
+        };
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| run_trials(&p, 8, None, &options))
+        };
+        let (one, two) = (run(1), run(2));
+        for (a, b) in one.iter().zip(&two) {
+            assert_eq!(a.x, b.x);
+            assert_eq!(a.iterations, b.iterations);
+            assert_eq!(a.status, b.status);
+        }
+        assert_eq!(one.len(), 2);
+    }
+
     #[test]
     fn classification_follows_the_tolerances() {
         let tol = 1e-3;
