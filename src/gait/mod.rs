@@ -11,12 +11,15 @@
 pub mod aba;
 pub mod character;
 pub mod contact;
+pub mod export;
+pub mod formulation;
 pub mod reduced;
 pub mod sim;
 pub mod spatial;
 pub mod spec;
 pub mod spline;
 pub mod task;
+pub mod trials;
 
 #[cfg(test)]
 mod truth_tests;
@@ -48,14 +51,11 @@ pub const CHECK_TOLERANCE: f64 = 1e-5;
 
 /// Runs a gait problem. With `opts.check`: builds the reduced-gradient NLP, evaluates it at the
 /// start point and compares its exact derivatives with extrapolated central differences
-/// ([`reduced::check_derivatives`]; figures in
-/// `result.json`). Solving (trials from several starts) is not available yet and is reported as
-/// a runtime error.
+/// ([`reduced::check_derivatives`]; figures in `result.json`). Otherwise solves the trials
+/// ([`trials`]; `opts.trial` picks one) and returns the best motion ([`solve_trials`]).
 pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     if !opts.check {
-        return Err(Error::Runtime(
-            "gait problems can only be checked (--check) so far; solving is not wired yet".into(),
-        ));
+        return solve_trials(problem, opts);
     }
     let t0 = Instant::now();
     let nlp = reduced::Reduced::new(problem);
@@ -117,4 +117,101 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         check_passed: Some(passed),
         artifacts: vec![],
     })
+}
+
+/// Solves the trials in parallel, prints the trial table (unless `opts.quiet`) and returns the
+/// best trial's motion with the table in `result.json` figures.
+pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
+    let count = problem.trials.count;
+    if let Some(k) = opts.trial
+        && !(1..=count).contains(&k)
+    {
+        return Err(Error::Runtime(format!(
+            "--trial {k}: {} has trials 1 to {count}",
+            problem.name
+        )));
+    }
+    let mut options = opts.solver_options(&problem.solver);
+    if opts.trial.is_none() && !opts.verbose {
+        // Parallel trials would interleave their logs.
+        options.verbosity = 0;
+    }
+    let clock = Instant::now();
+    let results = trials::run_trials(problem, opts.seed, opts.trial, &options);
+    let solve_seconds = clock.elapsed().as_secs_f64();
+    let tol = problem.trials.tolerance;
+    let table = trials::table(&results, tol);
+    if !opts.quiet {
+        eprintln!(
+            "{}: {} trial(s), {solve_seconds:.1} s\n{table}",
+            problem.name,
+            results.len()
+        );
+    }
+    let best = trials::best(&results)
+        .ok_or_else(|| Error::Runtime(format!("{}: no trials were run", problem.name)))?;
+    let chosen = &results[best];
+    let mut evaluations = Evaluations::default();
+    for r in &results {
+        evaluations.functions += r.evaluations.functions;
+        evaluations.derivatives += r.evaluations.derivatives;
+        evaluations.hessians += r.evaluations.hessians;
+    }
+    let export_clock = Instant::now();
+    let mut artifacts = export::artifacts(problem, &chosen.x)
+        .map_err(|e| Error::Runtime(format!("{}: {e}", problem.name)))?;
+    artifacts.push(crate::io::result::iterations_csv(
+        "iterations.csv",
+        &chosen.solution.log,
+    ));
+    let mut timings = std::collections::BTreeMap::new();
+    timings.insert("solve".to_string(), solve_seconds);
+    timings.insert("export".to_string(), export_clock.elapsed().as_secs_f64());
+    let counts = |s: trials::TrialStatus| results.iter().filter(|r| r.status == s).count();
+    let end = chosen.end.as_ref();
+    let summary = ResultSummary {
+        problem: problem.name.clone(),
+        kind: "gait".into(),
+        status: format!("{:?}", chosen.solver_status),
+        status_message: format!(
+            "Best of {} trial(s): trial {} ({:?}). {}",
+            results.len(),
+            chosen.trial,
+            chosen.status,
+            chosen.solver_status.sentence()
+        ),
+        objective: chosen.cost(),
+        max_violation: end.map_or(f64::INFINITY, |a| a.max()),
+        iterations: results.iter().map(|r| r.iterations).sum(),
+        evaluations,
+        timings,
+        seed: opts.seed,
+        figures: serde_json::json!({
+            "best_trial": chosen.trial,
+            "best_status": format!("{:?}", chosen.status),
+            "cost": chosen.cost(),
+            "tolerance": tol,
+            "successes": counts(trials::TrialStatus::Success),
+            "marginal": counts(trials::TrialStatus::Marginal),
+            "failures": counts(trials::TrialStatus::Failure),
+            "unimproved": counts(trials::TrialStatus::Unimproved),
+            "trials": trials::table_json(&results, tol),
+            "median_trial_seconds": median(results.iter().map(|r| r.seconds).collect()),
+        }),
+    };
+    Ok(Outcome {
+        summary,
+        status: Some(chosen.solver_status),
+        check_passed: None,
+        artifacts,
+    })
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
 }

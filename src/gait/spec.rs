@@ -69,9 +69,47 @@ pub struct FileSpec {
     /// Pose constraints.
     #[serde(default)]
     pub task: Vec<TaskSpec>,
+    /// Trials (several starts) and their success test.
+    #[serde(default)]
+    pub trials: TrialsSpec,
     /// Solver options.
     #[serde(default)]
     pub solver: SolverSpec,
+}
+
+/// The `[trials]` table: how many starts are solved, how random starts are drawn, how force
+/// splines are kept within the actuator bounds, and when a trial counts as a success.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrialsSpec {
+    /// Number of trials; trial 1 starts from the hand-made profile (`[[actuator]] start`), the
+    /// others from seeded random perturbations of it. Default 8 (seed: 8).
+    pub count: Option<usize>,
+    /// Pose-constraint tolerance in each constraint's unit (m, rad, m/s, rad/s); default 1e-3.
+    pub tolerance: Option<f64>,
+    /// Random knot perturbations are uniform in ±`spread`·(half the actuator's force range);
+    /// default 0.3, in [0, 1].
+    pub spread: Option<f64>,
+    /// Fraction of half the force range reserved for the spline's excursion between knots;
+    /// default 0.2, in (0, 1).
+    pub slope_margin: Option<f64>,
+    /// Re-solves of a trial that stopped short of success (not by a budget); default 1.
+    pub restarts: Option<usize>,
+}
+
+/// Validated `[trials]` settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrialSettings {
+    /// Number of trials (≥ 1).
+    pub count: usize,
+    /// Pose-constraint tolerance (constraint units).
+    pub tolerance: f64,
+    /// Random perturbation amplitude, a fraction of the half force range.
+    pub spread: f64,
+    /// Fraction of the half force range kept free for between-knot excursions.
+    pub slope_margin: f64,
+    /// Re-solves from the end point of a trial that stopped short of success.
+    pub restarts: usize,
 }
 
 fn default_gravity() -> [f64; 3] {
@@ -333,6 +371,8 @@ pub struct Problem {
     pub start: Vec<Vec<f64>>,
     /// Pose constraints, ordered by time.
     pub constraints: Vec<PoseConstraint>,
+    /// Trial settings.
+    pub trials: TrialSettings,
     /// Solver options table.
     pub solver: SolverSpec,
 }
@@ -663,6 +703,7 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
             .file_stem()
             .map_or("gait".into(), |s| s.to_string_lossy().into_owned())
     });
+    let trials = build_trials(source, &file.trials)?;
     Ok(Problem {
         name,
         model,
@@ -672,7 +713,56 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
         horizon,
         start,
         constraints,
+        trials,
         solver: file.solver,
+    })
+}
+
+fn build_trials(source: &Source, t: &TrialsSpec) -> Result<TrialSettings, InputError> {
+    let at = |key: &'static str, msg: String| {
+        source.error_at(&[Key::Name("trials"), Key::Name(key)], msg)
+    };
+    let count = t.count.unwrap_or(8);
+    if !(1..=1000).contains(&count) {
+        return Err(at(
+            "count",
+            format!("`count` must be in 1..=1000, got {count}"),
+        ));
+    }
+    let tolerance = t.tolerance.unwrap_or(1e-3);
+    if !(tolerance > 0.0 && tolerance.is_finite()) {
+        return Err(at(
+            "tolerance",
+            format!("`tolerance` must be positive, got {tolerance}"),
+        ));
+    }
+    let spread = t.spread.unwrap_or(0.3);
+    if !(0.0..=1.0).contains(&spread) {
+        return Err(at(
+            "spread",
+            format!("`spread` must be in [0, 1], got {spread}"),
+        ));
+    }
+    let slope_margin = t.slope_margin.unwrap_or(0.2);
+    if !(slope_margin > 0.0 && slope_margin < 1.0) {
+        return Err(at(
+            "slope_margin",
+            format!("`slope_margin` must be in (0, 1), got {slope_margin}"),
+        ));
+    }
+    let restarts = t.restarts.unwrap_or(1);
+    if restarts > 10 {
+        return Err(at(
+            "restarts",
+            format!("`restarts` must be in 0..=10, got {restarts}"),
+        ));
+    }
+    Ok(TrialSettings {
+        count,
+        tolerance,
+        spread,
+        slope_margin,
+        restarts,
     })
 }
 

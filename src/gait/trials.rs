@@ -1,0 +1,435 @@
+//! Trials (seed §3.7, Table 3.7): the same task solved from several initial force profiles,
+//! each classified by how well its final motion meets the pose constraints.
+//!
+//! Trial 1 starts from the hand-made profile (`[[actuator]] start`); trial `k ≥ 2` from that
+//! profile plus a uniform random perturbation of every knot value by up to
+//! `spread·(hi − lo)/2` (slopes start at zero), clamped into the spline box of
+//! [`Formulation`]. All starts are drawn up front, in trial order, from one `ChaCha8Rng` seeded
+//! with the run's seed, and trials are solved in parallel (rayon): results do not depend on the
+//! number of threads.
+//!
+//! A trial that ends short of Success with its solver stopped early (Stalled, Infeasible,
+//! Acceptable, ...) is re-solved from its end point up to `[trials] restarts` times (a fresh
+//! quasi-Newton model); the better end point (lower violation sum, or lower cost when feasible)
+//! is kept.
+//!
+//! Classification, with `tol` = `[trials] tolerance` in each constraint's unit and the violation
+//! of row `r` = `max(lower − c, c − upper, 0)`:
+//! - Success: every violation ≤ tol; Marginal: every violation ≤ 10·tol;
+//! - Unimproved: otherwise, if the violation sum did not fall below 99.9% of the start's;
+//! - Failure: otherwise.
+//!
+//! Cost is `∫ΣF²dt` (N²·s, seed eq. 3.1).
+
+use std::fmt::Write as _;
+use std::time::Instant;
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::formulation::Formulation;
+use super::spec::Problem;
+use crate::solver::{Evaluations, Nlp, Options, Solution, Status, solve};
+
+/// How a trial's final motion meets the pose constraints (module header).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum TrialStatus {
+    /// Every pose constraint within tolerance.
+    Success,
+    /// Every pose constraint within 10× tolerance.
+    Marginal,
+    /// Some constraint beyond 10× tolerance, but the violation fell.
+    Failure,
+    /// No progress from the start.
+    Unimproved,
+}
+
+/// How a point meets the pose constraints.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Assessment {
+    /// `∫ΣF²dt` (N²·s).
+    pub cost: f64,
+    /// Violation of each constraint row (its unit).
+    pub violations: Vec<f64>,
+}
+
+impl Assessment {
+    /// Rows violated by more than `tol`.
+    pub fn violated(&self, tol: f64) -> usize {
+        self.violations.iter().filter(|&&v| v > tol).count()
+    }
+
+    /// Sum of the violations.
+    pub fn sum(&self) -> f64 {
+        self.violations.iter().sum()
+    }
+
+    /// The largest violation.
+    pub fn max(&self) -> f64 {
+        self.violations.iter().copied().fold(0.0, f64::max)
+    }
+}
+
+/// Evaluates physical spline parameters `x`; `None` if the simulation fails.
+pub fn assess(f: &Formulation<'_>, x: &[f64]) -> Option<Assessment> {
+    let nlp = f.reduced();
+    let d = nlp.dims();
+    let (mut cost, mut c) = (0.0, vec![0.0; d.m]);
+    nlp.eval(x, &mut cost, &mut c).ok()?;
+    let (mut xl, mut xu, mut cl, mut cu) = (
+        vec![0.0; d.n],
+        vec![0.0; d.n],
+        vec![0.0; d.m],
+        vec![0.0; d.m],
+    );
+    nlp.bounds(&mut xl, &mut xu, &mut cl, &mut cu);
+    let violations = c
+        .iter()
+        .zip(cl.iter().zip(&cu))
+        .map(|(v, (lo, hi))| (lo - v).max(v - hi).max(0.0))
+        .collect();
+    Some(Assessment { cost, violations })
+}
+
+/// One solved trial.
+#[derive(Debug, Clone, Serialize)]
+pub struct TrialResult {
+    /// Trial number (1-based).
+    pub trial: usize,
+    /// "hand-made" or "random".
+    pub origin: &'static str,
+    /// Final spline parameters (physical units).
+    pub x: Vec<f64>,
+    /// The start's assessment.
+    pub start: Option<Assessment>,
+    /// The final assessment.
+    pub end: Option<Assessment>,
+    /// Classification.
+    pub status: TrialStatus,
+    /// Solver status.
+    #[serde(skip)]
+    pub solver_status: Status,
+    /// Solver iterations.
+    pub iterations: usize,
+    /// Wall time (s).
+    pub seconds: f64,
+    /// Solver evaluation counts.
+    #[serde(skip)]
+    pub evaluations: Evaluations,
+    /// The solver's iteration log.
+    #[serde(skip)]
+    pub solution: Solution,
+}
+
+impl TrialResult {
+    /// Final cost (N²·s), +∞ if the final point could not be simulated.
+    pub fn cost(&self) -> f64 {
+        self.end.as_ref().map_or(f64::INFINITY, |a| a.cost)
+    }
+
+    /// Final violation sum, +∞ if the final point could not be simulated.
+    pub fn violation_sum(&self) -> f64 {
+        self.end.as_ref().map_or(f64::INFINITY, |a| a.sum())
+    }
+}
+
+/// Classifies a trial (module header).
+pub fn classify(start: Option<&Assessment>, end: Option<&Assessment>, tol: f64) -> TrialStatus {
+    let Some(end) = end else {
+        return TrialStatus::Unimproved;
+    };
+    let worst = end.max();
+    if worst <= tol {
+        return TrialStatus::Success;
+    }
+    if worst <= 10.0 * tol {
+        return TrialStatus::Marginal;
+    }
+    let before = start.map_or(f64::INFINITY, |s| s.sum());
+    if end.sum() >= 0.999 * before {
+        TrialStatus::Unimproved
+    } else {
+        TrialStatus::Failure
+    }
+}
+
+/// The starting spline parameters (physical units) of every trial, in trial order.
+pub fn starts(problem: &Problem, f: &Formulation<'_>, seed: u64) -> Vec<Vec<f64>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let hand = f.hand_made_start().to_vec();
+    let grid = f.reduced().grid();
+    let (k, block) = (grid.knots, grid.per_actuator());
+    let (lo, hi) = f.physical_bounds();
+    let spread = problem.trials.spread;
+    (0..problem.trials.count)
+        .map(|t| {
+            let mut x = hand.clone();
+            if t > 0 {
+                for (a, act) in problem.model.actuators.iter().enumerate() {
+                    let half = 0.5 * (act.bounds[1] - act.bounds[0]);
+                    for i in 0..k {
+                        let j = a * block + i;
+                        let r: f64 = rng.random_range(-1.0..=1.0);
+                        x[j] = (x[j] + r * spread * half).clamp(lo[j], hi[j]);
+                    }
+                }
+            }
+            x
+        })
+        .collect()
+}
+
+/// Solves one trial from physical start `x0`.
+pub fn solve_trial(
+    problem: &Problem,
+    f: &Formulation<'_>,
+    trial: usize,
+    x0: &[f64],
+    options: &Options,
+) -> TrialResult {
+    let clock = Instant::now();
+    let tol = problem.trials.tolerance;
+    let mut nlp = f.starting_at(x0);
+    let start = assess(f, nlp.hand_made_start());
+    let mut solution = solve(&nlp, options);
+    let mut x = nlp.physical(&solution.x);
+    let mut end = assess(f, &x);
+    let mut status = classify(start.as_ref(), end.as_ref(), tol);
+    let (mut iterations, mut evaluations) = (solution.iterations, solution.evaluations);
+    let mut log = solution.log.clone();
+    for _ in 0..problem.trials.restarts {
+        // A restart drops the quasi-Newton model, which stalls on the kinks of the contact
+        // dynamics; a solve stopped by a budget is not restarted.
+        let budget = matches!(
+            solution.status,
+            Status::IterationLimit | Status::TimeLimit | Status::Interrupted
+        );
+        if status == TrialStatus::Success || budget {
+            break;
+        }
+        nlp = f.starting_at(&x);
+        let again = solve(&nlp, options);
+        iterations += again.iterations;
+        evaluations.functions += again.evaluations.functions;
+        evaluations.derivatives += again.evaluations.derivatives;
+        evaluations.hessians += again.evaluations.hessians;
+        let offset = log.last().map_or(0, |r| r.iter + 1);
+        let elapsed = log.last().map_or(0.0, |r| r.elapsed);
+        log.extend(again.log.iter().cloned().map(|mut r| {
+            r.iter += offset;
+            r.elapsed += elapsed;
+            r
+        }));
+        let x_again = nlp.physical(&again.x);
+        let end_again = assess(f, &x_again);
+        let better = match (&end, &end_again) {
+            (_, None) => false,
+            (None, Some(_)) => true,
+            (Some(a), Some(b)) => b.sum() < a.sum() || (b.max() <= tol && b.cost < a.cost),
+        };
+        solution = again;
+        if better {
+            x = x_again;
+            end = end_again;
+            status = classify(start.as_ref(), end.as_ref(), tol);
+        }
+    }
+    solution.log = log;
+    TrialResult {
+        trial,
+        origin: if trial == 1 { "hand-made" } else { "random" },
+        x,
+        start,
+        end,
+        status,
+        solver_status: solution.status,
+        iterations,
+        seconds: clock.elapsed().as_secs_f64(),
+        evaluations,
+        solution,
+    }
+}
+
+/// Solves trials `which` (1-based; all when `None`) in parallel.
+pub fn run_trials(
+    problem: &Problem,
+    seed: u64,
+    which: Option<usize>,
+    options: &Options,
+) -> Vec<TrialResult> {
+    let f = Formulation::new(problem);
+    let all = starts(problem, &f, seed);
+    let chosen: Vec<usize> = match which {
+        Some(k) => vec![k],
+        None => (1..=all.len()).collect(),
+    };
+    chosen
+        .par_iter()
+        .map(|&k| solve_trial(problem, &f, k, &all[k - 1], options))
+        .collect()
+}
+
+/// Index of the best trial: the lowest cost among the best class present (Success, then
+/// Marginal), else the lowest violation sum.
+pub fn best(results: &[TrialResult]) -> Option<usize> {
+    let rank = |r: &TrialResult| match r.status {
+        TrialStatus::Success => 0,
+        TrialStatus::Marginal => 1,
+        _ => 2,
+    };
+    (0..results.len()).min_by(|&a, &b| {
+        let (ra, rb) = (&results[a], &results[b]);
+        let key = |r: &TrialResult| {
+            if rank(r) < 2 {
+                r.cost()
+            } else {
+                r.violation_sum()
+            }
+        };
+        rank(ra)
+            .cmp(&rank(rb))
+            .then(key(ra).total_cmp(&key(rb)))
+            .then(ra.trial.cmp(&rb.trial))
+    })
+}
+
+/// The table of the seed's Table 3.7 as text.
+pub fn table(results: &[TrialResult], tol: f64) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{:>5}  {:<9}  {:>12}  {:>8}  {:>12}  {:>8}  {:>5}  {:<10}  solver",
+        "trial", "start", "cost N²s", "violated", "sum viol.", "time s", "iter", "status"
+    );
+    for r in results {
+        let violated = r
+            .end
+            .as_ref()
+            .map_or("-".to_string(), |a| a.violated(tol).to_string());
+        let _ = writeln!(
+            s,
+            "{:>5}  {:<9}  {:>12.4}  {:>8}  {:>12.3e}  {:>8.2}  {:>5}  {:<10}  {:?}",
+            r.trial,
+            r.origin,
+            r.cost(),
+            violated,
+            r.violation_sum(),
+            r.seconds,
+            r.iterations,
+            format!("{:?}", r.status),
+            r.solver_status
+        );
+    }
+    s
+}
+
+/// The table as JSON rows for `result.json`.
+pub fn table_json(results: &[TrialResult], tol: f64) -> serde_json::Value {
+    serde_json::Value::Array(
+        results
+            .iter()
+            .map(|r| {
+                serde_json::json!({
+                    "trial": r.trial,
+                    "start": r.origin,
+                    "cost": r.cost(),
+                    "violated": r.end.as_ref().map(|a| a.violated(tol)),
+                    "violation_sum": r.violation_sum(),
+                    "max_violation": r.end.as_ref().map(|a| a.max()),
+                    "seconds": r.seconds,
+                    "iterations": r.iterations,
+                    "status": format!("{:?}", r.status),
+                    "solver_status": format!("{:?}", r.solver_status),
+                })
+            })
+            .collect(),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn a(v: &[f64]) -> Assessment {
+        Assessment {
+            cost: 1.0,
+            violations: v.to_vec(),
+        }
+    }
+
+    fn golden(name: &str) -> Problem {
+        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join(format!("tests/golden/problems/gait/{name}.toml"));
+        crate::gait::load(&path).unwrap()
+    }
+
+    /// Starts are reproducible, distinct and within the spline box; trial 1 is the hand-made one.
+    #[test]
+    fn starts_are_seeded_and_bounded() {
+        let mut p = golden("luxo_leap_short");
+        p.trials.count = 5;
+        let f = Formulation::new(&p);
+        let a = starts(&p, &f, 8);
+        assert_eq!(a, starts(&p, &f, 8));
+        assert_ne!(a[1], starts(&p, &f, 9)[1]);
+        assert_eq!(a[0], f.hand_made_start());
+        let (lo, hi) = f.physical_bounds();
+        for x in &a {
+            for j in 0..x.len() {
+                assert!(x[j] >= lo[j] && x[j] <= hi[j]);
+            }
+        }
+        assert!(a[1] != a[2]);
+    }
+
+    /// A short solve gives bit-identical results on one thread and on two.
+    #[test]
+    fn results_do_not_depend_on_the_thread_count() {
+        let mut p = golden("pogo_crouch_short");
+        p.trials.count = 2;
+        let options = Options {
+            max_iterations: 4,
+            verbosity: 0,
+            ..Options::default()
+        };
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| run_trials(&p, 8, None, &options))
+        };
+        let (one, two) = (run(1), run(2));
+        for (a, b) in one.iter().zip(&two) {
+            assert_eq!(a.x, b.x);
+            assert_eq!(a.iterations, b.iterations);
+            assert_eq!(a.status, b.status);
+        }
+        assert_eq!(one.len(), 2);
+    }
+
+    #[test]
+    fn classification_follows_the_tolerances() {
+        let tol = 1e-3;
+        let start = a(&[0.5, 0.2]);
+        assert_eq!(
+            classify(Some(&start), Some(&a(&[1e-3, 0.0])), tol),
+            TrialStatus::Success
+        );
+        assert_eq!(
+            classify(Some(&start), Some(&a(&[9e-3, 0.0])), tol),
+            TrialStatus::Marginal
+        );
+        assert_eq!(
+            classify(Some(&start), Some(&a(&[0.1, 0.0])), tol),
+            TrialStatus::Failure
+        );
+        assert_eq!(
+            classify(Some(&start), Some(&a(&[0.6, 0.1])), tol),
+            TrialStatus::Unimproved
+        );
+        assert_eq!(classify(Some(&start), None, tol), TrialStatus::Unimproved);
+    }
+}
