@@ -141,20 +141,18 @@ fn out_of_range_value_names_line_and_column() {
 #[test]
 fn check_on_a_valid_file_exits_0() {
     let scratch = Scratch::new("check");
-    let out = optimize(&[
-        "truss",
-        SHIPPED,
-        "--check",
-        "-q",
-        "-o",
-        scratch.0.to_str().unwrap(),
-    ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out_dir = scratch.0.to_str().unwrap();
+    for (kind, file) in [
+        ("gait", "problems/gait/pogo_crouch.toml"),
+        ("truss", SHIPPED),
+        ("cmc", "problems/cmc/tennis_cushion.toml"),
+    ] {
+        let out = optimize(&[kind, file, "--check", "-q", "-o", out_dir]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{kind} {file}: {stderr}");
+        let summary = std::fs::read_to_string(scratch.0.join("result.json")).unwrap();
+        assert!(summary.contains("\"status\": \"Checked\""), "{summary}");
+    }
 }
 
 #[test]
