@@ -25,6 +25,13 @@
 //! order `w` and is reported with the results (set `w = 0` to switch it off). It keeps one fixed
 //! sparsity pattern per solve; connectivity is improved between solves by edge flips
 //! ([`super::remesh`]), after which the problem is rebuilt ([`CmcNlp::remeshed`]).
+//!
+//! Exact Lagrangian Hessian `σ∇²f + Σ λ_r ∇²c_r` in scaled variables, lower triangle in 3×3
+//! vertex blocks: area blocks of [`super::area::triangle_area_hessian`] (factor 1), the
+//! regularization `w Σ c_a c_b PᵀP` (c = 1 at the vertex, −1/k on its k neighbours), curvature
+//! rows `L³ ∇²H` ([`super::curvature_hessian`]), volume rows `∇²V / L`
+//! ([`super::volume::cone_volume_hessian`]), chords `L (I − ûûᵀ)/|x_a − x_b|` and the circle
+//! guide's second row `L/r · I`; plane and line guides and the `H_s` columns are linear.
 
 use std::collections::HashMap;
 use std::sync::Mutex;
