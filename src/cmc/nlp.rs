@@ -79,10 +79,19 @@ struct Smoothing {
 /// One constraint row's meaning.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Row {
-    Curvature { vertex: usize, surface: usize },
+    Curvature {
+        vertex: usize,
+        surface: usize,
+    },
     Volume(usize),
     Chord(usize),
-    Guide { vertex: usize, equation: usize },
+    Guide {
+        vertex: usize,
+        equation: usize,
+    },
+    /// Rigid-motion gauge of a free-floating mesh: k = 0..3 the mean position, k = 3..6 the
+    /// mean of `(x⁰_v − c⁰) × x_v` (scaled), both held at their start values.
+    Rigid(usize),
 }
 
 /// The CMC problem: see the module header.
@@ -101,6 +110,7 @@ pub struct CmcNlp {
     weight: f64,
     pattern: Vec<(usize, usize)>,
     hessian: HessianPattern,
+    centre: Point,
 }
 
 /// Lower-triangle pattern of the Lagrangian Hessian in 3×3 vertex blocks: block `(u, w)` with
@@ -242,6 +252,11 @@ impl CmcNlp {
             }
         }
         let scale = characteristic_length(&mesh);
+        let free_floating = mesh.flags().iter().all(|f| !f.fixed && f.guide.is_none());
+        let centre = mesh.positions().iter().sum::<Point>() / n as f64 / scale;
+        if free_floating {
+            rows.extend((0..6).map(Row::Rigid));
+        }
         let smoothing = if tangential_weight > 0.0 {
             let mut terms: Vec<Smoothing> = curvature_vertices
                 .iter()
@@ -273,6 +288,7 @@ impl CmcNlp {
             weight: tangential_weight,
             pattern: Vec::new(),
             hessian: HessianPattern::default(),
+            centre,
         };
         nlp.pattern = nlp.build_pattern();
         nlp.hessian = nlp.build_hessian_pattern();
@@ -366,7 +382,30 @@ impl CmcNlp {
             Row::Volume(k) => self.volumes[k].region.vertices(&self.start),
             Row::Chord(k) => vec![self.chords[k].a, self.chords[k].b],
             Row::Guide { vertex, .. } => vec![vertex],
+            Row::Rigid(_) => (0..self.start.vertex_count()).collect(),
         }
+    }
+
+    /// Value and per-vertex gradients (scaled variables) of rigid-motion row `k`.
+    fn rigid_row(&self, k: usize, pos: &[Point]) -> (f64, Vec<(usize, Point)>) {
+        let n = pos.len() as f64;
+        let l = self.scale;
+        let mut value = 0.0;
+        let mut grad = Vec::with_capacity(pos.len());
+        for (v, p) in pos.iter().enumerate() {
+            let x = p / l;
+            if k < 3 {
+                value += (x[k] - self.centre[k]) / n;
+                grad.push((v, Point::ith(k, 1.0 / n)));
+            } else {
+                let a = self.start.positions()[v] / l - self.centre;
+                value += a.cross(&x)[k - 3] / n;
+                // ∂(a × x)_k/∂x_j = (a × e_j)_k.
+                let g = Point::from_fn(|j, _| a.cross(&Point::ith(j, 1.0))[k - 3] / n);
+                grad.push((v, g));
+            }
+        }
+        (value, grad)
     }
 
     fn build_pattern(&self) -> Vec<(usize, usize)> {
@@ -587,6 +626,7 @@ impl Nlp for CmcNlp {
                         let g = &mesh.guides()[mesh.flags()[vertex].guide.unwrap_or(0)];
                         g.residuals(&mesh.positions()[vertex])[equation].0 / l
                     }
+                    Row::Rigid(k) => self.rigid_row(k, mesh.positions()).0,
                 };
             }
             if f.is_finite() && c.iter().all(|v| v.is_finite()) {
@@ -662,6 +702,9 @@ impl Nlp for CmcNlp {
                         let g = &mesh.guides()[mesh.flags()[vertex].guide.unwrap_or(0)];
                         let (_, d) = g.residuals(&mesh.positions()[vertex])[equation];
                         put(jac, &mut k, vec![(vertex, d)], 1.0);
+                    }
+                    Row::Rigid(r) => {
+                        put(jac, &mut k, self.rigid_row(r, mesh.positions()).1, 1.0);
                     }
                 }
             }
@@ -741,7 +784,7 @@ impl Nlp for CmcNlp {
                     continue;
                 }
                 match *row {
-                    Row::Curvature { .. } => {}
+                    Row::Curvature { .. } | Row::Rigid(_) => {}
                     Row::Volume(i) => {
                         let region = &self.volumes[i].region;
                         for &(s, sign) in &region.boundary {
@@ -805,6 +848,7 @@ impl Nlp for CmcNlp {
             Some(Row::Guide { vertex, equation }) => {
                 format!("guide equation {equation} of vertex {vertex}")
             }
+            Some(Row::Rigid(k)) => format!("rigid-motion gauge {k}"),
             None => format!("c[{row}]"),
         }
     }
@@ -869,7 +913,8 @@ mod tests {
         )
         .unwrap();
         let d = nlp.dims();
-        assert_eq!((d.n, d.m), (12 * 3 + 1, 12 + 1));
+        // 12 curvature rows, the volume and the six rigid-motion gauge rows (free bubble).
+        assert_eq!((d.n, d.m), (12 * 3 + 1, 12 + 1 + 6));
         let mut x = vec![0.0; d.n];
         nlp.start(&mut x);
         let (mut f, mut c) = (0.0, vec![0.0; d.m]);
