@@ -12,6 +12,7 @@
 pub mod area;
 pub mod check;
 pub mod curvature;
+pub mod curvature_hessian;
 pub mod export;
 pub mod figures;
 pub mod generators;
