@@ -127,6 +127,8 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let mut nlp = nlp;
     let mut solution = crate::solver::solve(&nlp, &options);
     let (mut iterations, mut evaluations) = (solution.iterations, solution.evaluations);
+    // The iteration log of every solve, one after the other (iteration numbers restart).
+    let mut log = solution.log.clone();
     let mut rounds = Vec::new();
     // Equiangulate and re-solve (cmc::remesh); each round's areas show the flips' effect.
     for _ in 0..problem.spec.file.quality.flip_rounds {
@@ -147,6 +149,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             .remeshed(flipped)
             .map_err(|e| Error::Runtime(format!("{}: {e}", problem.name)))?;
         solution = crate::solver::solve(&nlp, &options);
+        log.extend_from_slice(&solution.log);
         iterations += solution.iterations;
         evaluations.functions += solution.evaluations.functions;
         evaluations.derivatives += solution.evaluations.derivatives;
@@ -192,6 +195,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         status: Some(solution.status),
         check_passed: None,
         artifacts: vec![
+            crate::io::result::iterations_csv("iterations.csv", &log),
             Artifact {
                 name: "model.glb".into(),
                 bytes: model,
