@@ -364,7 +364,6 @@ fn settings(
             m.sigma_t.unwrap_or(1.0),
             m.sigma_c.unwrap_or(1.0),
             m.density.unwrap_or(STEEL_DENSITY),
-            blend,
         ),
     };
     let objective = match spec.objective {
