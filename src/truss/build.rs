@@ -350,7 +350,7 @@ fn settings(
     load_cases: Vec<String>,
 ) -> Settings {
     let m = &spec.mass;
-    let blend = m.blend_force.unwrap_or(1e-3 * largest_load);
+    let blend = m.blend_force.unwrap_or(0.05 * largest_load);
     let mass = match m.model {
         MassKind::Seed => MassModel {
             k_t: m.k_t.unwrap_or(5e-6),
@@ -364,7 +364,6 @@ fn settings(
             m.sigma_t.unwrap_or(1.0),
             m.sigma_c.unwrap_or(1.0),
             m.density.unwrap_or(STEEL_DENSITY),
-            blend,
         ),
     };
     let objective = match spec.objective {

@@ -9,21 +9,32 @@
 //! - `linear` option (plastic design): `m = ρ·|λ|·L/σ_T` in tension, `ρ·|λ|·L/σ_C` in
 //!   compression.
 //!
-//! Smoothing across λ = 0 (C∞, so the exact Hessian exists everywhere), with a blend width ε in
-//! newtons:
+//! Split forces. The optimizer never sees |λ|: each force is split into a tension part t ≥ 0
+//! and a compression part c ≥ 0 (both in newtons), λ = c − t, and the mass is
 //! ```text
-//!     r(λ) = √(λ² + ε²)
-//!     a(λ) = λ²/r                  smooth |λ|:   |λ| − a ≈ ε²/(2|λ|) for |λ| ≫ ε
-//!     h(λ) = λ²/r^(3/2)            smooth √|λ|:  √|λ| − h ≈ ¾·ε²/|λ|^(3/2)
-//!     s(λ) = ½·(1 + tanh(λ/ε))     blend weight: 0 in tension, 1 in compression
-//!     m(λ, L) = (1 − s)·k_T·a·L + w·s·C(λ, L)
-//!     C = k_C·h·L²  (Euler)    or    C = k_C·a·L  (linear, k_C = ρ/σ_C, k_T = ρ/σ_T)
+//!     m(t, c, L) = k_T·t·L + w·C(c, L)
+//!     C = k_C·c·L                (linear: k_C = ρ/σ_C, k_T = ρ/σ_T; exactly the plastic LP)
+//!     C = k_C·G(c)·L²,  G(c) = c/√(c + δ)   (Euler)
 //! ```
+//! Linear mass is exact and smooth (bilinear in force and length). For Euler buckling the
+//! square root, whose slope is infinite at c = 0, is replaced below a width δ (newtons) by the
+//! quartic that matches √c to third order at c = δ:
+//! ```text
+//!     G(c) = √c                                          c ≥ δ
+//!     G(c) = √δ·(35u − 35u² + 21u³ − 5u⁴)/16,  u = c/δ     c < δ
+//! ```
+//! G is C³, G(0) = 0, increasing and concave, with G′(0) = 35/(16√δ) and G″(0) = −35/(8δ^{3/2}):
+//! the exact Euler mass for every member carrying at least δ, slightly less below it (at most
+//! 0.122·√δ·k_C·L² per member, at c ≈ 0.07δ). The default δ is 5% of the largest load
+//! (`blend_force`): wide enough that central differences with steps of 1e-4 of the largest load
+//! resolve the curvature, and only members carrying less than δ, whose mass is small, differ
+//! from the seed's model; [`MassModel::exact_mass`] gives the seed's mass so the difference of a
+//! design can be reported. [`MassModel::mass`] gives the model mass of a force λ
+//! (t = max(−λ, 0), c = max(λ, 0)). At an optimum t·c = 0 for every beam: carrying both costs
+//! mass and does not change λ.
+//!
 //! `w` is 1 for the physical mass; the objective "mass with a preference for tension" uses
-//! `w > 1` (a penalty on compression members, seed §4.3.3). m(0, L) = 0 and m ≥ 0 everywhere.
-//! a and h are increasing in |λ|, vanish at 0 and approach the exact branches with relative
-//! errors of order (ε/λ)²; the blend tail (the other branch's share) decays like e^(−2|λ|/ε),
-//! which matters because an Euler member is far heavier than a tie at small forces.
+//! `w > 1` (a penalty on compression members, seed §4.3.3).
 //!
 //! Joint mass (lumping, seed §4.3): each beam's mass is split equally between its two joints;
 //! external loads enter the force balance directly as forces (a load given as a mass `M` is the
@@ -61,39 +72,36 @@ pub struct MassModel {
     pub k_t: f64,
     /// Compression law.
     pub compression: Compression,
-    /// Blend width ε, N (> 0).
+    /// Smoothing width δ of the Euler square root, N (> 0; unused by the linear law).
     pub blend: f64,
     /// Weight w on the compression part (1 for the physical mass).
     pub compression_weight: f64,
 }
 
-/// Mass and its first and second partial derivatives in λ (N) and L (m).
+/// Mass of a beam with tension part t, compression part c (N) and length L (m), with its
+/// nonzero first and second partial derivatives (∂²/∂t², ∂²/∂t∂c vanish).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct MassDerivatives {
     /// m, kg.
     pub m: f64,
-    /// ∂m/∂λ, kg/N.
-    pub m_l: f64,
+    /// ∂m/∂t, kg/N.
+    pub m_t: f64,
+    /// ∂m/∂c, kg/N.
+    pub m_c: f64,
     /// ∂m/∂L, kg/m.
     pub m_len: f64,
-    /// ∂²m/∂λ².
-    pub m_ll: f64,
-    /// ∂²m/∂λ∂L.
-    pub m_l_len: f64,
+    /// ∂²m/∂c².
+    pub m_cc: f64,
+    /// ∂²m/∂t∂L.
+    pub m_t_len: f64,
+    /// ∂²m/∂c∂L.
+    pub m_c_len: f64,
     /// ∂²m/∂L².
     pub m_len_len: f64,
 }
 
-/// A smooth scalar function of λ with its first two derivatives.
-#[derive(Debug, Clone, Copy)]
-struct Smooth {
-    v: f64,
-    d: f64,
-    dd: f64,
-}
-
 impl MassModel {
-    /// The seed's steel model: k_T = 5e-6, Euler buckling with k_C = 5e-3.
+    /// The seed's steel model: k_T = 5e-6, Euler buckling with k_C = 5e-3; `blend` = δ in N.
     pub fn seed(blend: f64) -> Self {
         MassModel {
             k_t: 5e-6,
@@ -104,14 +112,14 @@ impl MassModel {
     }
 
     /// The plastic-design model: `ρ·|λ|·L/σ` with σ_T in tension and σ_C in compression (Pa,
-    /// kg/m³).
-    pub fn linear(sigma_t: f64, sigma_c: f64, density: f64, blend: f64) -> Self {
+    /// kg/m³). Exact: no smoothing.
+    pub fn linear(sigma_t: f64, sigma_c: f64, density: f64) -> Self {
         MassModel {
             k_t: density / sigma_t,
             compression: Compression::Linear {
                 k_c: density / sigma_c,
             },
-            blend,
+            blend: 0.0,
             compression_weight: 1.0,
         }
     }
@@ -124,77 +132,68 @@ impl MassModel {
         }
     }
 
-    /// Mass of a beam with axial force `lambda` (N, + compression) and length `length` (m).
+    /// Model mass of a beam with axial force `lambda` (N, + compression) and length `length`
+    /// (m): the split t = max(−λ, 0), c = max(λ, 0).
     pub fn mass(&self, lambda: f64, length: f64) -> f64 {
-        self.derivatives(lambda, length).m
+        self.derivatives((-lambda).max(0.0), lambda.max(0.0), length)
+            .m
     }
 
-    /// Mass and its first and second derivatives.
-    pub fn derivatives(&self, lambda: f64, length: f64) -> MassDerivatives {
-        let eps = self.blend;
-        let r = (lambda * lambda + eps * eps).sqrt();
-        let r3 = r * r * r;
-        let (l2, e2) = (lambda * lambda, eps * eps);
-        // Smooth |λ| = λ²/r.
-        let a = Smooth {
-            v: l2 / r,
-            d: lambda * (l2 + 2.0 * e2) / r3,
-            dd: e2 * (2.0 * e2 - l2) / (r3 * r * r),
-        };
-        // Blend weight (0 in tension, 1 in compression).
-        let th = (lambda / eps).tanh();
-        let sech2 = 1.0 - th * th;
-        let s = Smooth {
-            v: 0.5 * (1.0 + th),
-            d: 0.5 * sech2 / eps,
-            dd: -th * sech2 / (eps * eps),
-        };
-        let big_l = length;
-        // Tension part T(λ)·L with T = (1 − s)·k_T·a.
-        let kt = self.k_t;
-        let t = Smooth {
-            v: kt * (1.0 - s.v) * a.v,
-            d: kt * (-s.d * a.v + (1.0 - s.v) * a.d),
-            dd: kt * (-s.dd * a.v - 2.0 * s.d * a.d + (1.0 - s.v) * a.dd),
-        };
+    /// Unsmoothed mass (seed eqs. 4.4 and 4.7, or the linear law) of force λ and length L.
+    pub fn exact_mass(&self, lambda: f64, length: f64) -> f64 {
         let w = self.compression_weight;
-        // Compression part: C(λ)·L^p.
-        let (c, power) = match self.compression {
-            Compression::Euler { k_c } => {
-                // Smooth √|λ| = λ²/r^(3/2).
-                let r32 = r * r.sqrt();
-                let r72 = r32 * r * r;
-                let h = Smooth {
-                    v: l2 / r32,
-                    d: lambda * (0.5 * l2 + 2.0 * e2) / r72,
-                    dd: (-0.25 * l2 * l2 - 3.5 * e2 * l2 + 2.0 * e2 * e2) / (r72 * r * r),
-                };
-                (product(s, h, w * k_c), 2)
+        if lambda <= 0.0 {
+            self.k_t * -lambda * length
+        } else {
+            match self.compression {
+                Compression::Euler { k_c } => w * k_c * lambda.sqrt() * length * length,
+                Compression::Linear { k_c } => w * k_c * lambda * length,
             }
-            Compression::Linear { k_c } => (product(s, a, w * k_c), 1),
+        }
+    }
+
+    /// Mass and its derivatives at tension part `t`, compression part `c` (N) and length (m).
+    pub fn derivatives(&self, t: f64, c: f64, length: f64) -> MassDerivatives {
+        let w = self.compression_weight;
+        let big_l = length;
+        // Compression part w·k_C·G(c)·L^p.
+        let (k, g, dg, ddg, p) = match self.compression {
+            Compression::Euler { k_c } => {
+                let (g, dg, ddg) = smooth_root(c, self.blend);
+                (w * k_c, g, dg, ddg, 2)
+            }
+            Compression::Linear { k_c } => (w * k_c, c, 1.0, 0.0, 1),
         };
-        let (lp, dlp, ddlp) = match power {
+        let (lp, dlp, ddlp) = match p {
             2 => (big_l * big_l, 2.0 * big_l, 2.0),
             _ => (big_l, 1.0, 0.0),
         };
+        let kt = self.k_t;
         MassDerivatives {
-            m: t.v * big_l + c.v * lp,
-            m_l: t.d * big_l + c.d * lp,
-            m_len: t.v + c.v * dlp,
-            m_ll: t.dd * big_l + c.dd * lp,
-            m_l_len: t.d + c.d * dlp,
-            m_len_len: c.v * ddlp,
+            m: kt * t * big_l + k * g * lp,
+            m_t: kt * big_l,
+            m_c: k * dg * lp,
+            m_len: kt * t + k * g * dlp,
+            m_cc: k * ddg * lp,
+            m_t_len: kt,
+            m_c_len: k * dg * dlp,
+            m_len_len: k * g * ddlp,
         }
     }
 }
 
-/// k·f·g with derivatives.
-fn product(f: Smooth, g: Smooth, k: f64) -> Smooth {
-    Smooth {
-        v: k * f.v * g.v,
-        d: k * (f.d * g.v + f.v * g.d),
-        dd: k * (f.dd * g.v + 2.0 * f.d * g.d + f.v * g.dd),
+/// G(c), G′(c), G″(c) of the module header: √c above δ, the matching quartic below.
+fn smooth_root(c: f64, delta: f64) -> (f64, f64, f64) {
+    if c >= delta {
+        let r = c.sqrt();
+        return (r, 0.5 / r, -0.25 / (r * c));
     }
+    let sd = delta.sqrt();
+    let u = c / delta;
+    let q = u * (35.0 + u * (-35.0 + u * (21.0 - 5.0 * u))) / 16.0;
+    let dq = (35.0 + u * (-70.0 + u * (63.0 - 20.0 * u))) / 16.0;
+    let ddq = (-70.0 + u * (126.0 - 60.0 * u)) / 16.0;
+    (sd * q, dq / sd, ddq / (sd * delta))
 }
 
 #[cfg(test)]
@@ -205,67 +204,85 @@ mod tests {
         vec![
             MassModel::seed(100.0),
             MassModel::seed(100.0).with_compression_weight(3.0),
-            MassModel::linear(250e6, 150e6, 7850.0, 100.0),
+            MassModel::linear(250e6, 150e6, 7850.0),
         ]
     }
 
     #[test]
     fn derivatives_match_central_differences() {
         for model in models() {
-            for &lambda in &[-1e5, -300.0, -20.0, 0.0, 15.0, 250.0, 4e5] {
-                for &len in &[0.3, 2.0, 17.0] {
-                    let d = model.derivatives(lambda, len);
-                    let hl = 1e-4 * (lambda.abs() + model.blend);
-                    // m is quadratic in L: a wide step is exact up to rounding.
-                    let hx = 1e-3 * len;
-                    let at = |l: f64, x: f64| model.derivatives(l, x);
-                    // Fourth-order central differences.
-                    let fd = |f: &dyn Fn(f64) -> f64, x: f64, h: f64| {
-                        (8.0 * (f(x + h) - f(x - h)) - (f(x + 2.0 * h) - f(x - 2.0 * h)))
-                            / (12.0 * h)
-                    };
-                    let close = |a: f64, b: f64, what: &str| {
-                        assert!(
-                            (a - b).abs() <= 1e-6 * (a.abs() + b.abs()) + 1e-12,
-                            "{what}: analytic {a} vs fd {b} at λ={lambda}, L={len}, {model:?}"
-                        );
-                    };
-                    close(d.m_l, fd(&|l| at(l, len).m, lambda, hl), "m_λ");
-                    close(d.m_len, fd(&|x| at(lambda, x).m, len, hx), "m_L");
-                    close(d.m_ll, fd(&|l| at(l, len).m_l, lambda, hl), "m_λλ");
-                    close(d.m_l_len, fd(&|x| at(lambda, x).m_l, len, hx), "m_λL");
-                    close(d.m_len_len, fd(&|x| at(lambda, x).m_len, len, hx), "m_LL");
+            for &t in &[0.0, 20.0, 4e5] {
+                for &c in &[0.0, 15.0, 60.0, 250.0, 4e5] {
+                    for &len in &[0.3, 2.0, 17.0] {
+                        let d = model.derivatives(t, c, len);
+                        let hf = 1e-4 * (c + 100.0);
+                        let ht = 1e-4 * (t + 100.0);
+                        let hx = 1e-3 * len;
+                        let at = |t: f64, c: f64, x: f64| model.derivatives(t, c, x);
+                        // Fourth-order central differences.
+                        let fd = |f: &dyn Fn(f64) -> f64, x: f64, h: f64| {
+                            (8.0 * (f(x + h) - f(x - h)) - (f(x + 2.0 * h) - f(x - 2.0 * h)))
+                                / (12.0 * h)
+                        };
+                        let close = |a: f64, b: f64, what: &str| {
+                            assert!(
+                                (a - b).abs() <= 1e-6 * (a.abs() + b.abs()) + 1e-12,
+                                "{what}: analytic {a} vs fd {b} at t={t}, c={c}, L={len}"
+                            );
+                        };
+                        close(d.m_t, fd(&|v| at(v, c, len).m, t, ht), "m_t");
+                        close(d.m_c, fd(&|v| at(t, v, len).m, c, hf), "m_c");
+                        close(d.m_len, fd(&|x| at(t, c, x).m, len, hx), "m_L");
+                        close(d.m_cc, fd(&|v| at(t, v, len).m_c, c, hf), "m_cc");
+                        close(0.0, fd(&|v| at(v, c, len).m_t, t, ht), "m_tt");
+                        close(0.0, fd(&|v| at(t, v, len).m_t, c, hf), "m_tc");
+                        close(d.m_t_len, fd(&|x| at(t, c, x).m_t, len, hx), "m_tL");
+                        close(d.m_c_len, fd(&|x| at(t, c, x).m_c, len, hx), "m_cL");
+                        close(d.m_len_len, fd(&|x| at(t, c, x).m_len, len, hx), "m_LL");
+                    }
                 }
             }
         }
     }
 
     #[test]
-    fn branches_are_recovered_away_from_zero() {
-        let model = MassModel::seed(1.0);
-        let (lambda, len) = (1e6, 5.0);
-        // Relative errors of order (ε/λ)² = 1e-12, plus the blend tail.
-        let tension = model.mass(-lambda, len);
-        let exact_t = 5e-6 * lambda * len;
+    fn smoothed_mass_is_within_the_documented_error_of_the_exact_mass() {
+        let delta = 1e3;
+        let model = MassModel::seed(delta);
+        for &c in &[5e4, 1e5, 1e6] {
+            let exact = model.exact_mass(c, 4.0);
+            let smooth = model.mass(c, 4.0);
+            let rel = (exact - smooth) / exact;
+            // Exact at and above δ.
+            assert!(rel.abs() < 1e-14, "{rel} at c = {c}");
+        }
+        // Below δ: lighter than the seed's model, by at most 0.122·√δ·k_C·L².
+        for i in 1..1000 {
+            let c = delta * f64::from(i) / 1000.0;
+            let gap = model.exact_mass(c, 4.0) - model.mass(c, 4.0);
+            assert!(
+                gap >= 0.0 && gap <= 0.1218 * delta.sqrt() * 5e-3 * 16.0,
+                "{gap} at {c}"
+            );
+        }
+        // G is C³ at δ: one-sided third differences of m_cc agree.
+        let h = 1e-5 * delta;
+        let below = (model.derivatives(0.0, delta, 4.0).m_cc
+            - model.derivatives(0.0, delta - h, 4.0).m_cc)
+            / h;
+        let above = (model.derivatives(0.0, delta + h, 4.0).m_cc
+            - model.derivatives(0.0, delta, 4.0).m_cc)
+            / h;
         assert!(
-            (tension - exact_t).abs() / exact_t < 1e-9,
-            "{tension} {exact_t}"
+            (below - above).abs() < 1e-3 * above.abs(),
+            "{below} {above}"
         );
-        let compression = model.mass(lambda, len);
-        let exact_c = 5e-3 * lambda.sqrt() * len * len;
-        assert!(
-            (compression - exact_c).abs() / exact_c < 1e-9,
-            "{compression} {exact_c}"
-        );
-        // At λ = 10ε the blend still reproduces each branch to about 1%.
-        let near = MassModel::seed(1e3);
-        let t = near.mass(-1e4, 2.0);
-        assert!((t - 5e-6 * 1e4 * 2.0).abs() / t < 0.02, "{t}");
-        let linear = MassModel::linear(200e6, 100e6, 8000.0, 1.0);
-        let lt = linear.mass(-lambda, len);
-        let lc = linear.mass(lambda, len);
-        assert!((lt - 8000.0 * lambda * len / 200e6).abs() / lt < 1e-9);
-        assert!((lc - 8000.0 * lambda * len / 100e6).abs() / lc < 1e-9);
+        // Tension and the linear law are exact.
+        assert_eq!(model.mass(-2e5, 3.0), model.exact_mass(-2e5, 3.0));
+        assert!((model.mass(-2e5, 3.0) - 5e-6 * 2e5 * 3.0).abs() < 1e-12);
+        let linear = MassModel::linear(200e6, 100e6, 8000.0);
+        assert!((linear.mass(-1e6, 5.0) - 8000.0 * 1e6 * 5.0 / 200e6).abs() < 1e-9);
+        assert!((linear.mass(1e6, 5.0) - 8000.0 * 1e6 * 5.0 / 100e6).abs() < 1e-9);
     }
 
     #[test]

@@ -1,12 +1,14 @@
 //! The truss optimization problem (seed eq. 4.8) as an [`Nlp`], with exact sparse Jacobian and
 //! exact Lagrangian Hessian.
 //!
-//! Variables (scaled; F = largest external load in N, M = k_T·F·D reference mass in kg with D the
-//! diagonal of the fixed joints' box):
-//! - `x_λ[c·B + j] = λ_jc / F`: axial force of beam j in load case c (+ compression), bounds
-//!   `|λ| ≤ λ_max` (eq. 4.3);
-//! - positions of free joints, m, one variable per coordinate that may move (not the held axis,
-//!   not z in planar problems);
+//! Variables (scaled so the solver sees O(1) numbers; F = largest external load in N, D = the
+//! diagonal of the fixed joints' box in m (the span), M = k_T·F·D reference mass in kg):
+//! - `x[2(c·B + j)] = t_jc / F` and `x[2(c·B + j) + 1] = c_jc / F`: tension and compression
+//!   parts of the axial force of beam j in load case c, `λ = F·(x_c − x_t)` (+ compression),
+//!   bounds `0 ≤ t, c ≤ λ_max` (eq. 4.3). With linear mass this makes the fixed-geometry problem
+//!   exactly the plastic layout LP (see [`super::mass`]);
+//! - positions of free joints divided by D, one variable per coordinate that may move (not the
+//!   held axis, not z in planar problems);
 //! - with several load cases only: `x_s[j] = s_j / M ≥ 0`, the mass of beam j sized for its worst
 //!   case (below).
 //!
@@ -17,18 +19,22 @@
 //!    `r·[Σ_j ±λ_jc e_j + ½ g Σ_j m_j + f_ic] / F = 0`, with −λe at the beam's first end and +λe at
 //!    its second (compression pushes the ends apart). `m_j` is the beam's mass (self-weight,
 //!    lumped half to each end), `m(λ_jc, L_j)` with one case and `s_j` with several;
-//! 2. beam length `l_min ≤ L_j ≤ l_max` (m) for beams with a free end (eq. 4.8);
+//! 2. beam length `l_min/D ≤ L_j/D ≤ l_max/D` for beams with a free end (eq. 4.8);
 //! 3. several cases only: `m(λ_jc, L_j)/M − s_j/M ≤ 0` for every case and beam. Minimizing Σ s_j
 //!    makes s_j = max_c m(λ_jc, L_j) at the optimum: the worst case sizes the beam smoothly,
 //!    without a max();
-//! 4. symmetry: `p_k − R(p_i) = 0` for mirror pairs, `n·(p − r) = 0` for joints on the plane;
-//! 5. half-space obstacles (eq. 4.9): `n·(p_i − r) ≥ 0` for free joints (segments follow: the
+//! 4. symmetry: `(p_k − R(p_i))/D = 0` for mirror pairs, `n·(p − r)/D = 0` for joints on the
+//!    plane;
+//! 5. half-space obstacles (eq. 4.9): `n·(p_i − r)/D ≥ 0` for free joints (segments follow: the
 //!    half-space is convex);
 //! 6. sphere obstacles: `D(a_j, b_j)/R² ≥ 1` for beams with a free end, D the squared distance
 //!    from the centre to the whole segment (see [`super::geometry`]).
 //!
 //! Objective: Σ m_j / M (mass), Σ m_w,j / M (mass with compression weighted, tension preference),
 //! or Σ L_j / D (length of all beams). With several cases the mass objective is Σ s_j / M.
+//!
+//! Internally every derivative is first formed with respect to positions in metres and then
+//! multiplied by D per position column ([`TrussNlp::column_scale`]).
 //!
 //! Patterns: entries are emitted by one walk over the model; duplicates are merged into a sorted
 //! unique pattern once, so the Jacobian and Hessian patterns have no repeated pairs.
@@ -186,7 +192,7 @@ impl TrussNlp {
             adjacency[b.ends[1]].push((j, 1.0));
         }
 
-        let mut n = cases * beams;
+        let mut n = 2 * cases * beams;
         let axes = settings.variable_axes();
         let mut position_vars = vec![[None; 3]; joints.len()];
         for (i, joint) in joints.iter().enumerate() {
@@ -293,6 +299,20 @@ impl TrussNlp {
         Ok(nlp)
     }
 
+    /// Scale of variable `v`: D for positions, 1 for forces and sizes.
+    fn column_scale(&self, v: usize) -> f64 {
+        if (2 * self.cases * self.beams..self.size_offset.unwrap_or(self.n)).contains(&v) {
+            self.length_scale
+        } else {
+            1.0
+        }
+    }
+
+    /// Length scale D (the span), m.
+    pub fn length_scale(&self) -> f64 {
+        self.length_scale
+    }
+
     /// Random starting forces: uniform in ±10% of the largest load, N (case-major).
     pub fn random_start_forces(structure: &Structure, cases: usize, seed: u64) -> Vec<f64> {
         let scale = structure
@@ -332,7 +352,7 @@ impl TrussNlp {
         (0..self.cases)
             .map(|c| {
                 (0..self.beams)
-                    .map(|j| x[c * self.beams + j] * self.force_scale)
+                    .map(|j| self.lambda(x, c, j) * self.force_scale)
                     .collect()
             })
             .collect()
@@ -345,7 +365,7 @@ impl TrussNlp {
                 let mut p = j.position;
                 for k in 0..3 {
                     if let Some(v) = vars[k] {
-                        p[k] = x[v];
+                        p[k] = x[v] * self.length_scale;
                     }
                 }
                 p
@@ -360,14 +380,32 @@ impl TrussNlp {
             .map(|(j, b)| {
                 let len = (p[b.ends[1]] - p[b.ends[0]]).norm();
                 (0..self.cases)
-                    .map(|c| {
-                        self.settings
-                            .mass
-                            .mass(x[c * self.beams + j] * self.force_scale, len)
-                    })
+                    .map(|c| self.case_mass(&self.settings.mass, x, c, j, len).m)
                     .fold(0.0, f64::max)
             })
             .collect()
+    }
+
+    /// Scaled axial force λ/F of beam j in case c.
+    fn lambda(&self, x: &[f64], c: usize, j: usize) -> f64 {
+        x[self.compression_var(c, j)] - x[self.tension_var(c, j)]
+    }
+
+    /// Mass derivatives of beam j in case c under `model` at length `len` (m).
+    fn case_mass(
+        &self,
+        model: &MassModel,
+        x: &[f64],
+        c: usize,
+        j: usize,
+        len: f64,
+    ) -> MassDerivatives {
+        let f = self.force_scale;
+        model.derivatives(
+            x[self.tension_var(c, j)] * f,
+            x[self.compression_var(c, j)] * f,
+            len,
+        )
     }
 
     /// Largest force-balance residual over joints and cases at `x`, N (self-weight from
@@ -382,8 +420,12 @@ impl TrussNlp {
             .fold(0.0, f64::max))
     }
 
-    fn lambda_var(&self, c: usize, j: usize) -> usize {
-        c * self.beams + j
+    fn tension_var(&self, c: usize, j: usize) -> usize {
+        2 * (c * self.beams + j)
+    }
+
+    fn compression_var(&self, c: usize, j: usize) -> usize {
+        2 * (c * self.beams + j) + 1
     }
 
     fn states_unchecked(&self, x: &[f64]) -> Vec<BeamState> {
@@ -396,11 +438,7 @@ impl TrussNlp {
                     e: if length > 0.0 { d / length } else { Vec3::x() },
                     length: length.max(f64::MIN_POSITIVE),
                     mass: (0..self.cases)
-                        .map(|c| {
-                            self.settings
-                                .mass
-                                .derivatives(x[self.lambda_var(c, j)] * self.force_scale, length)
-                        })
+                        .map(|c| self.case_mass(&self.settings.mass, x, c, j, length))
                         .collect(),
                 }
             })
@@ -449,18 +487,16 @@ impl TrussNlp {
                     let rg = r.dot(&g);
                     for &(j, sign) in &self.adjacency[bj.joint] {
                         let st = &states[j];
-                        let lambda = x[self.lambda_var(c, j)] * f_scale;
-                        let (m_l, m_len) =
+                        let lambda = self.lambda(x, c, j) * f_scale;
+                        let (m_t, m_c, m_len) =
                             if self.settings.self_weight && self.size_offset.is_none() {
-                                (st.mass[c].m_l, st.mass[c].m_len)
+                                (st.mass[c].m_t, st.mass[c].m_c, st.mass[c].m_len)
                             } else {
-                                (0.0, 0.0)
+                                (0.0, 0.0, 0.0)
                             };
-                        emit(
-                            row,
-                            self.lambda_var(c, j),
-                            sign * r.dot(&st.e) + 0.5 * rg * m_l,
-                        );
+                        let re = sign * r.dot(&st.e);
+                        emit(row, self.tension_var(c, j), -re + 0.5 * rg * m_t);
+                        emit(row, self.compression_var(c, j), re + 0.5 * rg * m_c);
                         // ∂/∂d of r·(±λe) + ½ r·g m, divided by F.
                         let dd = (sign * lambda * projection_gradient(r, &st.e, st.length)
                             + 0.5 * rg * m_len * st.e)
@@ -474,18 +510,17 @@ impl TrussNlp {
             }
         }
         for (k, &j) in self.length_beams.iter().enumerate() {
-            self.emit_ends(self.length_offset + k, j, &states[j].e, emit);
+            let ds = states[j].e / self.length_scale;
+            self.emit_ends(self.length_offset + k, j, &ds, emit);
         }
         if let Some(o) = self.size_offset {
             for c in 0..self.cases {
                 for (j, st) in states.iter().enumerate() {
                     let row = self.size_row_offset + c * self.beams + j;
                     let md = &st.mass[c];
-                    emit(
-                        row,
-                        self.lambda_var(c, j),
-                        md.m_l * f_scale / self.mass_scale,
-                    );
+                    let k = f_scale / self.mass_scale;
+                    emit(row, self.tension_var(c, j), md.m_t * k);
+                    emit(row, self.compression_var(c, j), md.m_c * k);
                     self.emit_ends(row, j, &(md.m_len / self.mass_scale * st.e), emit);
                     emit(row, o + j, -1.0);
                 }
@@ -493,7 +528,7 @@ impl TrussNlp {
         }
         for (k, lr) in self.linear.iter().enumerate() {
             for &(col, coef) in &lr.terms {
-                emit(self.linear_offset + k, col, coef);
+                emit(self.linear_offset + k, col, coef / self.length_scale);
             }
         }
         let p = self.positions(x);
@@ -550,14 +585,16 @@ impl TrussNlp {
         }
         let mut length_mult = vec![0.0; self.beams];
         for (k, &j) in self.length_beams.iter().enumerate() {
-            length_mult[j] = y[self.length_offset + k];
+            length_mult[j] = y[self.length_offset + k] / self.length_scale;
         }
         let single_mass_objective = self.size_offset.is_none()
             && matches!(
                 self.settings.objective,
                 Objective::Mass | Objective::MassTensionPreference(_)
             );
-        let size = nc + 6;
+        // Local variables: (t, c) per case, then the six end coordinates.
+        let size = 2 * nc + 6;
+        let (pa, pb) = (2 * nc, 2 * nc + 3);
         let mut h = DMatrix::<f64>::zeros(size, size);
         for (j, st) in states.iter().enumerate() {
             h.fill(0.0);
@@ -571,9 +608,11 @@ impl TrussNlp {
             }
             dd += length_coef * hl;
             for c in 0..nc {
-                let lambda_hat = x[self.lambda_var(c, j)];
+                let lambda_hat = self.lambda(x, c, j);
                 let yc = u[b * nc + c] - u[a * nc + c];
-                let mut cross = projection_gradient(&yc, &e, st.length);
+                let pg = projection_gradient(&yc, &e, st.length);
+                let mut cross_t = -pg;
+                let mut cross_c = pg;
                 dd += lambda_hat * projection_hessian(&yc, &e, st.length);
                 // Weighted physical-mass Hessian: self-weight (one case) and size rows.
                 let mut w = 0.0;
@@ -584,34 +623,45 @@ impl TrussNlp {
                     w += y[self.size_row_offset + c * self.beams + j] / ms;
                 }
                 let md = &st.mass[c];
-                let mut ll = w * fs * fs * md.m_ll;
-                cross += w * fs * md.m_l_len * e;
+                let mut cc = w * fs * fs * md.m_cc;
+                cross_t += w * fs * md.m_t_len * e;
+                cross_c += w * fs * md.m_c_len * e;
                 dd += w * (md.m_len_len * e * e.transpose() + md.m_len * hl);
                 if single_mass_objective {
-                    let mo = self.objective_mass.derivatives(lambda_hat * fs, st.length);
+                    let mo = self.case_mass(&self.objective_mass, x, c, j, st.length);
                     let s = sigma / ms;
-                    ll += s * fs * fs * mo.m_ll;
-                    cross += s * fs * mo.m_l_len * e;
+                    cc += s * fs * fs * mo.m_cc;
+                    cross_t += s * fs * mo.m_t_len * e;
+                    cross_c += s * fs * mo.m_c_len * e;
                     dd += s * (mo.m_len_len * e * e.transpose() + mo.m_len * hl);
                 }
-                h[(c, c)] += ll;
-                for k in 0..3 {
-                    h[(c, nc + k)] -= cross[k];
-                    h[(nc + k, c)] -= cross[k];
-                    h[(c, nc + 3 + k)] += cross[k];
-                    h[(nc + 3 + k, c)] += cross[k];
+                let (it, ic) = (2 * c, 2 * c + 1);
+                h[(ic, ic)] += cc;
+                for (i, cross) in [(it, cross_t), (ic, cross_c)] {
+                    for k in 0..3 {
+                        h[(i, pa + k)] -= cross[k];
+                        h[(pa + k, i)] -= cross[k];
+                        h[(i, pb + k)] += cross[k];
+                        h[(pb + k, i)] += cross[k];
+                    }
                 }
             }
             for r in 0..3 {
                 for s in 0..3 {
-                    h[(nc + r, nc + s)] += dd[(r, s)];
-                    h[(nc + 3 + r, nc + 3 + s)] += dd[(r, s)];
-                    h[(nc + r, nc + 3 + s)] -= dd[(r, s)];
-                    h[(nc + 3 + r, nc + s)] -= dd[(r, s)];
+                    h[(pa + r, pa + s)] += dd[(r, s)];
+                    h[(pb + r, pb + s)] += dd[(r, s)];
+                    h[(pa + r, pb + s)] -= dd[(r, s)];
+                    h[(pb + r, pa + s)] -= dd[(r, s)];
                 }
             }
-            let mut vars: Vec<Option<usize>> =
-                (0..nc).map(|c| Some(self.lambda_var(c, j))).collect();
+            let mut vars: Vec<Option<usize>> = (0..nc)
+                .flat_map(|c| {
+                    [
+                        Some(self.tension_var(c, j)),
+                        Some(self.compression_var(c, j)),
+                    ]
+                })
+                .collect();
             vars.extend(self.position_vars[a]);
             vars.extend(self.position_vars[b]);
             for r in 0..size {
@@ -664,7 +714,7 @@ impl TrussNlp {
                 let mut force = joint.loads[c];
                 for &(j, sign) in &self.adjacency[bj.joint] {
                     let st = &states[j];
-                    force += sign * x[self.lambda_var(c, j)] * self.force_scale * st.e;
+                    force += sign * self.lambda(x, c, j) * self.force_scale * st.e;
                     force += 0.5 * self.beam_weight_mass(x, st, c, j) * g;
                 }
                 for (k, r) in bj.basis.iter().enumerate() {
@@ -673,7 +723,7 @@ impl TrussNlp {
             }
         }
         for (k, &j) in self.length_beams.iter().enumerate() {
-            c_out[self.length_offset + k] = states[j].length;
+            c_out[self.length_offset + k] = states[j].length / self.length_scale;
         }
         if let Some(o) = self.size_offset {
             for c in 0..self.cases {
@@ -684,8 +734,8 @@ impl TrussNlp {
             }
         }
         for (k, lr) in self.linear.iter().enumerate() {
-            c_out[self.linear_offset + k] =
-                lr.constant + lr.terms.iter().map(|&(v, a)| a * x[v]).sum::<f64>();
+            c_out[self.linear_offset + k] = lr.constant / self.length_scale
+                + lr.terms.iter().map(|&(v, a)| a * x[v]).sum::<f64>();
         }
         let p = self.positions(x);
         for (k, &(j, center, radius)) in self.spheres.iter().enumerate() {
@@ -703,10 +753,7 @@ impl TrussNlp {
             (_, Some(o)) => x[o..o + self.beams].iter().sum(),
             (_, None) => {
                 (states.iter().enumerate())
-                    .map(|(j, s)| {
-                        self.objective_mass
-                            .mass(x[self.lambda_var(0, j)] * self.force_scale, s.length)
-                    })
+                    .map(|(j, s)| self.case_mass(&self.objective_mass, x, 0, j, s.length).m)
                     .sum::<f64>()
                     / self.mass_scale
             }
@@ -724,14 +771,16 @@ impl TrussNlp {
             (_, Some(o)) => grad[o..o + self.beams].fill(1.0),
             (_, None) => {
                 for (j, s) in states.iter().enumerate() {
-                    let v = self.lambda_var(0, j);
-                    let md = self
-                        .objective_mass
-                        .derivatives(x[v] * self.force_scale, s.length);
-                    grad[v] += md.m_l * self.force_scale / self.mass_scale;
+                    let md = self.case_mass(&self.objective_mass, x, 0, j, s.length);
+                    let k = self.force_scale / self.mass_scale;
+                    grad[self.tension_var(0, j)] += md.m_t * k;
+                    grad[self.compression_var(0, j)] += md.m_c * k;
                     self.add_end_gradient(j, &(md.m_len / self.mass_scale * s.e), grad);
                 }
             }
+        }
+        for (v, g) in grad.iter_mut().enumerate() {
+            *g *= self.column_scale(v);
         }
     }
 
@@ -761,8 +810,8 @@ impl Nlp for TrussNlp {
         xl.fill(f64::NEG_INFINITY);
         xu.fill(f64::INFINITY);
         let lmax = self.settings.max_force / self.force_scale;
-        for v in 0..self.cases * self.beams {
-            xl[v] = -lmax;
+        for v in 0..2 * self.cases * self.beams {
+            xl[v] = 0.0;
             xu[v] = lmax;
         }
         if let Some(o) = self.size_offset {
@@ -771,16 +820,17 @@ impl Nlp for TrussNlp {
         cl.fill(0.0);
         cu.fill(0.0);
         for k in 0..self.length_beams.len() {
-            cl[self.length_offset + k] = self.settings.min_length;
-            cu[self.length_offset + k] = self.settings.max_length.unwrap_or(f64::INFINITY);
+            cl[self.length_offset + k] = self.settings.min_length / self.length_scale;
+            cu[self.length_offset + k] =
+                self.settings.max_length.unwrap_or(f64::INFINITY) / self.length_scale;
         }
         if self.size_offset.is_some() {
             let rows = self.size_row_offset..self.linear_offset;
             cl[rows].fill(f64::NEG_INFINITY);
         }
         for (k, lr) in self.linear.iter().enumerate() {
-            cl[self.linear_offset + k] = lr.lower;
-            cu[self.linear_offset + k] = lr.upper;
+            cl[self.linear_offset + k] = lr.lower / self.length_scale;
+            cu[self.linear_offset + k] = lr.upper / self.length_scale;
         }
         for k in 0..self.spheres.len() {
             cl[self.sphere_offset + k] = 1.0;
@@ -790,16 +840,16 @@ impl Nlp for TrussNlp {
 
     fn start(&self, x: &mut [f64]) {
         x.fill(0.0);
-        for (v, f) in self.start_forces.iter().enumerate() {
-            x[v] = (f / self.force_scale).clamp(
-                -self.settings.max_force / self.force_scale,
-                self.settings.max_force / self.force_scale,
-            );
+        let lmax = self.settings.max_force / self.force_scale;
+        for (k, f) in self.start_forces.iter().enumerate() {
+            let lambda = (f / self.force_scale).clamp(-lmax, lmax);
+            x[2 * k] = (-lambda).max(0.0);
+            x[2 * k + 1] = lambda.max(0.0);
         }
         for (j, vars) in self.structure.joints.iter().zip(&self.position_vars) {
             for (k, var) in vars.iter().enumerate() {
                 if let Some(v) = var {
-                    x[*v] = j.position[k];
+                    x[*v] = j.position[k] / self.length_scale;
                 }
             }
         }
@@ -807,11 +857,7 @@ impl Nlp for TrussNlp {
             for j in 0..self.beams {
                 let len = self.structure.length(j);
                 x[o + j] = (0..self.cases)
-                    .map(|c| {
-                        self.settings
-                            .mass
-                            .mass(x[c * self.beams + j] * self.force_scale, len)
-                    })
+                    .map(|c| self.case_mass(&self.settings.mass, x, c, j, len).m)
                     .fold(0.0, f64::max)
                     / self.mass_scale;
             }
@@ -846,8 +892,8 @@ impl Nlp for TrussNlp {
         jac.fill(0.0);
         let mut k = 0;
         let slot = &self.jacobian.slot;
-        self.walk_jacobian(x, &states, &mut |_, _, v| {
-            jac[slot[k]] += v;
+        self.walk_jacobian(x, &states, &mut |_, col, v| {
+            jac[slot[k]] += v * self.column_scale(col);
             k += 1;
         });
         if grad.iter().chain(jac.iter()).any(|v| !v.is_finite()) {
@@ -872,8 +918,8 @@ impl Nlp for TrussNlp {
         values.fill(0.0);
         let mut k = 0;
         let slot = &self.hessian.slot;
-        self.walk_hessian(x, &states, sigma, lambda, &mut |_, _, v| {
-            values[slot[k]] += v;
+        self.walk_hessian(x, &states, sigma, lambda, &mut |r, col, v| {
+            values[slot[k]] += v * self.column_scale(r) * self.column_scale(col);
             k += 1;
         });
         if values.iter().any(|v| !v.is_finite()) {

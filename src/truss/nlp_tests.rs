@@ -48,7 +48,8 @@ fn point(nlp: &TrussNlp, forces: &[f64]) -> Vec<f64> {
     let mut x = vec![0.0; nlp.dims().n];
     nlp.start(&mut x);
     for (v, f) in forces.iter().enumerate() {
-        x[v] = f / nlp.force_scale();
+        x[2 * v] = (-f).max(0.0) / nlp.force_scale();
+        x[2 * v + 1] = f.max(0.0) / nlp.force_scale();
     }
     x
 }
@@ -228,7 +229,7 @@ fn derivatives_of_every_objective() {
         check(rich_structure(1), set, 2, &format!("{objective:?}"));
     }
     let mut set = settings(1);
-    set.mass = MassModel::linear(250e6, 120e6, 7850.0, 50.0);
+    set.mass = MassModel::linear(250e6, 120e6, 7850.0);
     set.self_weight = true;
     check(rich_structure(1), set, 3, "linear mass");
 }
@@ -365,7 +366,7 @@ fn planar_problems_have_two_coordinates_per_free_joint() {
     let beams = s.beams.len();
     let forces = TrussNlp::random_start_forces(&s, 1, 9);
     let nlp = TrussNlp::new(s, set, forces).unwrap();
-    assert_eq!(nlp.dims().n, beams + 2 * free);
+    assert_eq!(nlp.dims().n, 2 * beams + 2 * free);
     let mut x = vec![0.0; nlp.dims().n];
     nlp.start(&mut x);
     assert_derivatives(&nlp, &x, 9, 2e-6, "planar");
@@ -385,8 +386,9 @@ fn zero_length_beams_are_domain_errors() {
         .unwrap();
     let target = s.joints[b.ends[0]].position;
     let free_index = s.joints[..b.ends[1]].iter().filter(|j| j.is_free()).count();
-    let base = s.beams.len() + 3 * free_index;
-    x[base..base + 3].copy_from_slice(target.as_slice());
+    let base = 2 * s.beams.len() + 3 * free_index;
+    let scaled = target / nlp.length_scale();
+    x[base..base + 3].copy_from_slice(scaled.as_slice());
     let (mut f, mut c) = (0.0, vec![0.0; nlp.dims().m]);
     assert!(matches!(
         nlp.eval(&x, &mut f, &mut c),

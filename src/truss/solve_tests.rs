@@ -57,7 +57,7 @@ fn linear_settings(move_joints: bool) -> super::model::Settings {
         // σ = 1 Pa and ρ = 1 kg/m³: mass in kg equals volume in m³. The blend width must be
         // small: below it the smoothed |λ| is quadratic, and spreading a force over many idle
         // bars becomes artificially cheap (at ε = 1e-3 P the sizing solve ends 1.2% below the LP).
-        mass: MassModel::linear(1.0, 1.0, 1.0, 1e-5),
+        mass: MassModel::linear(1.0, 1.0, 1.0),
         objective: super::model::Objective::Mass,
         self_weight: false,
         max_force: 10.0,
