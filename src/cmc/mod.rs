@@ -449,7 +449,7 @@ mod tests {
             assert!((got / want - 1.0).abs() < 1e-6);
         }
         let names: Vec<&str> = outcome.artifacts.iter().map(|a| a.name.as_str()).collect();
-        assert_eq!(names, ["model.glb", "preview.svg"]);
+        assert_eq!(names, ["iterations.csv", "model.glb", "preview.svg"]);
     }
 
     #[test]
