@@ -171,7 +171,8 @@ pub struct MassSpec {
     pub sigma_c: Option<f64>,
     /// Density ρ, kg/m³ (linear model; default 7850, steel).
     pub density: Option<f64>,
-    /// Blend width ε across λ = 0, N (default 1e-3 × the largest load).
+    /// δ, N: below this compression force the Euler √c is a quartic matching it to third order
+    /// (default 5% of the largest load; ignored by the linear model).
     pub blend_force: Option<f64>,
 }
 
