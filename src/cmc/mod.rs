@@ -32,7 +32,7 @@ use std::time::Instant;
 
 use crate::error::{Error, InputError};
 use crate::run::{Artifact, Outcome, ResultSummary, RunOptions};
-use crate::solver::{Evaluations, Nlp};
+use crate::solver::Nlp;
 use crate::spec::Source;
 
 use nlp::{CmcNlp, VolumeConstraint};
@@ -258,30 +258,17 @@ fn check(
             }),
         );
     }
-    let mut objective = 0.0;
-    let mut c = vec![0.0; dims.m];
-    nlp.eval(&start, &mut objective, &mut c)
+    let mut summary = ResultSummary::checked(&problem.name, "cmc", opts.seed, nlp, &start, passed)
         .map_err(|e| Error::Runtime(format!("start point: {e}")))?;
-    let mut summary = ResultSummary {
-        problem: problem.name.clone(),
-        kind: "cmc".into(),
-        status: "Checked".into(),
-        status_message: if passed {
-            "Derivatives agree with central differences.".into()
-        } else {
-            format!(
-                "Derivatives disagree with central differences (error {:.2e} at {}).",
-                report.max_error, report.worst
-            )
-        },
-        objective: area::total_area(&mesh),
-        max_violation: c.iter().fold(0.0, |m: f64, v| m.max(v.abs())),
-        iterations: 0,
-        evaluations: Evaluations::default(),
-        timings: Default::default(),
-        seed: opts.seed,
-        figures: fig,
-    };
+    if !passed {
+        summary.status_message = format!(
+            "{} Largest error {:.2e} at {}.",
+            summary.status_message, report.max_error, report.worst
+        );
+    }
+    // The module's objective in SI units: the start's total area, m².
+    summary.objective = area::total_area(&mesh);
+    summary.figures = fig;
     summary.timings.insert("build".into(), build_seconds);
     summary
         .timings

@@ -62,55 +62,26 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let d = nlp.dims();
     let mut x = vec![0.0; d.n];
     nlp.start(&mut x);
-    let (mut f, mut c) = (0.0, vec![0.0; d.m]);
     let failed = |e: crate::solver::EvalError| Error::Runtime(format!("{}: {e}", problem.name));
-    nlp.eval(&x, &mut f, &mut c).map_err(failed)?;
-    let (mut xl, mut xu, mut cl, mut cu) = (
-        vec![0.0; d.n],
-        vec![0.0; d.n],
-        vec![0.0; d.m],
-        vec![0.0; d.m],
-    );
-    nlp.bounds(&mut xl, &mut xu, &mut cl, &mut cu);
-    let violation = c
-        .iter()
-        .zip(cl.iter().zip(&cu))
-        .map(|(v, (lo, hi))| (lo - v).max(v - hi).max(0.0))
-        .fold(0.0, f64::max);
     let check = reduced::check_derivatives(&nlp, &x, 1e-5).map_err(failed)?;
     let passed = check.jacobian_error < CHECK_TOLERANCE
         && check.gradient_error < CHECK_TOLERANCE
         && check.pattern_violations == 0;
-    let mut timings = std::collections::BTreeMap::new();
-    timings.insert("check".to_string(), t0.elapsed().as_secs_f64());
-    let summary = ResultSummary {
-        problem: problem.name.clone(),
-        kind: "gait".into(),
-        status: "Checked".into(),
-        status_message: if passed {
-            "Exact derivatives agree with central differences.".into()
-        } else {
-            "Exact derivatives disagree with central differences.".into()
-        },
-        objective: f,
-        max_violation: violation,
-        iterations: 0,
-        evaluations: Evaluations {
-            functions: 1 + 4 * d.n,
-            derivatives: 1,
-            hessians: 0,
-        },
-        timings,
-        seed: opts.seed,
-        figures: serde_json::json!({
-            "variables": d.n,
-            "constraints": d.m,
-            "jacobian_nonzeros": d.jac_nnz,
-            "jacobian_error": check.jacobian_error,
-            "gradient_error": check.gradient_error,
-            "pattern_violations": check.pattern_violations,
-        }),
-    };
+    let mut summary = ResultSummary::checked(&problem.name, "gait", opts.seed, &nlp, &x, passed)
+        .map_err(failed)?;
+    summary.evaluations.functions += 4 * d.n;
+    summary.evaluations.derivatives = 1;
+    summary
+        .timings
+        .insert("check".to_string(), t0.elapsed().as_secs_f64());
+    summary.figures = serde_json::json!({
+        "variables": d.n,
+        "constraints": d.m,
+        "jacobian_nonzeros": d.jac_nnz,
+        "jacobian_error": check.jacobian_error,
+        "gradient_error": check.gradient_error,
+        "pattern_violations": check.pattern_violations,
+    });
     Ok(Outcome {
         summary,
         status: None,

@@ -261,30 +261,15 @@ fn check(
     let started = Instant::now();
     let mut x = vec![0.0; nlp.dims().n];
     nlp.start(&mut x);
-    let (mut f, mut c) = (0.0, vec![0.0; nlp.dims().m]);
-    nlp.eval(&x, &mut f, &mut c)
-        .map_err(|e| Error::Runtime(format!("evaluation at the start point: {e}")))?;
     let report = check_derivatives(nlp, &x, &CheckOptions::default())
         .map_err(|e| Error::Runtime(format!("derivative check: {e}")))?;
     timings.insert("check".to_string(), started.elapsed().as_secs_f64());
     let passed = report.passed();
     let d = nlp.dims();
-    let summary = ResultSummary {
-        problem: problem.name().to_string(),
-        kind: "truss".into(),
-        status: "Checked".into(),
-        status_message: if passed {
-            "Checked: the derivatives agree with finite differences.".into()
-        } else {
-            "Checked: the derivatives disagree with finite differences.".into()
-        },
-        objective: f,
-        max_violation: 0.0,
-        iterations: 0,
-        evaluations: Evaluations::default(),
-        timings,
-        seed,
-        figures: json!({
+    let mut summary = ResultSummary::checked(problem.name(), "truss", seed, nlp, &x, passed)
+        .map_err(|e| Error::Runtime(format!("evaluation at the start point: {e}")))?;
+    summary.timings = timings;
+    summary.figures = json!({
             "variables": d.n,
             "constraints": d.m,
             "jacobian_nonzeros": d.jac_nnz,
@@ -292,8 +277,7 @@ fn check(
             "joints": nlp.structure().joints.len(),
             "beams": nlp.structure().beams.len(),
             "derivatives": report,
-        }),
-    };
+    });
     Ok(Outcome {
         summary,
         status: None,
