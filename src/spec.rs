@@ -17,6 +17,7 @@ use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
 use crate::error::InputError;
+use crate::solver::qp::QpMethod;
 use crate::solver::{HessianMode, Options};
 
 mod global;
@@ -176,6 +177,8 @@ pub struct SolverSpec {
     pub hessian: Option<HessianMode>,
     /// Number of correction pairs kept by limited-memory BFGS; default 10.
     pub lbfgs_memory: Option<usize>,
+    /// QP subproblem method: "auto" (default), "dense" or "sparse".
+    pub qp: Option<QpMethod>,
     /// Iteration-log detail: 0 silent, 1 one line per iteration (default), 2 more.
     pub verbosity: Option<u8>,
 }
@@ -243,6 +246,9 @@ impl SolverSpec {
         }
         if let Some(v) = self.lbfgs_memory {
             o.lbfgs_memory = v;
+        }
+        if let Some(v) = self.qp {
+            o.qp_method = v;
         }
         if let Some(v) = self.verbosity {
             o.verbosity = v;
