@@ -6,7 +6,12 @@
 //! ([`super::sparse`]) above, with one [`SparseQp`] kept in the [`WarmStart`] so that its
 //! symbolic analysis is reused by every QP of the same sparsity pattern. No n×n matrix is
 //! formed on the sparse path: a `LowRank` Hessian stays in compact form, a `SparseLower` one
-//! (possibly indefinite) is convexified by the sparse method's inertia correction.
+//! (possibly indefinite) is convexified by the sparse method's inertia correction, with the
+//! shift schedule of `hessian::exact` (δ₀ = 1 relative growing ×100 when the previous QP needed
+//! no shift, else from a third of the last shift growing ×8), so that both paths take the same
+//! steps: a barely sufficient shift (IPOPT's δ₀ = 1e-4, meant for a barrier method) leaves
+//! H + δI nearly singular along the null space of the constraints and gives long, poorly
+//! modelled steps that the line search cuts to a few percent.
 //!
 //! On the dense path a `SparseLower` Hessian is densified and shifted by `δI` until its
 //! Cholesky factorization exists, with δ growing geometrically from `1e-8·(1+max|Hᵢᵢ|)`; a
@@ -29,10 +34,19 @@ use super::{QpHessian, QpProblem, QpSolution, QpStatus};
 /// Variables above which [`QpMethod::Auto`] takes the sparse method.
 pub const DENSE_LIMIT: usize = 2000;
 
-/// First relative convexification shift of the sparse method (see
-/// [`SparseQp::first_shift`]); a Hessian lacking curvature along a direction of recession is
-/// caught by the unbounded-QP retry with δ₀ = 1 instead.
-const FIRST_SHIFT: f64 = 1e-4;
+/// First relative convexification shift of the sparse method when the previous QP needed
+/// none (δ₀ of `hessian::exact`: no barrier curvature here, so a nearly singular H + δI must
+/// not be passed on); a Hessian lacking curvature along a direction of recession is caught by
+/// the unbounded-QP retry instead.
+const SHIFT_FIRST: f64 = 1.0;
+/// Growth of the first convexification search (κ̄⁺ of Wächter & Biegler 2006, §3.1).
+const SHIFT_FIRST_GROWTH: f64 = 100.0;
+/// Later searches start from the last shift times this (κ⁻) ...
+const SHIFT_DECREASE: f64 = 1.0 / 3.0;
+/// ... but not below this (δ_min, relative) ...
+const SHIFT_MIN: f64 = 1e-10;
+/// ... and grow by this (κ⁺).
+const SHIFT_GROWTH: f64 = 8.0;
 
 /// Which QP method solves the subproblems.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -67,6 +81,10 @@ pub struct WarmStart {
     sparse: Option<Box<SparseQp>>,
     /// δ of the last sparse solve: the QP solved had `H + δI` (0 on the dense path).
     convexification: f64,
+    /// The last sparse shift relative to `max(1, maxⱼ|Hⱼⱼ|)`, where the next search starts.
+    shift_memory: f64,
+    /// The next sparse solve repeats the last shift (see [`WarmStart::snapshot`]).
+    repeat_shift: bool,
 }
 
 impl fmt::Debug for WarmStart {
@@ -94,10 +112,18 @@ impl WarmStart {
         self.working_set.clear();
     }
 
-    /// The dense working set, to be put back with [`WarmStart::restore`] after a QP whose
-    /// working set must not carry over (a second-order correction).
-    pub fn snapshot(&self) -> Vec<ConstraintId> {
-        self.working_set.clone()
+    /// The state to be put back with [`WarmStart::restore`] after a QP that must not carry
+    /// over (a second-order correction). Until then, solves repeat the convexification of the
+    /// last one: a correction of the same H and A must see the same `H + δI` as the step it
+    /// corrects, or it is a step of another model.
+    pub fn snapshot(&mut self) -> Snapshot {
+        let saved = Snapshot {
+            working_set: self.working_set.clone(),
+            shift_memory: self.shift_memory,
+            convexification: self.convexification,
+        };
+        self.repeat_shift = true;
+        saved
     }
 
     /// The shift δ ≥ 0 the last sparse solve added to a `SparseLower` Hessian (the step is
@@ -106,10 +132,21 @@ impl WarmStart {
         self.convexification
     }
 
-    /// Puts back a working set taken by [`WarmStart::snapshot`].
-    pub fn restore(&mut self, working_set: Vec<ConstraintId>) {
-        self.working_set = working_set;
+    /// Puts back the state taken by [`WarmStart::snapshot`].
+    pub fn restore(&mut self, saved: Snapshot) {
+        self.working_set = saved.working_set;
+        self.shift_memory = saved.shift_memory;
+        self.convexification = saved.convexification;
+        self.repeat_shift = false;
     }
+}
+
+/// What [`WarmStart::snapshot`] saves.
+#[derive(Debug, Clone)]
+pub struct Snapshot {
+    working_set: Vec<ConstraintId>,
+    shift_memory: f64,
+    convexification: f64,
 }
 
 /// Solves `problem`; `tolerance` is the relative KKT tolerance of the sparse method.
@@ -118,10 +155,23 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
     if warm.method.is_sparse(n) {
         let solver = warm
             .sparse
-            .get_or_insert_with(|| Box::new(sqp_sparse_solver()));
+            .get_or_insert_with(|| Box::new(SparseQp::new()));
+        (solver.first_shift, solver.shift_growth) = if warm.repeat_shift && warm.shift_memory > 0.0
+        {
+            // Trial 0 fails again (same H and A), the remembered shift succeeds.
+            (warm.shift_memory, SHIFT_GROWTH)
+        } else if warm.shift_memory == 0.0 {
+            (SHIFT_FIRST, SHIFT_FIRST_GROWTH)
+        } else {
+            (
+                (SHIFT_DECREASE * warm.shift_memory).max(SHIFT_MIN),
+                SHIFT_GROWTH,
+            )
+        };
         let (mut solution, info) = solver.solve(problem, tolerance);
         warm.convexification = info.convexification;
         if let QpHessian::SparseLower(h) = problem.h {
+            warm.shift_memory = info.convexification / max_diagonal(h).max(1.0);
             // The inertia correction makes the reduced Hessian non-singular, not positive
             // definite on every direction of recession: an exact Hessian without curvature
             // along a descent direction gives an unbounded QP. As on the dense path, the
@@ -137,7 +187,9 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
                     h: QpHessian::SparseLower(&shifted),
                     ..*problem
                 };
-                let (retried, info) = sqp_sparse_solver().solve(&retry, tolerance);
+                let mut fresh = SparseQp::new();
+                fresh.first_shift = SHIFT_FIRST;
+                let (retried, info) = fresh.solve(&retry, tolerance);
                 solution = retried;
                 warm.convexification = shift + info.convexification;
                 shift *= 100.0;
@@ -197,13 +249,6 @@ fn identify_active_set(problem: &QpProblem, solution: &mut QpSolution) {
             *lambda = 0.0;
         }
     }
-}
-
-/// The sparse solver as the SQP uses it.
-fn sqp_sparse_solver() -> SparseQp {
-    let mut solver = SparseQp::new();
-    solver.first_shift = FIRST_SHIFT;
-    solver
 }
 
 /// max |Hᵢᵢ| of a lower triangle.
