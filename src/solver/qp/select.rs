@@ -196,7 +196,10 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
             }
         }
         if solution.status == QpStatus::Optimal {
-            identify_active_set(problem, &mut solution);
+            if let Some(polished) = polish(problem, &solution, warm, tolerance) {
+                solution = polished;
+            }
+            identify_active_set(problem, &mut solution, tolerance);
         }
         return solution;
     }
@@ -220,20 +223,136 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
     }
 }
 
+/// The bounds of `problem` with the active set of an interior-point `solution` imposed: bounds
+/// and rows whose gap is at most their multiplier become equalities at that bound, inactive
+/// rows become free. `None` when every active gap is already within the QP's accuracy.
+fn active_set_problem(
+    problem: &QpProblem,
+    solution: &QpSolution,
+    tolerance: f64,
+) -> Option<[Vec<f64>; 4]> {
+    let (mut dl, mut du) = (problem.dl.to_vec(), problem.du.to_vec());
+    let (mut bl, mut bu) = (problem.bl.to_vec(), problem.bu.to_vec());
+    let mut ambiguous = false;
+    let mut fix = |value: f64, bound: f64, lo: &mut f64, hi: &mut f64| {
+        ambiguous |= (value - bound).abs() > tolerance * (1.0 + bound.abs());
+        (*lo, *hi) = (bound, bound);
+    };
+    for j in 0..dl.len() {
+        let (l, u, d, z) = (dl[j], du[j], solution.d[j], solution.z[j]);
+        if l == u {
+            continue;
+        }
+        if z < 0.0 && d - l <= -z {
+            fix(d, l, &mut dl[j], &mut du[j]);
+        } else if z > 0.0 && u - d <= z {
+            fix(d, u, &mut dl[j], &mut du[j]);
+        }
+    }
+    let ad = problem.a * &nalgebra::DVector::from_column_slice(&solution.d);
+    for i in 0..bl.len() {
+        let (l, u, lambda) = (bl[i], bu[i], solution.lambda[i]);
+        if l == u {
+            continue;
+        }
+        if lambda < 0.0 && ad[i] - l <= -lambda {
+            fix(ad[i], l, &mut bl[i], &mut bu[i]);
+        } else if lambda > 0.0 && u - ad[i] <= lambda {
+            fix(ad[i], u, &mut bl[i], &mut bu[i]);
+        } else {
+            (bl[i], bu[i]) = (f64::NEG_INFINITY, f64::INFINITY);
+        }
+    }
+    ambiguous.then_some([dl, du, bl, bu])
+}
+
+/// Active-set polish of an interior-point solution whose active bounds are not yet reached to
+/// the QP's accuracy (a degenerate QP: weakly active bounds with gap and multiplier both
+/// O(√μ), which the interior-point method resolves only slowly and which would leave the SQP
+/// iterate just off the bound, the dual residual at O(√μ)). The equality-constrained QP of the
+/// identified active set is solved with the same convexification (valid: it has more
+/// equality rows); its solution is taken when it keeps the other bounds and rows satisfied and
+/// the multipliers' signs right, as an active-set method's would be.
+fn polish(
+    problem: &QpProblem,
+    solution: &QpSolution,
+    warm: &mut WarmStart,
+    tolerance: f64,
+) -> Option<QpSolution> {
+    let [dl, du, bl, bu] = active_set_problem(problem, solution, tolerance)?;
+    let reduced = QpProblem {
+        dl: &dl,
+        du: &du,
+        bl: &bl,
+        bu: &bu,
+        ..*problem
+    };
+    let solver = warm.sparse.as_mut()?;
+    solver.fixed_shift = Some(warm.convexification);
+    let (polished, _) = solver.solve(&reduced, tolerance);
+    solver.fixed_shift = None;
+    if polished.status != QpStatus::Optimal {
+        return None;
+    }
+    let scale = 1.0 + problem.g.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+    let sign_slack = tolerance.sqrt() * scale;
+    let within = |v: f64, l: f64, u: f64| {
+        v >= l - tolerance * (1.0 + l.abs()) && v <= u + tolerance * (1.0 + u.abs())
+    };
+    for j in 0..dl.len() {
+        let (v, z) = (polished.d[j], polished.z[j]);
+        let ok = if dl[j] != du[j] || problem.dl[j] == problem.du[j] {
+            within(v, problem.dl[j], problem.du[j])
+        } else if dl[j] == problem.dl[j] {
+            z <= sign_slack
+        } else {
+            z >= -sign_slack
+        };
+        if !ok {
+            return None;
+        }
+    }
+    let ad = problem.a * &nalgebra::DVector::from_column_slice(&polished.d);
+    for i in 0..bl.len() {
+        let (v, lambda) = (ad[i], polished.lambda[i]);
+        let ok = if bl[i] != bu[i] || problem.bl[i] == problem.bu[i] {
+            within(v, problem.bl[i], problem.bu[i])
+        } else if bl[i] == problem.bl[i] {
+            lambda <= sign_slack
+        } else {
+            lambda >= -sign_slack
+        };
+        if !ok {
+            return None;
+        }
+    }
+    Some(QpSolution {
+        iterations: solution.iterations + polished.iterations,
+        ..polished
+    })
+}
+
 /// Turns an interior-point solution into the form an active-set method returns, which the
-/// SQP's termination test and penalty weights expect: a bound or row is taken as active when
-/// its multiplier exceeds its distance to the bound (`|zⱼ| ≥ gapⱼ`; at a strictly
+/// SQP's termination test and penalty weights expect: a bound or row is taken as inactive when
+/// its distance to the bound exceeds its multiplier (`gapⱼ > |zⱼ|`; at a strictly
 /// complementary solution the multiplier is O(1) and the gap O(μ), at an inactive one the
-/// reverse). Active variable bounds are hit exactly (d snapped onto them, so the iterate lands
-/// on the bound); multipliers of inactive bounds and rows, O(μ), are set to 0.
-fn identify_active_set(problem: &QpProblem, solution: &mut QpSolution) {
+/// reverse), and its multiplier, O(μ), is set to 0. An active variable bound is hit exactly
+/// (d snapped onto it, so the iterate lands on the bound) only when the move is within the
+/// QP's own accuracy, `gap ≤ tolerance·(1 + |bound|)`: at a degenerate solution (weakly active
+/// bound, gap and multiplier both O(√μ)) a longer snap would break the linearized equalities
+/// the step satisfies, and the SQP would stall at an infeasible point.
+fn identify_active_set(problem: &QpProblem, solution: &mut QpSolution, tolerance: f64) {
     for j in 0..solution.d.len() {
         let (l, u, d, z) = (problem.dl[j], problem.du[j], solution.d[j], solution.z[j]);
         let (gap_l, gap_u) = (d - l, u - d);
         if z < 0.0 && gap_l <= -z {
-            solution.d[j] = l;
+            if gap_l <= tolerance * (1.0 + l.abs()) {
+                solution.d[j] = l;
+            }
         } else if z > 0.0 && gap_u <= z {
-            solution.d[j] = u;
+            if gap_u <= tolerance * (1.0 + u.abs()) {
+                solution.d[j] = u;
+            }
         } else if l != u {
             solution.z[j] = 0.0;
         }

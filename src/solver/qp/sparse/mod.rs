@@ -132,6 +132,9 @@ pub struct SparseQp {
     pub first_shift: f64,
     /// Factor between successive convexification trials ([`DEFAULT_SHIFT_GROWTH`]).
     pub shift_growth: f64,
+    /// When set, the absolute shift δ_c used without an inertia search (the caller knows it
+    /// suffices, e.g. the QP has more equality rows than one already convexified with it).
+    pub fixed_shift: Option<f64>,
     system: Option<NewtonSystem>,
     layout: Layout,
     ws: Workspace,
@@ -254,6 +257,7 @@ impl SparseQp {
             max_iterations: DEFAULT_MAX_ITERATIONS,
             first_shift: DEFAULT_FIRST_SHIFT,
             shift_growth: DEFAULT_SHIFT_GROWTH,
+            fixed_shift: None,
             system: None,
             layout: Layout::default(),
             ws: Workspace::default(),
@@ -306,16 +310,19 @@ impl SparseQp {
         let ws = &mut self.ws;
         let layout = &self.layout;
         ws.resize(n, m, p);
-        let shift = match system.convexify(
-            qp,
-            layout,
-            self.first_shift,
-            self.shift_growth,
-            &mut ws.sig_d,
-            &mut ws.dual_diag,
-        ) {
-            Ok(Some(shift)) => shift,
-            _ => return (fail(QpStatus::Numerical), info),
+        let shift = match self.fixed_shift {
+            Some(shift) => shift,
+            None => match system.convexify(
+                qp,
+                layout,
+                self.first_shift,
+                self.shift_growth,
+                &mut ws.sig_d,
+                &mut ws.dual_diag,
+            ) {
+                Ok(Some(shift)) => shift,
+                _ => return (fail(QpStatus::Numerical), info),
+            },
         };
         info.convexification = shift;
         initial_point(qp, layout, ws);
