@@ -481,4 +481,31 @@ mod tests {
         assert_eq!(s.status, QpStatus::Optimal);
         assert!(s.d.iter().all(|v| v.abs() <= 1.0 + 1e-12));
     }
+
+    #[test]
+    fn degenerate_bound_is_reached_without_breaking_equalities() {
+        // min ½(d₀² + (d₁ − 1)²) s.t. d₀ + d₁ = 1, d₀ ≥ 0: d = (0, 1) with a zero multiplier on
+        // the active bound (weakly active), which an interior-point method approaches only as
+        // √μ; the returned step must lie on the bound and satisfy the equality.
+        let mut coo = CooMatrix::new(1, 2);
+        coo.push(0, 0, 1.0);
+        coo.push(0, 1, 1.0);
+        let a = CsrMatrix::from(&coo);
+        let h = CscMatrix::identity(2);
+        let inf = f64::INFINITY;
+        let problem = QpProblem {
+            h: QpHessian::SparseLower(&h),
+            g: &[0.0, -1.0],
+            a: &a,
+            dl: &[0.0, -inf],
+            du: &[inf, inf],
+            bl: &[1.0],
+            bu: &[1.0],
+        };
+        let s = solve(&problem, &mut WarmStart::new(QpMethod::Sparse), 1e-8);
+        assert_eq!(s.status, QpStatus::Optimal);
+        assert_eq!(s.d[0], 0.0);
+        assert!((s.d[0] + s.d[1] - 1.0).abs() <= 1e-12);
+        assert!(s.z[0].abs() <= 1e-6 && s.lambda[0].abs() <= 1e-6);
+    }
 }
