@@ -153,9 +153,7 @@ pub struct Snapshot {
 pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSolution {
     let n = problem.g.len();
     if warm.method.is_sparse(n) {
-        let solver = warm
-            .sparse
-            .get_or_insert_with(|| Box::new(SparseQp::new()));
+        let solver = warm.sparse.get_or_insert_with(|| Box::new(SparseQp::new()));
         (solver.first_shift, solver.shift_growth) = if warm.repeat_shift && warm.shift_memory > 0.0
         {
             // Trial 0 fails again (same H and A), the remembered shift succeeds.
