@@ -501,9 +501,12 @@ mod tests {
             bu: &[1.0],
         };
         let s = solve(&problem, &mut WarmStart::new(QpMethod::Sparse), 1e-8);
+        println!("d = {:?}, z = {:?}, λ = {:?}", s.d, s.z, s.lambda);
         assert_eq!(s.status, QpStatus::Optimal);
         assert_eq!(s.d[0], 0.0);
-        assert!((s.d[0] + s.d[1] - 1.0).abs() <= 1e-12);
+        // The equality holds to the QP's relative tolerance (a snap by the O(√μ) gap broke it
+        // by far more).
+        assert!((s.d[0] + s.d[1] - 1.0).abs() <= 1e-8 * 2.0);
         assert!(s.z[0].abs() <= 1e-6 && s.lambda[0].abs() <= 1e-6);
     }
 }
