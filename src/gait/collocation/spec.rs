@@ -238,7 +238,7 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
         ));
     }
     let frames = file.duration * file.fps;
-    if !(positive(file.duration) && frames >= 2.0 && frames <= 100_000.0) {
+    if !(positive(file.duration) && (2.0..=100_000.0).contains(&frames)) {
         return Err(err(
             &top("duration"),
             format!(

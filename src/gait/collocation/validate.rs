@@ -111,13 +111,13 @@ pub fn validate(p: &Problem, l: &Layout, x: &[f64]) -> Validity {
         // Inside each segment: residual of the spline's own acceleration.
         let (s, tau) = l.locate(t);
         let b = l.basis(s, tau, 2);
-        for a in 0..2 {
+        for (a, ga) in g.iter().enumerate() {
             let v = l.segment_vars(s, a);
             let acc: f64 = (0..4).map(|i| b[i] * x[v[i]]).sum();
             let f = l.force_at(x, a, t);
             out.newton_residual = out
                 .newton_residual
-                .max((p.mass * acc - f - p.mass * g[a]).abs());
+                .max((p.mass * acc - f - p.mass * ga).abs());
             let spline = l.eval(x, a, 0, t);
             out.resimulation_gap = out.resimulation_gap.max((spline - motion.r[k][a]).abs());
         }
