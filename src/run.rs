@@ -258,11 +258,7 @@ impl Outcome {
 /// nothing.
 pub fn execute(kind: Kind, path: &Path, opts: &RunOptions) -> Result<(String, Outcome), Error> {
     match kind {
-        Kind::Gait => {
-            let problem = crate::gait::load(path)?;
-            let outcome = crate::gait::run(&problem, opts)?;
-            Ok((problem.name().to_string(), outcome))
-        }
+        Kind::Gait => crate::gait::execute(path, opts),
         Kind::Truss => {
             let problem = crate::truss::load(path)?;
             let outcome = crate::truss::run(&problem, opts)?;

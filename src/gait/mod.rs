@@ -10,6 +10,7 @@
 
 pub mod aba;
 pub mod character;
+pub mod collocation;
 pub mod contact;
 pub mod export;
 pub mod formulation;
@@ -45,6 +46,21 @@ impl Problem {
     pub fn name(&self) -> &str {
         &self.name
     }
+}
+
+/// Loads and runs a gait problem file: the traditional collocation formulation when the file
+/// says `formulation = "collocation"` ([`collocation`]), else the reduced-gradient one
+/// ([`load`], [`run`]). Returns the problem's name and the outcome.
+pub fn execute(path: &Path, opts: &RunOptions) -> Result<(String, Outcome), Error> {
+    let source = Source::read(path)?;
+    if collocation::spec::selects_collocation(&source) {
+        let problem = collocation::load_source(&source)?;
+        let outcome = collocation::run(&problem, opts)?;
+        return Ok((problem.name.clone(), outcome));
+    }
+    let problem = spec::load_source(&source)?;
+    let outcome = run(&problem, opts)?;
+    Ok((problem.name().to_string(), outcome))
 }
 
 /// Relative agreement required of exact derivatives and central differences in `--check` runs.
