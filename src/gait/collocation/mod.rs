@@ -45,24 +45,20 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         let clock = Instant::now();
         let x = nlp.initial_guess();
         let report = check(&nlp, &x).map_err(failed)?;
-        let passed = report.passed();
         let mut summary =
-            ResultSummary::checked(&problem.name, "gait", opts.seed, &nlp, &x, passed)
+            ResultSummary::checked(&problem.name, "gait", opts.seed, &nlp, &x, &report)
                 .map_err(failed)?;
         summary
             .timings
             .insert("check".into(), clock.elapsed().as_secs_f64());
-        summary.figures = serde_json::json!({
-            "formulation": "collocation",
-            "variables": d.n,
-            "constraints": d.m,
-            "jacobian_nonzeros": d.jac_nnz,
-            "derivative_check": report,
-        });
+        summary.set_figure("formulation", "collocation");
+        summary.set_figure("variables", d.n);
+        summary.set_figure("constraints", d.m);
+        summary.set_figure("jacobian_nonzeros", d.jac_nnz);
         return Ok(Outcome {
             summary,
             status: None,
-            check_passed: Some(passed),
+            check_passed: Some(report.passed()),
             artifacts: vec![],
         });
     }
