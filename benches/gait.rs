@@ -3,7 +3,8 @@
 //! sensitivities with analytical ABA derivatives), whose time divided by the simulation's is the
 //! gradient/simulation ratio; for comparison the dual-number oracle (chunks of 8 duals, one
 //! thread) and the discrete-tangent Jacobian. The ratio is also measured directly by timing the
-//! simulation and the gradient alternately (medians of 15 pairs) and printed.
+//! simulation and the gradient alternately (medians of 15 pairs, wall and on-CPU time) and
+//! printed.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -83,15 +84,19 @@ fn benches(c: &mut Criterion) {
     };
     group.bench_function("simulate_1s", |b| b.iter(simulate));
     group.bench_function("exact_gradient", |b| b.iter(&mut gradient));
-    // Direct ratio: alternate the two so that machine load affects both alike.
+    // Direct ratio: alternate the two so that machine load affects both alike; wall time and,
+    // where Linux reports it, this thread's on-CPU time (robust to other processes' load).
     let (mut t_sim, mut t_grad) = (Vec::new(), Vec::new());
+    let (mut c_sim, mut c_grad) = (Vec::new(), Vec::new());
     for _ in 0..15 {
-        let t = Instant::now();
+        let (t, c) = (Instant::now(), cpu_seconds());
         simulate();
         t_sim.push(t.elapsed().as_secs_f64());
-        let t = Instant::now();
+        c_sim.push(cpu_seconds().zip(c).map(|(b, a)| b - a));
+        let (t, c) = (Instant::now(), cpu_seconds());
         gradient();
         t_grad.push(t.elapsed().as_secs_f64());
+        c_grad.push(cpu_seconds().zip(c).map(|(b, a)| b - a));
     }
     let median = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);
@@ -104,6 +109,16 @@ fn benches(c: &mut Criterion) {
         mg * 1e3,
         mg / ms
     );
+    let cpu = |v: Vec<Option<f64>>| v.into_iter().collect::<Option<Vec<f64>>>();
+    if let (Some(mut cs), Some(mut cg)) = (cpu(c_sim), cpu(c_grad)) {
+        let (ms, mg) = (median(&mut cs), median(&mut cg));
+        println!(
+            "luxo interleaved on-CPU medians: simulation {:.2} ms, exact gradient {:.2} ms, ratio {:.2}",
+            ms * 1e3,
+            mg * 1e3,
+            mg / ms
+        );
+    }
     let mut jac1 = vec![0.0; d.jac_nnz];
     let one = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
@@ -125,6 +140,14 @@ fn benches(c: &mut Criterion) {
         })
     });
     group.finish();
+}
+
+/// This thread's on-CPU time (s) from `/proc/thread-self/schedstat` (Linux), `None` elsewhere.
+/// The exact gradient and the simulation both run on the calling thread.
+fn cpu_seconds() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
+    Some(ns * 1e-9)
 }
 
 criterion_group!(gait, benches);

@@ -144,6 +144,7 @@ fn check_on_a_valid_file_exits_0() {
     let out_dir = scratch.0.to_str().unwrap();
     for (kind, file) in [
         ("gait", "problems/gait/pogo_crouch.toml"),
+        ("gait", "problems/gait/ball.toml"),
         ("cmc", "problems/cmc/tennis_cushion.toml"),
     ] {
         let out = optimize(&[kind, file, "--check", "-q", "-o", out_dir]);

@@ -64,7 +64,8 @@ impl<T: Real> Vec3<T> {
     /// Multiplies every component by `s`.
     #[inline]
     pub fn scale(&self, s: T) -> Self {
-        Vec3(self.0.map(|x| x * s))
+        let [x, y, z] = self.0;
+        Vec3([x * s, y * s, z * s])
     }
     /// Real parts.
     #[inline]
@@ -91,7 +92,8 @@ impl<T: Real> Neg for Vec3<T> {
     type Output = Self;
     #[inline]
     fn neg(self) -> Self {
-        Vec3(self.0.map(|x| -x))
+        let [x, y, z] = self.0;
+        Vec3([-x, -y, -z])
     }
 }
 
@@ -119,13 +121,16 @@ impl<T: Real> Mat3<T> {
     #[inline]
     pub fn mul_vec(&self, v: &Vec3<T>) -> Vec3<T> {
         let m = &self.0;
-        Vec3([0, 1, 2].map(|i| m[i][0] * v.0[0] + m[i][1] * v.0[1] + m[i][2] * v.0[2]))
+        let row = |i: usize| m[i][0] * v.0[0] + m[i][1] * v.0[1] + m[i][2] * v.0[2];
+        // Written out: `[0, 1, 2].map(...)` is not always inlined in the hot loops.
+        Vec3([row(0), row(1), row(2)])
     }
     /// `selfᵀ · v`.
     #[inline]
     pub fn tr_mul_vec(&self, v: &Vec3<T>) -> Vec3<T> {
         let m = &self.0;
-        Vec3([0, 1, 2].map(|i| m[0][i] * v.0[0] + m[1][i] * v.0[1] + m[2][i] * v.0[2]))
+        let col = |i: usize| m[0][i] * v.0[0] + m[1][i] * v.0[1] + m[2][i] * v.0[2];
+        Vec3([col(0), col(1), col(2)])
     }
     /// `self · o`.
     #[inline]
@@ -143,7 +148,8 @@ impl<T: Real> Mat3<T> {
     #[inline]
     pub fn transpose(&self) -> Self {
         let m = &self.0;
-        Mat3([0, 1, 2].map(|i| [m[0][i], m[1][i], m[2][i]]))
+        let col = |i: usize| [m[0][i], m[1][i], m[2][i]];
+        Mat3([col(0), col(1), col(2)])
     }
     /// The matrix `[v]×` with `[v]×·w = v × w`.
     #[inline]

@@ -74,6 +74,8 @@ pub struct StageLinearizer<'m> {
     /// Subtree forces of RNEA at `v̇*`.
     subtree: Vec<Force<f64>>,
     contacts: Vec<ContactPoint>,
+    /// Each link's own spatial inertia as a 6×6 block matrix (constant in link coordinates).
+    body_blocks: Vec<ArticulatedInertia<f64>>,
     composite: Vec<ArticulatedInertia<f64>>,
     /// Mass matrix, then its Cholesky factor (row-major nv × nv).
     chol: Vec<f64>,
@@ -117,6 +119,11 @@ impl<'m> StageLinearizer<'m> {
             momentum: fz.clone(),
             subtree: fz.clone(),
             contacts: Vec::new(),
+            body_blocks: model
+                .links
+                .iter()
+                .map(|l| l.inertia_t::<f64>().to_articulated())
+                .collect(),
             composite: vec![ArticulatedInertia::zero(); n],
             chol: vec![0.0; nv * nv],
             cols: vec![0.0; nv * (2 * nv + model.actuators.len())],
@@ -331,9 +338,7 @@ impl<'m> StageLinearizer<'m> {
         let nv = m.nv;
         let up = &self.dynamics.up;
         self.chol.fill(0.0);
-        for (i, body) in self.inertia.iter().enumerate() {
-            self.composite[i] = body.to_articulated();
-        }
+        self.composite.copy_from_slice(&self.body_blocks);
         for i in (0..m.links.len()).rev() {
             if let Some(p) = m.links[i].parent {
                 let t = self.composite[i].transform_back(&up[i]);

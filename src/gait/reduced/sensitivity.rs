@@ -111,12 +111,14 @@ impl Reduced<'_> {
                     if s > 0 {
                         let c = h * stages[s].1;
                         let d_prev = &prev[s - 1];
+                        // dk_{s−1} is zero right of the force columns of its stage time.
+                        let width = nx + (stages[s - 1].2 + 1) * na;
                         for r in 0..nx {
-                            let row = &mut out[r * ncol..(r + 1) * ncol];
+                            let row = &mut out[r * ncol..r * ncol + width];
                             for i in 0..nx {
                                 let f = c * j[r * nx + i];
                                 if f != 0.0 {
-                                    let src = &d_prev[i * ncol..(i + 1) * ncol];
+                                    let src = &d_prev[i * ncol..i * ncol + width];
                                     for (o, v) in row.iter_mut().zip(src) {
                                         *o += f * v;
                                     }
@@ -131,16 +133,19 @@ impl Reduced<'_> {
                 for r in 0..nx {
                     step_t[r * ncol + r] += 1.0;
                 }
-                // S⁺ = Φ·S + Σ G_s·W_s.
+                // S⁺ = Φ·S + Σ G_s·W_s over the columns of knots whose support has started:
+                // S is stored knot-major ([`Self::knot_major`]), so they are a prefix (the
+                // other columns are zero in S and in the update; time only moves forward).
                 let basis: [_; 3] =
                     std::array::from_fn(|st| self.grid.weights(t0 + 0.5 * h * st as f64));
+                let live = (basis[2].0[2] + 1) * 2 * na;
                 for r in 0..nx {
-                    let row = &mut next[r * n_par..(r + 1) * n_par];
+                    let row = &mut next[r * n_par..r * n_par + live];
                     row.fill(0.0);
                     for i in 0..nx {
                         let f = step_t[r * ncol + i];
                         if f != 0.0 {
-                            let src = &sens[i * n_par..(i + 1) * n_par];
+                            let src = &sens[i * n_par..i * n_par + live];
                             for (o, v) in row.iter_mut().zip(src) {
                                 *o += f * v;
                             }
@@ -150,7 +155,7 @@ impl Reduced<'_> {
                         for a in 0..na {
                             let g = step_t[r * ncol + nx + st * na + a];
                             for (c, wc) in idx.iter().zip(wts) {
-                                row[a * block + c] += g * wc;
+                                row[self.knot_major(a * block + c)] += g * wc;
                             }
                         }
                     }
@@ -191,12 +196,25 @@ impl Reduced<'_> {
                 }
                 for j in 0..n_par {
                     if let Some(slot) = self.slot[r * n_par + j] {
-                        jac[slot] = (0..nx).map(|i| grad_c[i] * sens[i * n_par + j]).sum();
+                        let col = self.knot_major(j);
+                        jac[slot] = (0..nx).map(|i| grad_c[i] * sens[i * n_par + col]).sum();
                     }
                 }
             }
         }
         Ok(true)
+    }
+}
+
+impl Reduced<'_> {
+    /// Column of parameter `j` (actuator-major: actuator, then values, then slopes) in the
+    /// knot-major order of the sensitivity matrix: knot, then value/slope, then actuator. The
+    /// parameters of knots `0..k` are then the first `2·k·na` columns.
+    fn knot_major(&self, j: usize) -> usize {
+        let na = self.problem.model.actuators.len();
+        let (knots, block) = (self.grid.knots, self.grid.per_actuator());
+        let (a, r) = (j / block, j % block);
+        ((r % knots) * 2 + r / knots) * na + a
     }
 }
 
