@@ -22,7 +22,7 @@ use crate::error::{Error, InputError};
 use crate::io::result::{Csv, num};
 use crate::run::{Artifact, Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::{CheckOptions, check_derivatives};
-use crate::solver::{Dims, EvalError, Nlp, solve};
+use crate::solver::{EvalError, Nlp, solve};
 use crate::spec::Source;
 
 pub use nlp::{Collocation, Layout};
@@ -107,55 +107,12 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
 }
 
 /// Compares the exact gradient, Jacobian and Hessian of `nlp` at `x` with central differences
-/// in every variable. The checker keeps its stencils inside the variable bounds and so cannot
-/// difference the fixed variables (start, take-off and end positions); the derivatives do not
-/// depend on the bounds, so the check sees the problem with the bounds removed.
+/// in every variable (the fixed start, take-off and end positions included).
 pub fn check(
     nlp: &Collocation<'_>,
     x: &[f64],
 ) -> Result<crate::solver::derivatives::DerivativeReport, EvalError> {
-    check_derivatives(&Unbounded(nlp), x, &CheckOptions::default())
-}
-
-/// An [`Nlp`] with the variable bounds of another removed (everything else delegated).
-struct Unbounded<'a>(&'a dyn Nlp);
-
-impl Nlp for Unbounded<'_> {
-    fn dims(&self) -> Dims {
-        self.0.dims()
-    }
-    fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
-        self.0.bounds(xl, xu, cl, cu);
-        xl.fill(f64::NEG_INFINITY);
-        xu.fill(f64::INFINITY);
-    }
-    fn start(&self, x: &mut [f64]) {
-        self.0.start(x)
-    }
-    fn jacobian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
-        self.0.jacobian_structure(rows, cols)
-    }
-    fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
-        self.0.eval(x, f, c)
-    }
-    fn eval_derivatives(&self, x: &[f64], g: &mut [f64], j: &mut [f64]) -> Result<(), EvalError> {
-        self.0.eval_derivatives(x, g, j)
-    }
-    fn hessian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
-        self.0.hessian_structure(rows, cols)
-    }
-    fn eval_hessian(
-        &self,
-        x: &[f64],
-        sigma: f64,
-        lambda: &[f64],
-        values: &mut [f64],
-    ) -> Result<(), EvalError> {
-        self.0.eval_hessian(x, sigma, lambda, values)
-    }
-    fn constraint_name(&self, row: usize) -> String {
-        self.0.constraint_name(row)
-    }
+    check_derivatives(nlp, x, &CheckOptions::default())
 }
 
 /// `trajectory.csv`: per knot, time (s), position (m), velocity (m/s) and ground force (N).

@@ -19,7 +19,8 @@
 //! by the symmetric Hessian pattern. The Hessian check uses the problem's Jacobian, so a wrong
 //! Jacobian entry also shows up as Hessian errors.
 //!
-//! Stencils respect the variable bounds (see [`super::interval`]).
+//! Stencils respect the variable bounds (see [`super::interval`]), except for fixed variables
+//! (xl = xu) and at points outside the bounds, where they are centred freely.
 //!
 //! Two refinements serve models whose functions are hard to difference, both off by default:
 //! - Richardson extrapolation (`richardson`): `D = (4·D(h/2) − D(h))/3` cancels the h² term of
@@ -307,9 +308,22 @@ impl Setup {
         }
     }
 
+    /// The bounds stencils of variable j must respect at the value `xj`: its bounds, or none
+    /// when it is fixed (xl = xu: its derivatives are part of the model even where the solver
+    /// cannot move it) or `xj` lies outside them (the functions are evidently defined there).
+    fn limits(&self, j: usize, xj: f64) -> (f64, f64) {
+        let (lo, hi) = (self.xl[j], self.xu[j]);
+        if lo == hi || xj < lo || xj > hi {
+            (f64::NEG_INFINITY, f64::INFINITY)
+        } else {
+            (lo, hi)
+        }
+    }
+
     fn stencil(&self, options: &FiniteDifferenceOptions, x: &[f64], j: usize) -> Stencil {
         let h = options.interval(DifferenceScheme::Central, x[j]);
-        Stencil::choose(DifferenceScheme::Central, x[j], self.xl[j], self.xu[j], h)
+        let (lo, hi) = self.limits(j, x[j]);
+        Stencil::choose(DifferenceScheme::Central, x[j], lo, hi, h)
     }
 
     /// Analytic Jacobian with duplicates summed, keyed by (row, col).
@@ -517,8 +531,8 @@ fn column_differences<F>(
 where
     F: Fn(&[f64]) -> Result<Vec<f64>, EvalError>,
 {
-    let stencil =
-        |h: f64| Stencil::choose(DifferenceScheme::Central, x[j], setup.xl[j], setup.xu[j], h);
+    let (lo, hi) = setup.limits(j, x[j]);
+    let stencil = |h: f64| Stencil::choose(DifferenceScheme::Central, x[j], lo, hi, h);
     let moved = |offset: f64| {
         let mut p = x.to_vec();
         p[j] = x[j] + offset;

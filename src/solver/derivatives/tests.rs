@@ -560,10 +560,11 @@ fn grouped_hessian_check_agrees_with_the_scan() {
 }
 
 /// f = 0; c0 = |x0| + x1 ("kinked"), c1 = exp(k·x1) ("stiff"), with a slip factor on
-/// ∂c0/∂x0 (1 when exact). No Hessian.
+/// ∂c0/∂x0 (1 when exact); x0 fixed at 0.5 by its bounds when `fixed`. No Hessian.
 struct Kinked {
     k: f64,
     slip: f64,
+    fixed: bool,
 }
 
 impl Nlp for Kinked {
@@ -578,6 +579,9 @@ impl Nlp for Kinked {
     fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
         xl.fill(f64::NEG_INFINITY);
         xu.fill(f64::INFINITY);
+        if self.fixed {
+            (xl[0], xu[0]) = (0.5, 0.5);
+        }
         cl.fill(0.0);
         cu.fill(0.0);
     }
@@ -607,7 +611,11 @@ impl Nlp for Kinked {
 fn kink_handling_accepts_a_kink_inside_the_stencil_but_not_a_wrong_slope() {
     // x0 = 3e-6 lies inside the default central stencil (h ≈ 1e-4) of |x0|.
     let x = [3e-6, 0.1];
-    let exact = Kinked { k: 1.0, slip: 1.0 };
+    let exact = Kinked {
+        k: 1.0,
+        slip: 1.0,
+        fixed: false,
+    };
     let plain = check_derivatives(&exact, &x, &CheckOptions::default()).unwrap();
     assert!(!plain.passed(), "{plain}");
     assert_eq!(plain.kinks, 0);
@@ -622,6 +630,7 @@ fn kink_handling_accepts_a_kink_inside_the_stencil_but_not_a_wrong_slope() {
     let slipped = Kinked {
         k: 1.0,
         slip: 1.001,
+        fixed: false,
     };
     let report = check_derivatives(&slipped, &x, &kinks).unwrap();
     assert!(!report.passed(), "{report}");
@@ -636,6 +645,7 @@ fn richardson_extrapolation_removes_the_truncation_error() {
     let stiff = Kinked {
         k: 100.0,
         slip: 1.0,
+        fixed: false,
     };
     let plain = check_derivatives(&stiff, &x, &CheckOptions::default()).unwrap();
     let extrapolated = CheckOptions {
@@ -675,4 +685,19 @@ fn listed_columns_limit_the_check() {
     assert_eq!(a, jittered_start(&nlp, 1e-3, 9));
     assert!(a.iter().zip(&x).all(|(p, q)| (p - q).abs() <= 1e-3));
     assert_ne!(a, jittered_start(&nlp, 1e-3, 10));
+}
+
+#[test]
+fn fixed_variables_are_differenced_across_their_value() {
+    let nlp = Kinked {
+        k: 1.0,
+        slip: 1.0,
+        fixed: true,
+    };
+    let report = check_derivatives(&nlp, &[0.5, 0.1], &CheckOptions::default()).unwrap();
+    assert!(report.passed(), "{report}");
+    assert!(
+        report.jacobian.checked == 3 && report.max_error() < 1e-7,
+        "{report}"
+    );
 }
