@@ -10,6 +10,7 @@
 //! The final mesh is also written as `model.glb` ([`export`]).
 
 pub mod area;
+pub mod catenoid;
 pub mod check;
 pub mod curvature;
 pub mod curvature_hessian;
@@ -19,6 +20,7 @@ pub mod generators;
 pub mod import;
 pub mod mesh;
 pub mod nlp;
+pub mod octahedron;
 pub mod preview;
 pub mod remesh;
 pub mod spec;

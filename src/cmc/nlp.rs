@@ -864,8 +864,9 @@ fn add3(v: &mut [f64], c: usize, g: Point) {
 mod tests {
     use super::*;
     use crate::cmc::check::{check_derivatives, jittered_start, spread_columns};
-    use crate::cmc::generators::{self, OctahedronTopology, Shape};
+    use crate::cmc::generators::{self, Shape};
     use crate::cmc::mesh::Guide;
+    use crate::cmc::octahedron::{self, OctahedronTopology};
 
     fn nlp_of(shape: Shape, weight: f64) -> CmcNlp {
         let volumes = shape
@@ -937,10 +938,13 @@ mod tests {
                 "triple bubble",
                 generators::triple_bubble([1.0, 1.5, 2.0], 2).unwrap(),
             ),
-            ("cube frame", generators::cube_frame(1.0, 0.05, 2).unwrap()),
+            (
+                "cube frame",
+                generators::cube_frame(1.0, Some(0.05), 2).unwrap(),
+            ),
             (
                 "octahedron",
-                generators::octahedron_frame(1.0, OctahedronTopology::Cone, 3).unwrap(),
+                octahedron::octahedron_frame(1.0, OctahedronTopology::Cone, 3).unwrap(),
             ),
             ("u wires", generators::u_wires(1.0, 0.6, 4).unwrap()),
         ];
@@ -988,7 +992,10 @@ mod tests {
                 "triple bubble",
                 generators::triple_bubble([1.0, 1.5, 2.0], 2).unwrap(),
             ),
-            ("cube frame", generators::cube_frame(1.0, 0.05, 2).unwrap()),
+            (
+                "cube frame",
+                generators::cube_frame(1.0, Some(0.05), 2).unwrap(),
+            ),
             ("u wires", generators::u_wires(1.0, 0.6, 4).unwrap()),
         ];
         for (what, shape) in shapes {
@@ -1005,7 +1012,7 @@ mod tests {
     fn reduced_hessian_spectrum_at_a_solved_frame() {
         use crate::solver::{HessianMode, Options, hessian::assemble_dense};
         use nalgebra::{DMatrix, DVector};
-        let nlp = nlp_of(generators::cube_frame(0.05, 1e-6, 2).unwrap(), 0.01);
+        let nlp = nlp_of(generators::cube_frame(0.05, Some(1e-6), 2).unwrap(), 0.01);
         let options = Options {
             hessian: HessianMode::Bfgs,
             ..Options::default()
