@@ -7,8 +7,9 @@
 //! h/R ≤ 1.325486839 (max over a of 2a·acosh(R/a)); for R = 1, h = 1: a = 0.848338…,
 //! A = 5.991796975802.
 //!
-//! The start mesh is the cylinder between the rings: `12·levels` vertices per ring, rings of
-//! free vertices staggered by half a segment (near-equilateral triangles), outward normals.
+//! The start mesh is the cylinder between the rings: `12·levels` vertices per ring, every other
+//! ring turned by half a segment (near-equilateral triangles without a net twist: a cumulative
+//! stagger would shear the mesh into a helix), outward normals.
 
 use std::f64::consts::PI;
 
@@ -53,8 +54,12 @@ pub fn exact_catenoid(radius: f64, separation: f64) -> Option<(f64, f64)> {
 /// y = ±`separation`/2, one film `film` with outward normals; `12·levels` segments per ring.
 pub fn catenoid(radius: f64, separation: f64, levels: usize) -> Result<Shape, MeshError> {
     let around = 12 * levels.max(1);
-    let segment = 2.0 * PI * radius / around as f64;
-    let rows = ((separation / (segment * 3f64.sqrt() / 2.0)).round() as usize).max(1);
+    // Rows for near-equilateral triangles at level 1, times the level: every level has the
+    // same triangle shapes, so the discretization error falls cleanly with the edge length.
+    let level_one_segment = 2.0 * PI * radius / 12.0;
+    let rows_per_level =
+        ((separation / (level_one_segment * 3f64.sqrt() / 2.0)).round() as usize).max(1);
+    let rows = rows_per_level * levels.max(1);
     let mut b = MeshBuilder::new();
     let film = b.surface("film");
     let rings: Vec<Vec<usize>> = (0..=rows)
@@ -62,7 +67,7 @@ pub fn catenoid(radius: f64, separation: f64, levels: usize) -> Result<Shape, Me
             let y = separation * (j as f64 / rows as f64 - 0.5);
             (0..around)
                 .map(|i| {
-                    let phi = 2.0 * PI * (i as f64 + 0.5 * j as f64) / around as f64;
+                    let phi = 2.0 * PI * (i as f64 + 0.5 * (j % 2) as f64) / around as f64;
                     let p = Point::new(radius * phi.cos(), y, radius * phi.sin());
                     if j == 0 || j == rows {
                         b.fixed(p)
@@ -77,10 +82,13 @@ pub fn catenoid(radius: f64, separation: f64, levels: usize) -> Result<Shape, Me
         let (lower, upper) = (&rings[j], &rings[j + 1]);
         for i in 0..around {
             let k = (i + 1) % around;
-            // Upper ring shifted by half a segment towards increasing angle: upper[i] lies
-            // between lower[i] and lower[i + 1]. Counter-clockwise seen from outside.
-            b.triangle(film, [lower[i], upper[i], lower[k]]);
-            b.triangle(film, [lower[k], upper[i], upper[k]]);
+            // The upper vertex between lower[i] and lower[i + 1]: upper[i] above an even ring
+            // (the upper ring is turned by +½ segment), upper[i + 1] above an odd one.
+            let u = if j % 2 == 0 { i } else { k };
+            let u_next = (u + 1) % around;
+            // Counter-clockwise seen from outside.
+            b.triangle(film, [lower[i], upper[u], lower[k]]);
+            b.triangle(film, [lower[k], upper[u], upper[u_next]]);
         }
     }
     Ok(Shape {

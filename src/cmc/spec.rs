@@ -5,7 +5,8 @@
 //! resolution = 6                # optional refinement level (meaning per shape, see below)
 //! [shape]
 //! type = "double_bubble"        # sphere | double_bubble | triple_bubble | cube_frame |
-//! volumes = [1.0e-6, 2.0e-6]    # octahedron_frame | catenoid | u_wires | tents | cells | obj
+//! volumes = [1.0e-6, 2.0e-6]    # octahedron_frame | catenoid | u_wires | tents | cells |
+//!                               # obj | gltf
 //! [quality]
 //! tangential_weight = 0.01      # w of the tangential regularization (cmc::nlp), ≥ 0
 //! flip_rounds = 1               # edge-flip + re-solve rounds after the first solve (cmc::remesh)
@@ -18,7 +19,7 @@
 //! Resolution: icosphere subdivision level (sphere), 12·resolution segments per ring (catenoid),
 //! rings per cap (double bubble), rows per
 //! half-meridian (triple bubble), segments per wire (frames, U wires), rings from centre to rim
-//! (tents, cells); ignored for OBJ imports.
+//! (tents, cells); ignored for OBJ and glTF imports.
 
 use std::path::Path;
 
@@ -152,6 +153,17 @@ pub enum ShapeSpec {
         /// The cells.
         cell: Vec<CellToml>,
     },
+    /// A mesh from a glTF file, `.glb` or `.gltf` (see `cmc::import_gltf`).
+    Gltf {
+        /// Path, relative to the problem file.
+        file: String,
+        /// Fix every boundary vertex.
+        #[serde(default)]
+        fix_boundary: bool,
+        /// Volume constraints.
+        #[serde(default)]
+        volume: Vec<VolumeToml>,
+    },
     /// A mesh from an OBJ file (see `cmc::import`).
     Obj {
         /// Path, relative to the problem file.
@@ -269,7 +281,7 @@ impl ShapeSpec {
             ShapeSpec::CubeFrame { .. } | ShapeSpec::OctahedronFrame { .. } => 8,
             ShapeSpec::UWires { .. } => 16,
             ShapeSpec::Tents { .. } | ShapeSpec::Cells { .. } => 10,
-            ShapeSpec::Obj { .. } => 1,
+            ShapeSpec::Obj { .. } | ShapeSpec::Gltf { .. } => 1,
         }
     }
 }
@@ -467,7 +479,7 @@ impl CmcSpec {
                     }
                 }
             }
-            ShapeSpec::Obj { volume, .. } => {
+            ShapeSpec::Obj { volume, .. } | ShapeSpec::Gltf { volume, .. } => {
                 for (i, v) in volume.iter().enumerate() {
                     if !positive(v.volume) {
                         return Err(self.err(
@@ -588,7 +600,12 @@ impl CmcSpec {
                 file,
                 fix_boundary,
                 volume,
-            } => self.import(file, *fix_boundary, volume)?,
+            } => self.import(file, false, *fix_boundary, volume)?,
+            ShapeSpec::Gltf {
+                file,
+                fix_boundary,
+                volume,
+            } => self.import(file, true, *fix_boundary, volume)?,
         };
         let n = shape.mesh.vertex_count();
         let mut chords = Vec::new();
@@ -608,19 +625,28 @@ impl CmcSpec {
         Ok((shape, chords))
     }
 
+    /// Reads an OBJ (`gltf` false) or glTF start mesh and resolves its volume regions.
     fn import(
         &self,
         file: &str,
+        gltf: bool,
         fix_boundary: bool,
         volumes: &[VolumeToml],
     ) -> Result<Shape, InputError> {
         let dir = self.source.path.parent().unwrap_or(Path::new("."));
         let path = dir.join(file);
         let at_file = |m: String| self.err(&["shape".into(), "file".into()], m);
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| at_file(format!("cannot read `{}`: {e}", path.display())))?;
-        let mut mesh = super::import::read_obj(&text)
-            .map_err(|e| at_file(format!("`{}`: {e}", path.display())))?;
+        let mut mesh = if gltf {
+            if !path.is_file() {
+                return Err(at_file(format!("cannot read `{}`", path.display())));
+            }
+            super::import_gltf::read_gltf_file(&path)
+        } else {
+            let text = std::fs::read_to_string(&path)
+                .map_err(|e| at_file(format!("cannot read `{}`: {e}", path.display())))?;
+            super::import::read_obj(&text)
+        }
+        .map_err(|e| at_file(format!("`{}`: {e}", path.display())))?;
         if fix_boundary {
             mesh.fix_boundary();
         }
