@@ -1,8 +1,8 @@
 //! Solves the hanging chain of `tests/common/chain.rs` once per Hessian mode and prints status,
 //! iterations and time: the medium-size figures of BENCHMARKS.md.
 //!
-//! `cargo run --release --example chain_solve -- [links] [auto|dense|sparse]` (default 100
-//! links: n = 198, m = 100; the QP method `auto`).
+//! `cargo run --release --example chain_solve -- [links] [auto|dense|sparse] [bfgs|lbfgs|exact]`
+//! (default 100 links: n = 198, m = 100; the QP method `auto`; all three Hessian modes).
 
 #[path = "../tests/common/chain.rs"]
 #[allow(dead_code)]
@@ -27,6 +27,10 @@ fn main() {
         (HessianMode::Lbfgs, false),
         (HessianMode::Exact, true),
     ] {
+        let only = std::env::args().nth(3);
+        if only.is_some_and(|m| !format!("{mode:?}").eq_ignore_ascii_case(&m)) {
+            continue;
+        }
         let chain = Chain { links, exact };
         let options = Options {
             hessian: mode,

@@ -14,6 +14,7 @@ use std::sync::atomic::AtomicBool;
 use serde::Serialize;
 
 use crate::error::Error;
+use crate::solver::derivatives::DerivativeReport;
 use crate::solver::{EvalError, Evaluations, Nlp, Options, Solution, Status};
 use crate::spec::SolverSpec;
 
@@ -129,16 +130,17 @@ impl ResultSummary {
 }
 
 impl ResultSummary {
-    /// The summary of a `--check` run: status "Checked", the verdict in one sentence, and the
-    /// objective and largest bound or constraint violation of `nlp` at the checked point `x`.
-    /// Modules add their figures and timings.
+    /// The summary of a `--check` run: status "Checked", the checker's verdict in one sentence
+    /// (naming the worst entry when it failed), the objective and largest bound or constraint
+    /// violation of `nlp` at the checked point `x`, and the report under figures
+    /// `"derivatives"`. Modules add their own figures and timings.
     pub fn checked(
         problem: &str,
         kind: &str,
         seed: u64,
         nlp: &dyn Nlp,
         x: &[f64],
-        passed: bool,
+        report: &DerivativeReport,
     ) -> Result<Self, EvalError> {
         let d = nlp.dims();
         let (mut f, mut c) = (0.0, vec![0.0; d.m]);
@@ -156,25 +158,60 @@ impl ResultSummary {
             .chain(c.iter().zip(cl.iter().zip(&cu)))
             .map(|(v, (lo, hi))| (lo - v).max(v - hi).max(0.0))
             .fold(0.0, f64::max);
-        let verdict = if passed { "agree" } else { "disagree" };
+        let status_message = match report.worst_per_function.first() {
+            Some(worst) if !report.passed() => {
+                let function = match worst.row {
+                    Some(r) => format!("{} (row {r})", worst.name),
+                    None => worst.name.clone(),
+                };
+                format!(
+                    "Checked: the exact derivatives disagree with finite differences in {} \
+                     entries; worst: {function} by x[{}], {:.6e} vs {:.6e} (error {:.2e}).",
+                    report.failed(),
+                    worst.col,
+                    worst.analytic,
+                    worst.estimate,
+                    worst.error
+                )
+            }
+            _ => format!(
+                "Checked: the exact derivatives agree with finite differences \
+                 (max error {:.2e}).",
+                report.max_error()
+            ),
+        };
+        let mut figures = serde_json::Map::new();
+        figures.insert(
+            "derivatives".into(),
+            serde_json::to_value(report).unwrap_or_default(),
+        );
         Ok(ResultSummary {
             problem: problem.to_string(),
             kind: kind.to_string(),
             status: "Checked".into(),
-            status_message: format!(
-                "Checked: the exact derivatives {verdict} with finite differences."
-            ),
+            status_message,
             objective: f,
             max_violation,
             iterations: 0,
             evaluations: Evaluations {
-                functions: 1,
+                functions: 1 + report.evaluations,
+                derivatives: 1,
                 ..Evaluations::default()
             },
             timings: BTreeMap::new(),
             seed,
-            figures: serde_json::Value::Object(Default::default()),
+            figures: serde_json::Value::Object(figures),
         })
+    }
+
+    /// Adds (or replaces) one entry of `figures`, which is always a JSON object.
+    pub fn set_figure(&mut self, key: &str, value: impl Into<serde_json::Value>) {
+        if !self.figures.is_object() {
+            self.figures = serde_json::Value::Object(Default::default());
+        }
+        if let Some(figures) = self.figures.as_object_mut() {
+            figures.insert(key.to_string(), value.into());
+        }
     }
 }
 
@@ -221,11 +258,7 @@ impl Outcome {
 /// nothing.
 pub fn execute(kind: Kind, path: &Path, opts: &RunOptions) -> Result<(String, Outcome), Error> {
     match kind {
-        Kind::Gait => {
-            let problem = crate::gait::load(path)?;
-            let outcome = crate::gait::run(&problem, opts)?;
-            Ok((problem.name().to_string(), outcome))
-        }
+        Kind::Gait => crate::gait::execute(path, opts),
         Kind::Truss => {
             let problem = crate::truss::load(path)?;
             let outcome = crate::truss::run(&problem, opts)?;

@@ -169,8 +169,9 @@ fn run_set_with(mode: HessianMode, qp_method: QpMethod) -> SetOutcome {
 
 /// The whole set through the sparse interior-point QP (the large-problem path, forced):
 /// every success must be a verified KKT point (to the factor 100 `Acceptable` allows), and at
-/// least `least` problems must reach the book's optimum (the counts measured when the sparse
-/// path was introduced; BENCHMARKS.md lists the problems that differ from the dense path).
+/// least `least` problems must reach the book's optimum (the counts measured with the
+/// active-set polish of degenerate QP solutions, which brought BFGS to the dense path's 77;
+/// BENCHMARKS.md lists the problems that differ from the dense path).
 fn sparse_path(mode: HessianMode, least: usize) {
     let outcome = run_set_with(mode, QpMethod::Sparse);
     println!(
@@ -380,15 +381,15 @@ fn hs_random_starts_never_report_false_success() {
 
 #[test]
 fn hs_set_with_bfgs_through_the_sparse_qp() {
-    sparse_path(HessianMode::Bfgs, 76);
+    sparse_path(HessianMode::Bfgs, 77);
 }
 
 #[test]
 fn hs_set_with_lbfgs_through_the_sparse_qp() {
-    sparse_path(HessianMode::Lbfgs, 75);
+    sparse_path(HessianMode::Lbfgs, 76);
 }
 
 #[test]
 fn hs_set_with_exact_hessians_through_the_sparse_qp() {
-    sparse_path(HessianMode::Exact, 74);
+    sparse_path(HessianMode::Exact, 75);
 }

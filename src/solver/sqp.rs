@@ -390,7 +390,7 @@ impl<'a> Sqp<'a> {
             let slope = gd - reduction;
             if self.options.verbosity >= 2 {
                 self.say(&format!(
-                    "      |d| = {:.3e}  g'd = {gd:.3e}  d'Hd = {dhd:.3e}  lin.red = {reduction:.3e}  max rho = {:.3e}  slope = {slope:.3e}  qp = {:?}",
+                    "      |d| = {:.3e}  g'd = {gd:.3e}  d'Hd = {dhd:.3e}  lin.red = {reduction:.3e}  max rho = {:.3e}  slope = {slope:.3e}  shift = {shift:.2e}  qp = {:?}",
                     d.iter().fold(0.0_f64, |a, v| a.max(v.abs())),
                     self.rho.iter().fold(0.0_f64, |a, v| a.max(*v)),
                     step.qp.status
@@ -811,10 +811,10 @@ impl<'a> Sqp<'a> {
             bl: &bl,
             bu: &bu,
         };
-        let working_set = self.warm.snapshot();
+        let saved = self.warm.snapshot();
         let tol = self.qp_tolerance();
         let sol = qp::solve(&problem, &mut self.warm, tol);
-        self.warm.restore(working_set);
+        self.warm.restore(saved);
         if sol.status != QpStatus::Optimal {
             return Ok(None);
         }

@@ -264,24 +264,20 @@ fn check(
     let report = check_derivatives(nlp, &x, &CheckOptions::default())
         .map_err(|e| Error::Runtime(format!("derivative check: {e}")))?;
     timings.insert("check".to_string(), started.elapsed().as_secs_f64());
-    let passed = report.passed();
     let d = nlp.dims();
-    let mut summary = ResultSummary::checked(problem.name(), "truss", seed, nlp, &x, passed)
+    let mut summary = ResultSummary::checked(problem.name(), "truss", seed, nlp, &x, &report)
         .map_err(|e| Error::Runtime(format!("evaluation at the start point: {e}")))?;
     summary.timings = timings;
-    summary.figures = json!({
-            "variables": d.n,
-            "constraints": d.m,
-            "jacobian_nonzeros": d.jac_nnz,
-            "hessian_nonzeros": d.hess_nnz,
-            "joints": nlp.structure().joints.len(),
-            "beams": nlp.structure().beams.len(),
-            "derivatives": report,
-    });
+    summary.set_figure("variables", d.n);
+    summary.set_figure("constraints", d.m);
+    summary.set_figure("jacobian_nonzeros", d.jac_nnz);
+    summary.set_figure("hessian_nonzeros", d.hess_nnz);
+    summary.set_figure("joints", nlp.structure().joints.len());
+    summary.set_figure("beams", nlp.structure().beams.len());
     Ok(Outcome {
         summary,
         status: None,
-        check_passed: Some(passed),
+        check_passed: Some(report.passed()),
         artifacts: Vec::new(),
     })
 }

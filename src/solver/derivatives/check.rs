@@ -20,10 +20,29 @@
 //! Jacobian entry also shows up as Hessian errors.
 //!
 //! Stencils respect the variable bounds (see [`super::interval`]).
+//!
+//! Two refinements serve models whose functions are hard to difference, both off by default:
+//! - Richardson extrapolation (`richardson`): `D = (4·D(h/2) − D(h))/3` cancels the h² term of
+//!   the central difference D(h). Stiff simulations (ground contact) make plain central
+//!   differences truncation-limited before they reach round-off.
+//! - Kink detection (`kink_threshold = t`): where the forward and backward differences of a
+//!   function disagree by more than t (relative), the stencil straddles a kink of a C⁰/C¹
+//!   function (the mixed-area rule of Meyer et al. switches at right angles, which grid-made
+//!   meshes contain exactly), or the function curves too strongly over it for the central
+//!   difference to be trusted to t. Such an entry is re-estimated with steps 10× and 100× smaller; if
+//!   the finest stencil straddles the kink too, either one-sided difference is accepted. Every
+//!   admissible estimate is compared and the closest one counts; the report says how many
+//!   entries straddled a kink.
+//!
+//! `columns` restricts the check to listed variables (for meshes with many thousands of
+//! variables, a spread sample: [`spread_columns`]), differenced one by one; [`jittered_start`]
+//! moves the start point off exact symmetries first.
 
 use std::collections::BTreeMap;
 use std::fmt;
 
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -47,6 +66,14 @@ pub struct CheckOptions {
     pub lambda: Option<Vec<f64>>,
     /// Worst functions listed by `Display`; default 10.
     pub listed: usize,
+    /// Only these variables are checked (one by one, entries outside the pattern included);
+    /// default `None`, meaning all (grouped above `scan_limit`).
+    pub columns: Option<Vec<usize>>,
+    /// Richardson-extrapolate the central differences (see the module header); default false.
+    pub richardson: bool,
+    /// Relative forward/backward disagreement that marks a kink (see the module header);
+    /// default `None`: no kink handling.
+    pub kink_threshold: Option<f64>,
 }
 
 impl Default for CheckOptions {
@@ -57,6 +84,9 @@ impl Default for CheckOptions {
             scan_limit: 2000,
             lambda: None,
             listed: 10,
+            columns: None,
+            richardson: false,
+            kink_threshold: None,
         }
     }
 }
@@ -129,6 +159,10 @@ pub struct DerivativeReport {
     pub listed: usize,
     /// `eval` plus `eval_derivatives` calls spent by the check.
     pub evaluations: usize,
+    /// Variables checked.
+    pub columns: usize,
+    /// Entries whose stencil straddled a kink (only with `kink_threshold`).
+    pub kinks: usize,
 }
 
 impl DerivativeReport {
@@ -175,6 +209,16 @@ impl fmt::Display for DerivativeReport {
                 f,
                 "  {:<10} {:>9} {:>8} {:>11.3e}",
                 name, b.checked, b.failed, b.max_error
+            )?;
+        }
+        if self.columns < self.n {
+            writeln!(f, "  {} of {} variables checked", self.columns, self.n)?;
+        }
+        if self.kinks > 0 {
+            writeln!(
+                f,
+                "  {} entries straddled a kink (judged by their best admissible estimate)",
+                self.kinks
             )?;
         }
         let listed = self.worst_per_function.iter().take(self.listed);
@@ -279,7 +323,8 @@ impl Setup {
 }
 
 /// Compares the derivatives of `nlp` at `x` with central differences (see the module header).
-/// Errors from the problem's functions at `x` or at a perturbed point are returned.
+/// Errors from the problem's functions at `x` or at a perturbed point are returned; a listed
+/// column outside `0..n` is a [`EvalError::Fatal`].
 pub fn check_derivatives(
     nlp: &dyn Nlp,
     x: &[f64],
@@ -287,16 +332,27 @@ pub fn check_derivatives(
 ) -> Result<DerivativeReport, EvalError> {
     let setup = Setup::new(nlp);
     let dims = nlp.dims();
+    if let Some(&j) = options.columns.iter().flatten().find(|&&j| j >= setup.n) {
+        return Err(EvalError::Fatal(format!(
+            "derivative check: variable {j} listed, but n = {}",
+            setup.n
+        )));
+    }
     let mut grad = vec![0.0; setup.n];
     let mut jac = vec![0.0; dims.jac_nnz];
     nlp.eval_derivatives(x, &mut grad, &mut jac)?;
     let analytic = setup.summed(&jac);
 
-    let scan = setup.n <= options.scan_limit;
-    let (entries, mut evaluations) = if scan {
-        scan_columns(nlp, &setup, x, options, &grad, &analytic)?
+    let scan = options.columns.is_some() || setup.n <= options.scan_limit;
+    let columns: Vec<usize> = match &options.columns {
+        Some(list) => list.clone(),
+        None => (0..setup.n).collect(),
+    };
+    let (entries, mut evaluations, mut kinks) = if scan {
+        scan_columns(nlp, &setup, x, options, &grad, &analytic, &columns)?
     } else {
-        grouped_columns(nlp, &setup, x, options, &grad, &analytic)?
+        let (entries, evaluations) = grouped_columns(nlp, &setup, x, options, &grad, &analytic)?;
+        (entries, evaluations, 0)
     };
     evaluations += 1;
     let (gradient_entries, jacobian_entries): (Vec<_>, Vec<_>) = entries
@@ -305,8 +361,10 @@ pub fn check_derivatives(
 
     let mut hessian_entries = Vec::new();
     let hessian = if dims.hess_nnz > 0 {
-        let (entries, count) = hessian_entries_at(nlp, &setup, x, options, scan)?;
+        let scanned = scan.then_some(columns.as_slice());
+        let (entries, count, kinked) = hessian_entries_at(nlp, &setup, x, options, scanned)?;
         evaluations += count;
+        kinks += kinked;
         hessian_entries = entries;
         Some(summarize(&hessian_entries, options.tolerance))
     } else {
@@ -350,7 +408,31 @@ pub fn check_derivatives(
         worst_per_function,
         listed: options.listed,
         evaluations,
+        columns: columns.len(),
+        kinks,
     })
+}
+
+/// The NLP's start point moved by uniform random offsets of at most `amount` per variable
+/// (units of x), seeded: a check point off the exact symmetries of generated starts.
+pub fn jittered_start(nlp: &dyn Nlp, amount: f64, seed: u64) -> Vec<f64> {
+    let mut x = vec![0.0; nlp.dims().n];
+    nlp.start(&mut x);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    for v in &mut x {
+        *v += amount * (2.0 * rng.random::<f64>() - 1.0);
+    }
+    x
+}
+
+/// `count` variable indices spread evenly over `0..n` (all of them when `count ≥ n`).
+pub fn spread_columns(n: usize, count: usize) -> Vec<usize> {
+    if count >= n {
+        return (0..n).collect();
+    }
+    let mut cols: Vec<usize> = (0..count).map(|i| i * n / count).collect();
+    cols.dedup();
+    cols
 }
 
 fn summarize(entries: &[EntryCheck], tolerance: f64) -> BlockCheck {
@@ -387,23 +469,136 @@ fn entry(
     }
 }
 
-/// Function values at x + offset·e_j.
-fn eval_moved(
-    nlp: &dyn Nlp,
-    x: &[f64],
-    j: usize,
-    offset: f64,
-    m: usize,
-) -> Result<(f64, Vec<f64>), EvalError> {
-    let mut moved = x.to_vec();
-    moved[j] = x[j] + offset;
-    let mut f = 0.0;
-    let mut c = vec![0.0; m];
-    nlp.eval(&moved, &mut f, &mut c)?;
-    Ok((f, c))
+/// Compared entries, evaluations spent and entries at kinks (of one column, or gathered).
+type ColumnEntries = (Vec<EntryCheck>, usize, usize);
+
+/// Objective and constraints at x, as `[f, c…]`.
+fn values_at(nlp: &dyn Nlp, m: usize, x: &[f64]) -> Result<Vec<f64>, EvalError> {
+    let mut v = vec![0.0; m + 1];
+    let (f, c) = v.split_at_mut(1);
+    nlp.eval(x, &mut f[0], c)?;
+    Ok(v)
 }
 
-/// Column-by-column central differences: every pattern entry, plus failing entries outside it.
+/// Difference estimates of a vector function F along one variable, refined as the options ask
+/// (see the module header).
+struct ColumnDifferences {
+    /// Estimate per component: central (Richardson-extrapolated if asked), or the
+    /// bound-respecting stencil's.
+    estimate: Vec<f64>,
+    /// Further admissible estimates of the components whose stencil straddled a kink.
+    alternatives: BTreeMap<usize, Vec<f64>>,
+    /// Evaluations of F spent.
+    evaluations: usize,
+}
+
+impl ColumnDifferences {
+    /// The admissible estimate of component `i` closest to `analytic`.
+    fn best(&self, i: usize, analytic: f64) -> f64 {
+        let mut best = self.estimate[i];
+        for &d in self.alternatives.get(&i).into_iter().flatten() {
+            if relative_error(analytic, d) < relative_error(analytic, best) {
+                best = d;
+            }
+        }
+        best
+    }
+}
+
+/// Differences of F (with F(x) = `f0`) along variable `j`.
+fn column_differences<F>(
+    eval: &F,
+    setup: &Setup,
+    x: &[f64],
+    j: usize,
+    f0: &[f64],
+    options: &CheckOptions,
+) -> Result<ColumnDifferences, EvalError>
+where
+    F: Fn(&[f64]) -> Result<Vec<f64>, EvalError>,
+{
+    let stencil =
+        |h: f64| Stencil::choose(DifferenceScheme::Central, x[j], setup.xl[j], setup.xu[j], h);
+    let moved = |offset: f64| {
+        let mut p = x.to_vec();
+        p[j] = x[j] + offset;
+        eval(&p)
+    };
+    // F at the stencil's points (F(x) standing in for a missing second point).
+    let sample = |s: Stencil| -> Result<(Vec<f64>, Vec<f64>, usize), EvalError> {
+        let (a, b) = s.offsets();
+        let fa = moved(a)?;
+        match b {
+            Some(b) => Ok((fa, moved(b)?, 2)),
+            None => Ok((fa, f0.to_vec(), 1)),
+        }
+    };
+    let derive = |s: Stencil, fa: &[f64], fb: &[f64]| -> Vec<f64> {
+        (0..f0.len())
+            .map(|i| s.derivative(f0[i], fa[i], fb[i]))
+            .collect()
+    };
+    let h = options
+        .differences
+        .interval(DifferenceScheme::Central, x[j]);
+    let s = stencil(h);
+    let (fa, fb, mut evaluations) = sample(s)?;
+    let mut estimate = derive(s, &fa, &fb);
+    let mut alternatives = BTreeMap::new();
+    let Stencil::Centered { a, b } = s else {
+        return Ok(ColumnDifferences {
+            estimate,
+            alternatives,
+            evaluations,
+        });
+    };
+    if options.richardson
+        && let half @ Stencil::Centered { .. } = stencil(h / 2.0)
+    {
+        let (ha, hb, count) = sample(half)?;
+        evaluations += count;
+        for (e, d) in estimate.iter_mut().zip(derive(half, &ha, &hb)) {
+            *e = (4.0 * d - *e) / 3.0;
+        }
+    }
+    if let Some(t) = options.kink_threshold {
+        // Forward and backward differences of component i disagree: a kink inside the stencil.
+        let straddles = |i: usize, fa: &[f64], fb: &[f64], a: f64, b: f64, central: f64| {
+            let (forward, backward) = ((fa[i] - f0[i]) / a, (fb[i] - f0[i]) / b);
+            (forward - backward).abs() / central.abs().max(1.0) > t
+        };
+        let kinked: Vec<usize> = (0..f0.len())
+            .filter(|&i| straddles(i, &fa, &fb, a, b, estimate[i]))
+            .collect();
+        if !kinked.is_empty() {
+            for shrink in [10.0, 100.0] {
+                let fine = stencil(h / shrink);
+                let (ga, gb, count) = sample(fine)?;
+                evaluations += count;
+                let fine_estimate = derive(fine, &ga, &gb);
+                for &i in &kinked {
+                    let admissible: &mut Vec<f64> = alternatives.entry(i).or_default();
+                    admissible.push(fine_estimate[i]);
+                    if let Stencil::Centered { a, b } = fine
+                        && shrink == 100.0
+                        && straddles(i, &ga, &gb, a, b, fine_estimate[i])
+                    {
+                        admissible.push((ga[i] - f0[i]) / a);
+                        admissible.push((gb[i] - f0[i]) / b);
+                    }
+                }
+            }
+        }
+    }
+    Ok(ColumnDifferences {
+        estimate,
+        alternatives,
+        evaluations,
+    })
+}
+
+/// Column-by-column differences over `columns`: every pattern entry, plus failing entries
+/// outside it. Returns the entries, the evaluations spent and the entries at kinks.
 fn scan_columns(
     nlp: &dyn Nlp,
     setup: &Setup,
@@ -411,59 +606,76 @@ fn scan_columns(
     options: &CheckOptions,
     grad: &[f64],
     analytic: &BTreeMap<(usize, usize), f64>,
-) -> Result<(Vec<EntryCheck>, usize), EvalError> {
+    columns: &[usize],
+) -> Result<ColumnEntries, EvalError> {
     let m = setup.m;
-    let mut f0 = 0.0;
-    let mut c0 = vec![0.0; m];
-    nlp.eval(x, &mut f0, &mut c0)?;
+    let f0 = values_at(nlp, m, x)?;
     let mut by_col: Vec<Vec<(usize, f64)>> = vec![Vec::new(); setup.n];
     for (&(r, c), &v) in analytic {
         by_col[c].push((r, v));
     }
-    let columns: Vec<Result<(Vec<EntryCheck>, usize), EvalError>> = (0..setup.n)
-        .into_par_iter()
-        .map(|j| {
-            let s = setup.stencil(&options.differences, x, j);
-            let (a, b) = s.offsets();
-            let (fa, ca) = eval_moved(nlp, x, j, a, m)?;
-            let (fb, cb) = match b {
-                Some(b) => eval_moved(nlp, x, j, b, m)?,
-                None => (f0, c0.clone()),
-            };
+    let eval = |p: &[f64]| values_at(nlp, m, p);
+    let results: Vec<Result<ColumnEntries, EvalError>> = columns
+        .par_iter()
+        .map(|&j| {
+            let d = column_differences(&eval, setup, x, j, &f0, options)?;
             let mut out = vec![entry(
                 nlp,
                 Block::Gradient,
                 None,
                 j,
                 grad[j],
-                s.derivative(f0, fa, fb),
+                d.best(0, grad[j]),
                 true,
             )];
             let mut declared = by_col[j].iter().peekable();
             for r in 0..m {
-                let d = s.derivative(c0[r], ca[r], cb[r]);
                 match declared.peek() {
                     Some(&&(row, v)) if row == r => {
                         declared.next();
-                        out.push(entry(nlp, Block::Jacobian, Some(r), j, v, d, true));
+                        out.push(entry(
+                            nlp,
+                            Block::Jacobian,
+                            Some(r),
+                            j,
+                            v,
+                            d.best(r + 1, v),
+                            true,
+                        ));
                     }
-                    _ if relative_error(0.0, d) > options.tolerance => {
-                        out.push(entry(nlp, Block::Jacobian, Some(r), j, 0.0, d, false));
+                    _ => {
+                        let estimate = d.best(r + 1, 0.0);
+                        if relative_error(0.0, estimate) > options.tolerance {
+                            out.push(entry(
+                                nlp,
+                                Block::Jacobian,
+                                Some(r),
+                                j,
+                                0.0,
+                                estimate,
+                                false,
+                            ));
+                        }
                     }
-                    _ => {}
                 }
             }
-            Ok((out, 1 + usize::from(b.is_some())))
+            Ok((out, d.evaluations, d.alternatives.len()))
         })
         .collect();
+    gather(results)
+}
+
+/// Concatenates per-column results: entries, evaluations (plus the one at x), kinks.
+fn gather(results: Vec<Result<ColumnEntries, EvalError>>) -> Result<ColumnEntries, EvalError> {
     let mut entries = Vec::new();
-    let mut evaluations = 1;
-    for column in columns {
-        let (mut e, count) = column?;
+    let (mut evaluations, mut kinks) = (1, 0);
+    for result in results {
+        let (mut e, count, kinked) = result?;
         entries.append(&mut e);
         evaluations += count;
+        kinks += kinked;
     }
-    Ok((entries, evaluations))
+    Ok((entries, evaluations, kinks))
 }
 
 /// Grouped central differences: pattern entries only.
@@ -524,14 +736,16 @@ fn lagrangian_gradient(
     Ok(g)
 }
 
-/// Lower-triangle Hessian entries against central differences of ∇L.
+/// Lower-triangle Hessian entries against central differences of ∇L: column by column over
+/// `scanned` (finding entries outside the pattern), or grouped by the symmetric pattern when
+/// `None`. Returns the entries, the gradient evaluations spent and the entries at kinks.
 fn hessian_entries_at(
     nlp: &dyn Nlp,
     setup: &Setup,
     x: &[f64],
     options: &CheckOptions,
-    scan: bool,
-) -> Result<(Vec<EntryCheck>, usize), EvalError> {
+    scanned: Option<&[usize]>,
+) -> Result<ColumnEntries, EvalError> {
     let dims = nlp.dims();
     let lambda = options
         .lambda
@@ -551,22 +765,67 @@ fn hessian_entries_at(
     for (&(r, c), &v) in &analytic {
         by_col[c].push((r, v));
     }
-    // One column per group when scanning; otherwise columns grouped so that no row of the
-    // symmetric pattern meets two columns of a group.
-    let groups = if scan {
-        ColumnGroups::singletons(setup.n)
-    } else {
-        let mut pattern: Vec<Vec<usize>> = vec![Vec::new(); setup.n];
-        for &(r, c) in analytic.keys() {
-            pattern[r].push(c);
-            if r != c {
-                pattern[c].push(r);
-            }
-        }
-        ColumnGroups::greedy(setup.n, &pattern)
-    };
     let g0 = lagrangian_gradient(nlp, setup, x, &lambda)?;
-    let columns: Vec<Result<(Vec<EntryCheck>, usize), EvalError>> = groups
+    let Some(columns) = scanned else {
+        return grouped_hessian(nlp, setup, x, options, &lambda, &analytic, &by_col, &g0);
+    };
+    let eval = |p: &[f64]| lagrangian_gradient(nlp, setup, p, &lambda);
+    let results: Vec<Result<ColumnEntries, EvalError>> = columns
+        .par_iter()
+        .map(|&j| {
+            let d = column_differences(&eval, setup, x, j, &g0, options)?;
+            let mut out = Vec::new();
+            let mut declared = by_col[j].iter().peekable();
+            for r in j..setup.n {
+                match declared.peek() {
+                    Some(&&(row, v)) if row == r => {
+                        declared.next();
+                        out.push(entry(
+                            nlp,
+                            Block::Hessian,
+                            Some(r),
+                            j,
+                            v,
+                            d.best(r, v),
+                            true,
+                        ));
+                    }
+                    _ => {
+                        let estimate = d.best(r, 0.0);
+                        if relative_error(0.0, estimate) > options.tolerance {
+                            out.push(entry(nlp, Block::Hessian, Some(r), j, 0.0, estimate, false));
+                        }
+                    }
+                }
+            }
+            Ok((out, d.evaluations, d.alternatives.len()))
+        })
+        .collect();
+    gather(results)
+}
+
+/// Hessian pattern entries from columns grouped so that no row of the symmetric pattern meets
+/// two columns of a group (plain central differences).
+#[allow(clippy::too_many_arguments)]
+fn grouped_hessian(
+    nlp: &dyn Nlp,
+    setup: &Setup,
+    x: &[f64],
+    options: &CheckOptions,
+    lambda: &[f64],
+    analytic: &BTreeMap<(usize, usize), f64>,
+    by_col: &[Vec<(usize, f64)>],
+    g0: &[f64],
+) -> Result<ColumnEntries, EvalError> {
+    let mut pattern: Vec<Vec<usize>> = vec![Vec::new(); setup.n];
+    for &(r, c) in analytic.keys() {
+        pattern[r].push(c);
+        if r != c {
+            pattern[c].push(r);
+        }
+    }
+    let groups = ColumnGroups::greedy(setup.n, &pattern);
+    let results: Vec<Result<ColumnEntries, EvalError>> = groups
         .groups()
         .par_iter()
         .map(|group| {
@@ -585,43 +844,21 @@ fn hessian_entries_at(
                     second = true;
                 }
             }
-            let ga = lagrangian_gradient(nlp, setup, &xa, &lambda)?;
+            let ga = lagrangian_gradient(nlp, setup, &xa, lambda)?;
             let gb = if second {
-                lagrangian_gradient(nlp, setup, &xb, &lambda)?
+                lagrangian_gradient(nlp, setup, &xb, lambda)?
             } else {
-                g0.clone()
+                g0.to_vec()
             };
             let mut out = Vec::new();
             for (&j, s) in group.iter().zip(&stencils) {
-                let mut declared = by_col[j].iter().peekable();
-                let rows: Box<dyn Iterator<Item = usize>> = if scan {
-                    Box::new(j..setup.n)
-                } else {
-                    Box::new(by_col[j].iter().map(|&(r, _)| r))
-                };
-                for r in rows {
+                for &(r, v) in &by_col[j] {
                     let d = s.derivative(g0[r], ga[r], gb[r]);
-                    match declared.peek() {
-                        Some(&&(row, v)) if row == r => {
-                            declared.next();
-                            out.push(entry(nlp, Block::Hessian, Some(r), j, v, d, true));
-                        }
-                        _ if relative_error(0.0, d) > options.tolerance => {
-                            out.push(entry(nlp, Block::Hessian, Some(r), j, 0.0, d, false));
-                        }
-                        _ => {}
-                    }
+                    out.push(entry(nlp, Block::Hessian, Some(r), j, v, d, true));
                 }
             }
-            Ok((out, 1 + usize::from(second)))
+            Ok((out, 1 + usize::from(second), 0))
         })
         .collect();
-    let mut entries = Vec::new();
-    let mut evaluations = 1;
-    for column in columns {
-        let (mut e, count) = column?;
-        entries.append(&mut e);
-        evaluations += count;
-    }
-    Ok((entries, evaluations))
+    gather(results)
 }

@@ -68,7 +68,7 @@ mod tests;
 
 pub use check::{
     Block, BlockCheck, CheckOptions, DerivativeReport, EntryCheck, check_derivatives,
-    relative_error,
+    jittered_start, relative_error, spread_columns,
 };
 pub use coloring::ColumnGroups;
 pub use engine::FiniteDifferences;

@@ -558,3 +558,121 @@ fn grouped_hessian_check_agrees_with_the_scan() {
         (Block::Hessian, Some(1), 1)
     );
 }
+
+/// f = 0; c0 = |x0| + x1 ("kinked"), c1 = exp(k·x1) ("stiff"), with a slip factor on
+/// ∂c0/∂x0 (1 when exact). No Hessian.
+struct Kinked {
+    k: f64,
+    slip: f64,
+}
+
+impl Nlp for Kinked {
+    fn dims(&self) -> Dims {
+        Dims {
+            n: 2,
+            m: 2,
+            jac_nnz: 3,
+            hess_nnz: 0,
+        }
+    }
+    fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
+        xl.fill(f64::NEG_INFINITY);
+        xu.fill(f64::INFINITY);
+        cl.fill(0.0);
+        cu.fill(0.0);
+    }
+    fn start(&self, x: &mut [f64]) {
+        x.copy_from_slice(&[0.0, 0.0]);
+    }
+    fn jacobian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
+        rows.copy_from_slice(&[0, 0, 1]);
+        cols.copy_from_slice(&[0, 1, 1]);
+    }
+    fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
+        *f = 0.0;
+        c[0] = x[0].abs() + x[1];
+        c[1] = (self.k * x[1]).exp();
+        Ok(())
+    }
+    fn eval_derivatives(&self, x: &[f64], g: &mut [f64], j: &mut [f64]) -> Result<(), EvalError> {
+        g.fill(0.0);
+        j[0] = self.slip * x[0].signum();
+        j[1] = 1.0;
+        j[2] = self.k * (self.k * x[1]).exp();
+        Ok(())
+    }
+}
+
+#[test]
+fn kink_handling_accepts_a_kink_inside_the_stencil_but_not_a_wrong_slope() {
+    // x0 = 3e-6 lies inside the default central stencil (h ≈ 1e-4) of |x0|.
+    let x = [3e-6, 0.1];
+    let exact = Kinked { k: 1.0, slip: 1.0 };
+    let plain = check_derivatives(&exact, &x, &CheckOptions::default()).unwrap();
+    assert!(!plain.passed(), "{plain}");
+    assert_eq!(plain.kinks, 0);
+    let kinks = CheckOptions {
+        kink_threshold: Some(1e-5),
+        ..CheckOptions::default()
+    };
+    let report = check_derivatives(&exact, &x, &kinks).unwrap();
+    assert!(report.passed(), "{report}");
+    assert!(report.kinks >= 1);
+    // A slope 1e-3 off is still caught, kink or not.
+    let slipped = Kinked {
+        k: 1.0,
+        slip: 1.001,
+    };
+    let report = check_derivatives(&slipped, &x, &kinks).unwrap();
+    assert!(!report.passed(), "{report}");
+    let worst = &report.worst_per_function[0];
+    assert_eq!((worst.row, worst.col), (Some(0), 0));
+}
+
+#[test]
+fn richardson_extrapolation_removes_the_truncation_error() {
+    // exp(100·x1): central truncation h²·k²/6 relative ≈ 1.2e-8·1e4/6 ≈ 2e-5 at h ≈ 1.1e-4.
+    let x = [0.5, 0.1];
+    let stiff = Kinked {
+        k: 100.0,
+        slip: 1.0,
+    };
+    let plain = check_derivatives(&stiff, &x, &CheckOptions::default()).unwrap();
+    let extrapolated = CheckOptions {
+        richardson: true,
+        ..CheckOptions::default()
+    };
+    let report = check_derivatives(&stiff, &x, &extrapolated).unwrap();
+    assert!(!plain.passed(), "{plain}");
+    assert!(report.passed(), "{report}");
+    assert!(report.max_error() < 1e-3 * plain.max_error());
+}
+
+#[test]
+fn listed_columns_limit_the_check() {
+    let nlp = Chain { n: 50 };
+    let mut x = vec![0.0; 50];
+    nlp.start(&mut x);
+    let columns = spread_columns(50, 5);
+    assert_eq!(columns, vec![0, 10, 20, 30, 40]);
+    let options = CheckOptions {
+        columns: Some(columns.clone()),
+        ..Default::default()
+    };
+    let report = check_derivatives(&nlp, &x, &options).unwrap();
+    assert!(report.passed(), "{report}");
+    assert!(report.scanned_outside_pattern);
+    assert_eq!((report.columns, report.gradient.checked), (5, 5));
+    assert!(report.to_string().contains("5 of 50 variables checked"));
+    // A listed column outside 0..n is an error, not a panic.
+    let bad = CheckOptions {
+        columns: Some(vec![50]),
+        ..Default::default()
+    };
+    assert!(check_derivatives(&nlp, &x, &bad).is_err());
+    // Jittered starts are reproducible and bounded.
+    let a = jittered_start(&nlp, 1e-3, 9);
+    assert_eq!(a, jittered_start(&nlp, 1e-3, 9));
+    assert!(a.iter().zip(&x).all(|(p, q)| (p - q).abs() <= 1e-3));
+    assert_ne!(a, jittered_start(&nlp, 1e-3, 10));
+}

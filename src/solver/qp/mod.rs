@@ -11,7 +11,7 @@
 pub mod dense;
 mod select;
 
-pub use select::{DENSE_LIMIT, QpMethod, WarmStart, solve};
+pub use select::{DENSE_LIMIT, QpMethod, Snapshot, WarmStart, solve};
 
 use nalgebra::DMatrix;
 use nalgebra_sparse::{CscMatrix, CsrMatrix};

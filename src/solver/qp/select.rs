@@ -6,7 +6,12 @@
 //! ([`super::sparse`]) above, with one [`SparseQp`] kept in the [`WarmStart`] so that its
 //! symbolic analysis is reused by every QP of the same sparsity pattern. No n×n matrix is
 //! formed on the sparse path: a `LowRank` Hessian stays in compact form, a `SparseLower` one
-//! (possibly indefinite) is convexified by the sparse method's inertia correction.
+//! (possibly indefinite) is convexified by the sparse method's inertia correction, with the
+//! shift schedule of `hessian::exact` (δ₀ = 1 relative growing ×100 when the previous QP needed
+//! no shift, else from a third of the last shift growing ×8), so that both paths take the same
+//! steps: a barely sufficient shift (IPOPT's δ₀ = 1e-4, meant for a barrier method) leaves
+//! H + δI nearly singular along the null space of the constraints and gives long, poorly
+//! modelled steps that the line search cuts to a few percent.
 //!
 //! On the dense path a `SparseLower` Hessian is densified and shifted by `δI` until its
 //! Cholesky factorization exists, with δ growing geometrically from `1e-8·(1+max|Hᵢᵢ|)`; a
@@ -29,10 +34,19 @@ use super::{QpHessian, QpProblem, QpSolution, QpStatus};
 /// Variables above which [`QpMethod::Auto`] takes the sparse method.
 pub const DENSE_LIMIT: usize = 2000;
 
-/// First relative convexification shift of the sparse method (see
-/// [`SparseQp::first_shift`]); a Hessian lacking curvature along a direction of recession is
-/// caught by the unbounded-QP retry with δ₀ = 1 instead.
-const FIRST_SHIFT: f64 = 1e-4;
+/// First relative convexification shift of the sparse method when the previous QP needed
+/// none (δ₀ of `hessian::exact`: no barrier curvature here, so a nearly singular H + δI must
+/// not be passed on); a Hessian lacking curvature along a direction of recession is caught by
+/// the unbounded-QP retry instead.
+const SHIFT_FIRST: f64 = 1.0;
+/// Growth of the first convexification search (κ̄⁺ of Wächter & Biegler 2006, §3.1).
+const SHIFT_FIRST_GROWTH: f64 = 100.0;
+/// Later searches start from the last shift times this (κ⁻) ...
+const SHIFT_DECREASE: f64 = 1.0 / 3.0;
+/// ... but not below this (δ_min, relative) ...
+const SHIFT_MIN: f64 = 1e-10;
+/// ... and grow by this (κ⁺).
+const SHIFT_GROWTH: f64 = 8.0;
 
 /// Which QP method solves the subproblems.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -67,6 +81,10 @@ pub struct WarmStart {
     sparse: Option<Box<SparseQp>>,
     /// δ of the last sparse solve: the QP solved had `H + δI` (0 on the dense path).
     convexification: f64,
+    /// The last sparse shift relative to `max(1, maxⱼ|Hⱼⱼ|)`, where the next search starts.
+    shift_memory: f64,
+    /// The next sparse solve repeats the last shift (see [`WarmStart::snapshot`]).
+    repeat_shift: bool,
 }
 
 impl fmt::Debug for WarmStart {
@@ -94,10 +112,18 @@ impl WarmStart {
         self.working_set.clear();
     }
 
-    /// The dense working set, to be put back with [`WarmStart::restore`] after a QP whose
-    /// working set must not carry over (a second-order correction).
-    pub fn snapshot(&self) -> Vec<ConstraintId> {
-        self.working_set.clone()
+    /// The state to be put back with [`WarmStart::restore`] after a QP that must not carry
+    /// over (a second-order correction). Until then, solves repeat the convexification of the
+    /// last one: a correction of the same H and A must see the same `H + δI` as the step it
+    /// corrects, or it is a step of another model.
+    pub fn snapshot(&mut self) -> Snapshot {
+        let saved = Snapshot {
+            working_set: self.working_set.clone(),
+            shift_memory: self.shift_memory,
+            convexification: self.convexification,
+        };
+        self.repeat_shift = true;
+        saved
     }
 
     /// The shift δ ≥ 0 the last sparse solve added to a `SparseLower` Hessian (the step is
@@ -106,22 +132,44 @@ impl WarmStart {
         self.convexification
     }
 
-    /// Puts back a working set taken by [`WarmStart::snapshot`].
-    pub fn restore(&mut self, working_set: Vec<ConstraintId>) {
-        self.working_set = working_set;
+    /// Puts back the state taken by [`WarmStart::snapshot`].
+    pub fn restore(&mut self, saved: Snapshot) {
+        self.working_set = saved.working_set;
+        self.shift_memory = saved.shift_memory;
+        self.convexification = saved.convexification;
+        self.repeat_shift = false;
     }
+}
+
+/// What [`WarmStart::snapshot`] saves.
+#[derive(Debug, Clone)]
+pub struct Snapshot {
+    working_set: Vec<ConstraintId>,
+    shift_memory: f64,
+    convexification: f64,
 }
 
 /// Solves `problem`; `tolerance` is the relative KKT tolerance of the sparse method.
 pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSolution {
     let n = problem.g.len();
     if warm.method.is_sparse(n) {
-        let solver = warm
-            .sparse
-            .get_or_insert_with(|| Box::new(sqp_sparse_solver()));
+        let solver = warm.sparse.get_or_insert_with(|| Box::new(SparseQp::new()));
+        (solver.first_shift, solver.shift_growth) = if warm.repeat_shift && warm.shift_memory > 0.0
+        {
+            // Trial 0 fails again (same H and A), the remembered shift succeeds.
+            (warm.shift_memory, SHIFT_GROWTH)
+        } else if warm.shift_memory == 0.0 {
+            (SHIFT_FIRST, SHIFT_FIRST_GROWTH)
+        } else {
+            (
+                (SHIFT_DECREASE * warm.shift_memory).max(SHIFT_MIN),
+                SHIFT_GROWTH,
+            )
+        };
         let (mut solution, info) = solver.solve(problem, tolerance);
         warm.convexification = info.convexification;
         if let QpHessian::SparseLower(h) = problem.h {
+            warm.shift_memory = info.convexification / max_diagonal(h).max(1.0);
             // The inertia correction makes the reduced Hessian non-singular, not positive
             // definite on every direction of recession: an exact Hessian without curvature
             // along a descent direction gives an unbounded QP. As on the dense path, the
@@ -137,14 +185,19 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
                     h: QpHessian::SparseLower(&shifted),
                     ..*problem
                 };
-                let (retried, info) = sqp_sparse_solver().solve(&retry, tolerance);
+                let mut fresh = SparseQp::new();
+                fresh.first_shift = SHIFT_FIRST;
+                let (retried, info) = fresh.solve(&retry, tolerance);
                 solution = retried;
                 warm.convexification = shift + info.convexification;
                 shift *= 100.0;
             }
         }
         if solution.status == QpStatus::Optimal {
-            identify_active_set(problem, &mut solution);
+            if let Some(polished) = polish(problem, &solution, warm, tolerance) {
+                solution = polished;
+            }
+            identify_active_set(problem, &mut solution, tolerance);
         }
         return solution;
     }
@@ -168,20 +221,136 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
     }
 }
 
+/// The bounds of `problem` with the active set of an interior-point `solution` imposed: bounds
+/// and rows whose gap is at most their multiplier become equalities at that bound, inactive
+/// rows become free. `None` when every active gap is already within the QP's accuracy.
+fn active_set_problem(
+    problem: &QpProblem,
+    solution: &QpSolution,
+    tolerance: f64,
+) -> Option<[Vec<f64>; 4]> {
+    let (mut dl, mut du) = (problem.dl.to_vec(), problem.du.to_vec());
+    let (mut bl, mut bu) = (problem.bl.to_vec(), problem.bu.to_vec());
+    let mut ambiguous = false;
+    let mut fix = |value: f64, bound: f64, lo: &mut f64, hi: &mut f64| {
+        ambiguous |= (value - bound).abs() > tolerance * (1.0 + bound.abs());
+        (*lo, *hi) = (bound, bound);
+    };
+    for j in 0..dl.len() {
+        let (l, u, d, z) = (dl[j], du[j], solution.d[j], solution.z[j]);
+        if l == u {
+            continue;
+        }
+        if z < 0.0 && d - l <= -z {
+            fix(d, l, &mut dl[j], &mut du[j]);
+        } else if z > 0.0 && u - d <= z {
+            fix(d, u, &mut dl[j], &mut du[j]);
+        }
+    }
+    let ad = problem.a * &nalgebra::DVector::from_column_slice(&solution.d);
+    for i in 0..bl.len() {
+        let (l, u, lambda) = (bl[i], bu[i], solution.lambda[i]);
+        if l == u {
+            continue;
+        }
+        if lambda < 0.0 && ad[i] - l <= -lambda {
+            fix(ad[i], l, &mut bl[i], &mut bu[i]);
+        } else if lambda > 0.0 && u - ad[i] <= lambda {
+            fix(ad[i], u, &mut bl[i], &mut bu[i]);
+        } else {
+            (bl[i], bu[i]) = (f64::NEG_INFINITY, f64::INFINITY);
+        }
+    }
+    ambiguous.then_some([dl, du, bl, bu])
+}
+
+/// Active-set polish of an interior-point solution whose active bounds are not yet reached to
+/// the QP's accuracy (a degenerate QP: weakly active bounds with gap and multiplier both
+/// O(√μ), which the interior-point method resolves only slowly and which would leave the SQP
+/// iterate just off the bound, the dual residual at O(√μ)). The equality-constrained QP of the
+/// identified active set is solved with the same convexification (valid: it has more
+/// equality rows); its solution is taken when it keeps the other bounds and rows satisfied and
+/// the multipliers' signs right, as an active-set method's would be.
+fn polish(
+    problem: &QpProblem,
+    solution: &QpSolution,
+    warm: &mut WarmStart,
+    tolerance: f64,
+) -> Option<QpSolution> {
+    let [dl, du, bl, bu] = active_set_problem(problem, solution, tolerance)?;
+    let reduced = QpProblem {
+        dl: &dl,
+        du: &du,
+        bl: &bl,
+        bu: &bu,
+        ..*problem
+    };
+    let solver = warm.sparse.as_mut()?;
+    solver.fixed_shift = Some(warm.convexification);
+    let (polished, _) = solver.solve(&reduced, tolerance);
+    solver.fixed_shift = None;
+    if polished.status != QpStatus::Optimal {
+        return None;
+    }
+    let scale = 1.0 + problem.g.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+    let sign_slack = tolerance.sqrt() * scale;
+    let within = |v: f64, l: f64, u: f64| {
+        v >= l - tolerance * (1.0 + l.abs()) && v <= u + tolerance * (1.0 + u.abs())
+    };
+    for j in 0..dl.len() {
+        let (v, z) = (polished.d[j], polished.z[j]);
+        let ok = if dl[j] != du[j] || problem.dl[j] == problem.du[j] {
+            within(v, problem.dl[j], problem.du[j])
+        } else if dl[j] == problem.dl[j] {
+            z <= sign_slack
+        } else {
+            z >= -sign_slack
+        };
+        if !ok {
+            return None;
+        }
+    }
+    let ad = problem.a * &nalgebra::DVector::from_column_slice(&polished.d);
+    for i in 0..bl.len() {
+        let (v, lambda) = (ad[i], polished.lambda[i]);
+        let ok = if bl[i] != bu[i] || problem.bl[i] == problem.bu[i] {
+            within(v, problem.bl[i], problem.bu[i])
+        } else if bl[i] == problem.bl[i] {
+            lambda <= sign_slack
+        } else {
+            lambda >= -sign_slack
+        };
+        if !ok {
+            return None;
+        }
+    }
+    Some(QpSolution {
+        iterations: solution.iterations + polished.iterations,
+        ..polished
+    })
+}
+
 /// Turns an interior-point solution into the form an active-set method returns, which the
-/// SQP's termination test and penalty weights expect: a bound or row is taken as active when
-/// its multiplier exceeds its distance to the bound (`|zⱼ| ≥ gapⱼ`; at a strictly
+/// SQP's termination test and penalty weights expect: a bound or row is taken as inactive when
+/// its distance to the bound exceeds its multiplier (`gapⱼ > |zⱼ|`; at a strictly
 /// complementary solution the multiplier is O(1) and the gap O(μ), at an inactive one the
-/// reverse). Active variable bounds are hit exactly (d snapped onto them, so the iterate lands
-/// on the bound); multipliers of inactive bounds and rows, O(μ), are set to 0.
-fn identify_active_set(problem: &QpProblem, solution: &mut QpSolution) {
+/// reverse), and its multiplier, O(μ), is set to 0. An active variable bound is hit exactly
+/// (d snapped onto it, so the iterate lands on the bound) only when the move is within the
+/// QP's own accuracy, `gap ≤ tolerance·(1 + |bound|)`: at a degenerate solution (weakly active
+/// bound, gap and multiplier both O(√μ)) a longer snap would break the linearized equalities
+/// the step satisfies, and the SQP would stall at an infeasible point.
+fn identify_active_set(problem: &QpProblem, solution: &mut QpSolution, tolerance: f64) {
     for j in 0..solution.d.len() {
         let (l, u, d, z) = (problem.dl[j], problem.du[j], solution.d[j], solution.z[j]);
         let (gap_l, gap_u) = (d - l, u - d);
         if z < 0.0 && gap_l <= -z {
-            solution.d[j] = l;
+            if gap_l <= tolerance * (1.0 + l.abs()) {
+                solution.d[j] = l;
+            }
         } else if z > 0.0 && gap_u <= z {
-            solution.d[j] = u;
+            if gap_u <= tolerance * (1.0 + u.abs()) {
+                solution.d[j] = u;
+            }
         } else if l != u {
             solution.z[j] = 0.0;
         }
@@ -197,13 +366,6 @@ fn identify_active_set(problem: &QpProblem, solution: &mut QpSolution) {
             *lambda = 0.0;
         }
     }
-}
-
-/// The sparse solver as the SQP uses it.
-fn sqp_sparse_solver() -> SparseQp {
-    let mut solver = SparseQp::new();
-    solver.first_shift = FIRST_SHIFT;
-    solver
 }
 
 /// max |Hᵢᵢ| of a lower triangle.
@@ -316,5 +478,35 @@ mod tests {
         let s = solve_with(QpHessian::SparseLower(&lower));
         assert_eq!(s.status, QpStatus::Optimal);
         assert!(s.d.iter().all(|v| v.abs() <= 1.0 + 1e-12));
+    }
+
+    #[test]
+    fn degenerate_bound_is_reached_without_breaking_equalities() {
+        // min ½(d₀² + (d₁ − 1)²) s.t. d₀ + d₁ = 1, d₀ ≥ 0: d = (0, 1) with a zero multiplier on
+        // the active bound (weakly active), which an interior-point method approaches only as
+        // √μ; the returned step must lie on the bound and satisfy the equality.
+        let mut coo = CooMatrix::new(1, 2);
+        coo.push(0, 0, 1.0);
+        coo.push(0, 1, 1.0);
+        let a = CsrMatrix::from(&coo);
+        let h = CscMatrix::identity(2);
+        let inf = f64::INFINITY;
+        let problem = QpProblem {
+            h: QpHessian::SparseLower(&h),
+            g: &[0.0, -1.0],
+            a: &a,
+            dl: &[0.0, -inf],
+            du: &[inf, inf],
+            bl: &[1.0],
+            bu: &[1.0],
+        };
+        let s = solve(&problem, &mut WarmStart::new(QpMethod::Sparse), 1e-8);
+        println!("d = {:?}, z = {:?}, λ = {:?}", s.d, s.z, s.lambda);
+        assert_eq!(s.status, QpStatus::Optimal);
+        assert_eq!(s.d[0], 0.0);
+        // The equality holds to the QP's relative tolerance (a snap by the O(√μ) gap broke it
+        // by far more).
+        assert!((s.d[0] + s.d[1] - 1.0).abs() <= 1e-8 * 2.0);
+        assert!(s.z[0].abs() <= 1e-6 && s.lambda[0].abs() <= 1e-6);
     }
 }

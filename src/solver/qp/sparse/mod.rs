@@ -68,6 +68,9 @@ const STALL_WINDOW: usize = 5;
 /// Default first convexification shift (relative), see [`SparseQp::first_shift`].
 pub const DEFAULT_FIRST_SHIFT: f64 = 1e-4;
 
+/// Default growth of the convexification shift between trials, see [`SparseQp::shift_growth`].
+pub const DEFAULT_SHIFT_GROWTH: f64 = 10.0;
+
 /// Default iteration limit.
 pub const DEFAULT_MAX_ITERATIONS: usize = 200;
 
@@ -123,9 +126,15 @@ pub struct SparseQp {
     /// Iteration limit.
     pub max_iterations: usize,
     /// First nonzero convexification shift tried, relative to `max(1, maxⱼ|Hⱼⱼ|)`
-    /// ([`DEFAULT_FIRST_SHIFT`], IPOPT's 1e-4); later trials grow ×10. An SQP without barrier
-    /// curvature wants 1 (a singular H must not give steps of length ‖g‖/δ).
+    /// ([`DEFAULT_FIRST_SHIFT`], IPOPT's 1e-4); later trials grow by [`SparseQp::shift_growth`].
+    /// An SQP without barrier curvature wants 1 (a singular H must not give steps of length
+    /// ‖g‖/δ).
     pub first_shift: f64,
+    /// Factor between successive convexification trials ([`DEFAULT_SHIFT_GROWTH`]).
+    pub shift_growth: f64,
+    /// When set, the absolute shift δ_c used without an inertia search (the caller knows it
+    /// suffices, e.g. the QP has more equality rows than one already convexified with it).
+    pub fixed_shift: Option<f64>,
     system: Option<NewtonSystem>,
     layout: Layout,
     ws: Workspace,
@@ -247,6 +256,8 @@ impl SparseQp {
         SparseQp {
             max_iterations: DEFAULT_MAX_ITERATIONS,
             first_shift: DEFAULT_FIRST_SHIFT,
+            shift_growth: DEFAULT_SHIFT_GROWTH,
+            fixed_shift: None,
             system: None,
             layout: Layout::default(),
             ws: Workspace::default(),
@@ -299,15 +310,19 @@ impl SparseQp {
         let ws = &mut self.ws;
         let layout = &self.layout;
         ws.resize(n, m, p);
-        let shift = match system.convexify(
-            qp,
-            layout,
-            self.first_shift,
-            &mut ws.sig_d,
-            &mut ws.dual_diag,
-        ) {
-            Ok(Some(shift)) => shift,
-            _ => return (fail(QpStatus::Numerical), info),
+        let shift = match self.fixed_shift {
+            Some(shift) => shift,
+            None => match system.convexify(
+                qp,
+                layout,
+                self.first_shift,
+                self.shift_growth,
+                &mut ws.sig_d,
+                &mut ws.dual_diag,
+            ) {
+                Ok(Some(shift)) => shift,
+                _ => return (fail(QpStatus::Numerical), info),
+            },
         };
         info.convexification = shift;
         initial_point(qp, layout, ws);

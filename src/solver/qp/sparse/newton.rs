@@ -19,7 +19,7 @@
 //! factorization.
 //!
 //! Convexification (IPOPT §3.1 inertia correction, Wächter & Biegler 2006): for sparse and
-//! dense H, δ_c ∈ {0, δ₀, 10δ₀, …} is raised until `[H + δ_c I, A_Eᵀ; A_E, −εI]` (equality rows
+//! dense H, δ_c ∈ {0, δ₀, κδ₀, κ²δ₀, …} (δ₀, κ chosen by the caller) is raised until `[H + δ_c I, A_Eᵀ; A_E, −εI]` (equality rows
 //! only; inequality and free rows replaced by −1) has inertia (n, m), i.e. H + δ_c I is positive
 //! definite on the null space of the equality constraints, which makes the QP convex. For the
 //! low-rank form δ_c is computed in closed form from the p×p eigenproblem of `R M Rᵀ`
@@ -339,13 +339,15 @@ impl NewtonSystem {
         norm
     }
 
-    /// Finds the convexification shift δ_c ≥ 0 (see the module header). `scratch_n` and
+    /// Finds the convexification shift δ_c ≥ 0 (see the module header): trials 0, then
+    /// `first_shift` relative to `max(1, maxⱼ|Hⱼⱼ|)` growing by `growth`. `scratch_n` and
     /// `scratch_m` are length-n and length-m buffers. `None` when no shift up to 1e20 works.
     pub fn convexify(
         &mut self,
         qp: &QpProblem<'_>,
         layout: &Layout,
         first_shift: f64,
+        growth: f64,
         scratch_n: &mut [f64],
         scratch_m: &mut [f64],
     ) -> Result<Option<f64>, KktError> {
@@ -379,7 +381,7 @@ impl NewtonSystem {
             shift = if shift == 0.0 {
                 first_shift * diag_scale
             } else {
-                10.0 * shift
+                growth * shift
             };
         }
         Ok(None)
