@@ -17,7 +17,8 @@ command -v "$EVOLVER" >/dev/null || { echo "$EVOLVER not found (apt-get install 
 cases=("$@")
 if [ ${#cases[@]} -eq 0 ]; then
     cases=(problems/cmc/double_bubble.toml:3 problems/cmc/double_bubble.toml:5
-           problems/cmc/cube_frame.toml:2 problems/cmc/cube_frame_film.toml:4)
+           problems/cmc/cube_frame.toml:2 problems/cmc/cube_frame.toml:3
+           problems/cmc/cube_frame_film.toml:3)
 fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
