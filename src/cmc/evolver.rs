@@ -143,8 +143,11 @@ mod tests {
             .collect()
     }
 
-    /// Parses the sections back: vertex, edge and facet counts, every facet a closed edge loop.
-    fn reread(text: &str) -> (usize, Vec<[usize; 2]>, Vec<[i64; 3]>, Vec<Vec<i64>>) {
+    /// Vertex count, edges, facets (signed edges) and bodies (signed facets) of a datafile.
+    type Sections = (usize, Vec<[usize; 2]>, Vec<[i64; 3]>, Vec<Vec<i64>>);
+
+    /// Parses a datafile back into its sections.
+    fn reread(text: &str) -> Sections {
         let mut section = "";
         let (mut vertices, mut edges, mut facets, mut bodies) = (0, vec![], vec![], vec![]);
         for line in text.lines() {

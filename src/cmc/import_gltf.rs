@@ -275,7 +275,7 @@ mod tests {
             ]
         });
         let mut json = serde_json::to_vec(&json).unwrap();
-        while json.len() % 4 != 0 {
+        while !json.len().is_multiple_of(4) {
             json.push(b' ');
         }
         let total = 12 + 8 + json.len() + 8 + bin.len();

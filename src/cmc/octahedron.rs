@@ -94,7 +94,7 @@ pub fn partition_walls(half_diagonal: f64, weights: &[f64; 8]) -> Vec<(usize, us
     };
     let tolerance = 1e-9 * half_diagonal;
     let mut walls = Vec::new();
-    for f in 0..8 {
+    for (f, &weight_f) in weights.iter().enumerate() {
         for g in (f + 1)..8 {
             let (a, b) = le(f, g);
             let norm = a.norm();
@@ -112,7 +112,7 @@ pub fn partition_walls(half_diagonal: f64, weights: &[f64; 8]) -> Vec<(usize, us
                 poly = clip(&poly, &a, b);
             }
             // Inside the frame: φ_f ≥ 0.
-            poly = clip(&poly, &(weights[f] * window_normal(f)), weights[f] * c);
+            poly = clip(&poly, &(weight_f * window_normal(f)), weight_f * c);
             let mut corners: Vec<Point> = Vec::new();
             for p in poly {
                 if corners.last().is_none_or(|q| (p - q).norm() > tolerance) {
@@ -225,10 +225,9 @@ pub fn partition_film(edge: f64, weights: &[f64; 8], levels: usize) -> Result<Sh
         for i in 0..poly.len() {
             let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
             let key = (p.min(q), p.max(q));
-            if !paths.contains_key(&key) {
+            if let std::collections::btree_map::Entry::Vacant(slot) = paths.entry(key) {
                 let wire = b.flags_mut(key.0).fixed && b.flags_mut(key.1).fixed;
-                let path = add_path(&mut b, key, n, wire);
-                paths.insert(key, path);
+                slot.insert(add_path(&mut b, key, n, wire));
             }
         }
     }
