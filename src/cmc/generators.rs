@@ -14,8 +14,7 @@
 //!   walls meeting on the axis): the topology of the standard triple bubble.
 //! - [`cube_frame`]: a wire cube (fixed edges) with a central cubical bubble joined to every wire
 //!   by a trapezoidal film (seed Fig. 5.8).
-//! - [`octahedron_frame`]: a wire octahedron; topology `Cone`: every wire joined by a triangle
-//!   to a central vertex (the other stable topologies of seed Fig. 5.9 need their own starts).
+//! - octahedral frames: see [`super::octahedron`].
 //! - [`u_wires`]: two U-shaped wires meeting at their tips, spanned by one film (seed Fig. 5.3).
 //! - [`tents`]: membranes over boundary polygons with fixed rims; poles lift small caps of
 //!   vertices (never one point, which has no well-posed minimum).
@@ -266,7 +265,12 @@ fn add_grid_patch(
 
 /// A straight path of `count` segments between two existing vertices; the `count − 1` new
 /// vertices between them are fixed or free.
-fn add_path(b: &mut MeshBuilder, ends: (usize, usize), count: usize, fixed: bool) -> Vec<usize> {
+pub(super) fn add_path(
+    b: &mut MeshBuilder,
+    ends: (usize, usize),
+    count: usize,
+    fixed: bool,
+) -> Vec<usize> {
     let (pa, pb) = (b.position(ends.0), b.position(ends.1));
     let mut path = vec![ends.0];
     for i in 1..count {
@@ -511,15 +515,27 @@ fn add_pole_grid(b: &mut MeshBuilder, s: usize, grid: &[Vec<usize>], up: Point) 
     add_oriented(b, s, tris, up);
 }
 
-/// A wire cube of edge `edge` (m, centred at the origin, fixed wires) holding a central cubical
-/// bubble of volume `bubble_volume` (m³) joined to each wire by a trapezoidal film. `levels`
-/// segments along each wire. Surfaces `films` and `bubble` (outward).
-pub fn cube_frame(edge: f64, bubble_volume: f64, levels: usize) -> Result<Shape, MeshError> {
+/// A wire cube of edge `edge` (m, centred at the origin, fixed wires), `levels` segments along
+/// each wire. With `Some(bubble_volume)` (m³) it holds a central cubical bubble joined to each
+/// wire by a trapezoidal film (seed Fig. 5.8); surfaces `films` and `bubble` (outward). With
+/// `None` it is the bubble-free cube film: the inner cube flattened along z into a central square
+/// (side 0.3·edge) joined by trapezoids to the eight horizontal wires and by triangles to the
+/// four vertical ones (the stable film a wire cube holds); one surface `films`.
+pub fn cube_frame(
+    edge: f64,
+    bubble_volume: Option<f64>,
+    levels: usize,
+) -> Result<Shape, MeshError> {
     let n = levels.max(1);
-    let inner = bubble_volume.cbrt();
+    let inner = bubble_volume.map_or(0.3 * edge, f64::cbrt);
+    let flat = bubble_volume.is_none();
     let mut b = MeshBuilder::new();
     let films = b.surface("films");
-    let bubble = b.surface("bubble");
+    let bubble = if flat {
+        None
+    } else {
+        Some(b.surface("bubble"))
+    };
     let corner = |i: usize, size: f64| {
         Point::new(
             (i & 1) as f64 - 0.5,
@@ -528,10 +544,27 @@ pub fn cube_frame(edge: f64, bubble_volume: f64, levels: usize) -> Result<Shape,
         ) * size
     };
     let outer_c: Vec<usize> = (0..8).map(|i| b.fixed(corner(i, edge))).collect();
-    let inner_c: Vec<usize> = (0..8).map(|i| b.vertex(corner(i, inner))).collect();
-    let diagonal_segments = ((edge - inner) / 2.0 * 3f64.sqrt() / (inner / n as f64))
-        .round()
-        .clamp(1.0, n as f64) as usize;
+    // Flattened: corners i and i|4 share the square corner at z = 0.
+    let mut inner_c: Vec<usize> = Vec::with_capacity(8);
+    for i in 0..8 {
+        let v = if flat && i & 4 != 0 {
+            inner_c[i & 3]
+        } else {
+            let mut p = corner(i, inner);
+            if flat {
+                p.z = 0.0;
+            }
+            b.vertex(p)
+        };
+        inner_c.push(v);
+    }
+    let diagonal_segments = if flat {
+        n
+    } else {
+        ((edge - inner) / 2.0 * 3f64.sqrt() / (inner / n as f64))
+            .round()
+            .clamp(1.0, n as f64) as usize
+    };
     let diagonals: Vec<Vec<usize>> = (0..8)
         .map(|i| add_path(&mut b, (outer_c[i], inner_c[i]), diagonal_segments, false))
         .collect();
@@ -542,36 +575,61 @@ pub fn cube_frame(edge: f64, bubble_volume: f64, levels: usize) -> Result<Shape,
             if i & bit == 0 {
                 let j = i | bit;
                 outer_e.insert((i, j), add_path(&mut b, (outer_c[i], outer_c[j]), n, true));
-                inner_e.insert((i, j), add_path(&mut b, (inner_c[i], inner_c[j]), n, false));
+                if !(flat && bit == 4) {
+                    let path = match inner_e.get(&(i & 3, j & 3)) {
+                        Some(p) if flat => Vec::clone(p),
+                        _ => add_path(&mut b, (inner_c[i], inner_c[j]), n, false),
+                    };
+                    inner_e.insert((i, j), path);
+                }
             }
         }
     }
     for (&(i, j), wire) in &outer_e {
-        add_grid_patch(
-            &mut b,
-            films,
-            wire,
-            &inner_e[&(i, j)],
-            &diagonals[i],
-            &diagonals[j],
-            None,
-            |_, _| Point::zeros(),
-        );
+        match inner_e.get(&(i, j)) {
+            Some(inner_path) => add_grid_patch(
+                &mut b,
+                films,
+                wire,
+                inner_path,
+                &diagonals[i],
+                &diagonals[j],
+                None,
+                |_, _| Point::zeros(),
+            ),
+            None => {
+                // A vertical wire of the flattened cube: a triangle to the square's corner.
+                let apex_to = |d: &Vec<usize>| d.iter().rev().copied().collect::<Vec<_>>();
+                add_triangle_patch(
+                    &mut b,
+                    films,
+                    &apex_to(&diagonals[i]),
+                    &apex_to(&diagonals[j]),
+                    wire,
+                );
+            }
+        }
     }
-    // Bubble faces: for each axis bit and side, corners base, base+u, base+v, base+u+v.
+    // Bubble faces (or the central square): for each axis bit and side, corners base,
+    // base+u, base+v, base+u+v.
     for bit in [1usize, 2, 4] {
         let others: Vec<usize> = [1usize, 2, 4].into_iter().filter(|&o| o != bit).collect();
         let (u, v) = (others[0], others[1]);
         for side in [0, bit] {
-            let base = side;
             let normal = if side == 0 {
                 -axis_vector(bit)
             } else {
                 axis_vector(bit)
             };
+            let surface = match bubble {
+                Some(s) => s,
+                None if bit == 4 && side == 0 => films,
+                None => continue,
+            };
+            let base = side;
             add_grid_patch(
                 &mut b,
-                bubble,
+                surface,
                 &inner_e[&(base, base | u)],
                 &inner_e[&(base | v, base | u | v)],
                 &inner_e[&(base, base | v)],
@@ -582,17 +640,18 @@ pub fn cube_frame(edge: f64, bubble_volume: f64, levels: usize) -> Result<Shape,
         }
     }
     let mesh = b.build()?;
-    Ok(Shape {
-        mesh,
-        volumes: vec![(
+    let volumes = match (bubble, bubble_volume) {
+        (Some(s), Some(v)) => vec![(
             "bubble".into(),
             Region {
-                boundary: vec![(bubble, 1.0)],
+                boundary: vec![(s, 1.0)],
                 reference: Point::zeros(),
             },
-            bubble_volume,
+            v,
         )],
-    })
+        _ => Vec::new(),
+    };
+    Ok(Shape { mesh, volumes })
 }
 
 fn axis_vector(bit: usize) -> Point {
@@ -603,62 +662,9 @@ fn axis_vector(bit: usize) -> Point {
     }
 }
 
-/// Film topologies on the octahedral frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum OctahedronTopology {
-    /// Every wire joined by a triangular film to one central vertex.
-    Cone,
-}
-
-/// A wire octahedron with edges of length `edge` (m, vertices on the axes), fixed wires, with
-/// the films of `topology`; `levels` segments per wire. Surface `films`.
-pub fn octahedron_frame(
-    edge: f64,
-    topology: OctahedronTopology,
-    levels: usize,
-) -> Result<Shape, MeshError> {
-    let n = levels.max(1);
-    let s = edge / 2f64.sqrt();
-    let mut b = MeshBuilder::new();
-    let films = b.surface("films");
-    let axes = [
-        Point::x(),
-        -Point::x(),
-        Point::y(),
-        -Point::y(),
-        Point::z(),
-        -Point::z(),
-    ];
-    let corners: Vec<usize> = axes.iter().map(|d| b.fixed(d * s)).collect();
-    match topology {
-        OctahedronTopology::Cone => {
-            let centre = b.vertex(Point::zeros());
-            let spokes: Vec<Vec<usize>> = corners
-                .iter()
-                .map(|&c| add_path(&mut b, (centre, c), n, false))
-                .collect();
-            for i in 0..6 {
-                for j in (i + 1)..6 {
-                    // Opposite vertices (i, i^1) share no wire.
-                    if j == (i ^ 1) {
-                        continue;
-                    }
-                    let wire = add_path(&mut b, (corners[i], corners[j]), n, true);
-                    add_triangle_patch(&mut b, films, &spokes[i], &spokes[j], &wire);
-                }
-            }
-        }
-    }
-    Ok(Shape {
-        mesh: b.build()?,
-        volumes: Vec::new(),
-    })
-}
-
 /// A triangular patch with corner paths `side_a` (apex → A), `side_b` (apex → B) and `base`
 /// (A → B), all with `n` segments: rows parallel to the base, row r holding r + 1 vertices.
-fn add_triangle_patch(
+pub(super) fn add_triangle_patch(
     b: &mut MeshBuilder,
     s: usize,
     side_a: &[usize],
@@ -986,7 +992,7 @@ mod tests {
 
     #[test]
     fn cube_frame_bubble_is_closed_and_wires_fixed() {
-        let shape = cube_frame(1.0, 0.05, 4).unwrap();
+        let shape = cube_frame(1.0, Some(0.05), 4).unwrap();
         let (_, region, target) = &shape.volumes[0];
         assert!((region.volume(&shape.mesh) - target).abs() < 1e-12);
         let bubble = shape.mesh.surface_index("bubble").unwrap();
@@ -997,8 +1003,35 @@ mod tests {
     }
 
     #[test]
+    fn bubble_free_cube_film_has_a_central_square_on_triple_lines() {
+        let shape = cube_frame(1.0, None, 4).unwrap();
+        let m = &shape.mesh;
+        assert!(shape.volumes.is_empty());
+        assert_eq!(m.surfaces().len(), 1);
+        let fixed = m.flags().iter().filter(|f| f.fixed).count();
+        assert_eq!(fixed, 8 + 12 * 3);
+        // Square edges meet three films (square, upper and lower trapezoid); the eight diagonals
+        // from the cube's corners are triple lines too: 4·4 square-edge vertices + 8·3 diagonal
+        // interior vertices + the 8 (fixed) cube corners.
+        let triple: usize = m.edges().iter().filter(|e| e.triangles.len() == 3).count();
+        assert_eq!(triple, 4 * 4 + 8 * 4);
+        assert_eq!(m.junction_vertices().len(), 4 * 4 + 8 * 3 + 8);
+        // Planar pieces: 8 trapezoids (sides 1 and 0.3, height √(0.35² + 0.5²)), 4 triangles
+        // (base 1, height √2·0.35) and the 0.3² square.
+        let trapezoid = 0.65 * (0.35f64 * 0.35 + 0.25).sqrt();
+        let triangle = 0.5 * 2f64.sqrt() * 0.35;
+        let exact = 8.0 * trapezoid + 4.0 * triangle + 0.09;
+        assert!((total_area(m) - exact).abs() < 1e-12, "{}", total_area(m));
+    }
+
+    #[test]
     fn frames_wires_and_tents_build() {
-        let o = octahedron_frame(1.0, OctahedronTopology::Cone, 3).unwrap();
+        let o = crate::cmc::octahedron::octahedron_frame(
+            1.0,
+            crate::cmc::octahedron::OctahedronTopology::Cone,
+            3,
+        )
+        .unwrap();
         // 12 cone triangles of base 1 and height ½.
         assert!((total_area(&o.mesh) - 3.0).abs() < 1e-12);
         let u = u_wires(1.0, 0.5, 6).unwrap();

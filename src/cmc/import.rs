@@ -31,6 +31,9 @@ pub enum ImportError {
     /// The mesh is degenerate.
     #[error("{0}")]
     Mesh(#[from] MeshError),
+    /// A glTF file could not be read or lacks what a start mesh needs.
+    #[error("{0}")]
+    Gltf(String),
 }
 
 /// Reads an OBJ text into a mesh (see the module header for the conventions).
@@ -98,10 +101,21 @@ pub fn read_obj(text: &str) -> Result<Mesh, ImportError> {
             _ => {}
         }
     }
-    // Keep only vertices used by films, renumbered in order of first use.
+    Ok(assemble(&positions, &faces, &fixed, &excluded)?)
+}
+
+/// Builds the mesh of imported polygons: `faces` are `(surface name, vertex indices)` polygons
+/// (split into fans), `fixed` and `excluded` flag vertices. Only vertices used by faces are
+/// kept, renumbered in order of first use. Shared by the OBJ and glTF readers.
+pub(super) fn assemble(
+    positions: &[Point],
+    faces: &[(String, Vec<usize>)],
+    fixed: &[usize],
+    excluded: &[usize],
+) -> Result<Mesh, MeshError> {
     let mut builder = MeshBuilder::new();
     let mut renumber: BTreeMap<usize, usize> = BTreeMap::new();
-    for (name, poly) in &faces {
+    for (name, poly) in faces {
         let s = builder.surface(name);
         let ids: Vec<usize> = poly
             .iter()
@@ -116,16 +130,16 @@ pub fn read_obj(text: &str) -> Result<Mesh, ImportError> {
         }
     }
     for v in fixed {
-        if let Some(&id) = renumber.get(&v) {
+        if let Some(&id) = renumber.get(v) {
             builder.flags_mut(id).fixed = true;
         }
     }
     for v in excluded {
-        if let Some(&id) = renumber.get(&v) {
+        if let Some(&id) = renumber.get(v) {
             builder.flags_mut(id).excluded = true;
         }
     }
-    Ok(builder.build()?)
+    builder.build()
 }
 
 /// A 0-based vertex index from an OBJ reference (`7`, `7/1`, `7//2`, `-1`).

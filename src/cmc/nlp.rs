@@ -863,8 +863,9 @@ fn add3(v: &mut [f64], c: usize, g: Point) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cmc::generators::{self, OctahedronTopology, Shape};
+    use crate::cmc::generators::{self, Shape};
     use crate::cmc::mesh::Guide;
+    use crate::cmc::octahedron::{self, OctahedronTopology};
     use crate::solver::derivatives::{
         CheckOptions, FiniteDifferenceOptions, check_derivatives, jittered_start,
     };
@@ -935,10 +936,13 @@ mod tests {
                 "triple bubble",
                 generators::triple_bubble([1.0, 1.5, 2.0], 2).unwrap(),
             ),
-            ("cube frame", generators::cube_frame(1.0, 0.05, 2).unwrap()),
+            (
+                "cube frame",
+                generators::cube_frame(1.0, Some(0.05), 2).unwrap(),
+            ),
             (
                 "octahedron",
-                generators::octahedron_frame(1.0, OctahedronTopology::Cone, 3).unwrap(),
+                octahedron::octahedron_frame(1.0, OctahedronTopology::Cone, 3).unwrap(),
             ),
             ("u wires", generators::u_wires(1.0, 0.6, 4).unwrap()),
         ];
@@ -983,7 +987,10 @@ mod tests {
                 "triple bubble",
                 generators::triple_bubble([1.0, 1.5, 2.0], 2).unwrap(),
             ),
-            ("cube frame", generators::cube_frame(1.0, 0.05, 2).unwrap()),
+            (
+                "cube frame",
+                generators::cube_frame(1.0, Some(0.05), 2).unwrap(),
+            ),
             ("u wires", generators::u_wires(1.0, 0.6, 4).unwrap()),
         ];
         for (what, shape) in shapes {
@@ -1000,7 +1007,7 @@ mod tests {
     fn reduced_hessian_spectrum_at_a_solved_frame() {
         use crate::solver::{HessianMode, Options, hessian::assemble_dense};
         use nalgebra::{DMatrix, DVector};
-        let nlp = nlp_of(generators::cube_frame(0.05, 1e-6, 2).unwrap(), 0.01);
+        let nlp = nlp_of(generators::cube_frame(0.05, Some(1e-6), 2).unwrap(), 0.01);
         let options = Options {
             hessian: HessianMode::Bfgs,
             ..Options::default()

@@ -5,7 +5,8 @@
 //! resolution = 6                # optional refinement level (meaning per shape, see below)
 //! [shape]
 //! type = "double_bubble"        # sphere | double_bubble | triple_bubble | cube_frame |
-//! volumes = [1.0e-6, 2.0e-6]    # octahedron_frame | u_wires | tents | cells | obj
+//! volumes = [1.0e-6, 2.0e-6]    # octahedron_frame | catenoid | u_wires | tents | cells |
+//!                               # obj | gltf
 //! [quality]
 //! tangential_weight = 0.01      # w of the tangential regularization (cmc::nlp), ≥ 0
 //! flip_rounds = 1               # edge-flip + re-solve rounds after the first solve (cmc::remesh)
@@ -15,17 +16,20 @@
 //! length = 0.5
 //! [solver]                      # the shared solver table
 //! ```
-//! Resolution: icosphere subdivision level (sphere), rings per cap (double bubble), rows per
+//! Resolution: icosphere subdivision level (sphere), 12·resolution segments per ring (catenoid),
+//! rings per cap (double bubble), rows per
 //! half-meridian (triple bubble), segments per wire (frames, U wires), rings from centre to rim
-//! (tents, cells); ignored for OBJ imports.
+//! (tents, cells); ignored for OBJ and glTF imports.
 
 use std::path::Path;
 
 use serde::Deserialize;
 
-use super::generators::{self, CellSpec, OctahedronTopology, Pole, Shape, TentSpec};
+use super::catenoid;
+use super::generators::{self, CellSpec, Pole, Shape, TentSpec};
 use super::mesh::Point;
 use super::nlp::Chord;
+use super::octahedron::{self, OctahedronTopology};
 use super::volume::Region;
 use crate::error::InputError;
 use crate::spec::{Key, SolverSpec, Source};
@@ -111,12 +115,19 @@ pub enum ShapeSpec {
         /// The three volumes, m³.
         volumes: [f64; 3],
     },
-    /// Wire cube with a central bubble.
+    /// Wire cube, with a central bubble or without (the central-square film).
     CubeFrame {
         /// Wire edge length, m.
         edge: f64,
-        /// Central bubble volume, m³.
-        bubble_volume: f64,
+        /// Central bubble volume, m³; absent: no bubble.
+        bubble_volume: Option<f64>,
+    },
+    /// Two coaxial fixed rings spanned by a film (the catenoid).
+    Catenoid {
+        /// Ring radius, m.
+        radius: f64,
+        /// Distance between the rings, m.
+        separation: f64,
     },
     /// Wire octahedron.
     OctahedronFrame {
@@ -141,6 +152,17 @@ pub enum ShapeSpec {
     Cells {
         /// The cells.
         cell: Vec<CellToml>,
+    },
+    /// A mesh from a glTF file, `.glb` or `.gltf` (see `cmc::import_gltf`).
+    Gltf {
+        /// Path, relative to the problem file.
+        file: String,
+        /// Fix every boundary vertex.
+        #[serde(default)]
+        fix_boundary: bool,
+        /// Volume constraints.
+        #[serde(default)]
+        volume: Vec<VolumeToml>,
     },
     /// A mesh from an OBJ file (see `cmc::import`).
     Obj {
@@ -254,12 +276,12 @@ impl ShapeSpec {
     /// The resolution used when the file gives none.
     pub fn default_resolution(&self) -> usize {
         match self {
-            ShapeSpec::Sphere { .. } => 4,
+            ShapeSpec::Sphere { .. } | ShapeSpec::Catenoid { .. } => 4,
             ShapeSpec::DoubleBubble { .. } | ShapeSpec::TripleBubble { .. } => 8,
             ShapeSpec::CubeFrame { .. } | ShapeSpec::OctahedronFrame { .. } => 8,
             ShapeSpec::UWires { .. } => 16,
             ShapeSpec::Tents { .. } | ShapeSpec::Cells { .. } => 10,
-            ShapeSpec::Obj { .. } => 1,
+            ShapeSpec::Obj { .. } | ShapeSpec::Gltf { .. } => 1,
         }
     }
 }
@@ -343,10 +365,31 @@ impl CmcSpec {
                 if !positive(*edge) {
                     return Err(self.err(&shape("edge"), "`edge` must be positive metres"));
                 }
-                if !(positive(*bubble_volume) && bubble_volume.cbrt() < 0.8 * edge) {
+                if let Some(bubble_volume) = bubble_volume
+                    && !(positive(*bubble_volume) && bubble_volume.cbrt() < 0.8 * edge)
+                {
                     return Err(self.err(
                         &shape("bubble_volume"),
                         "`bubble_volume` must be positive and its cube root below 0.8·edge",
+                    ));
+                }
+            }
+            ShapeSpec::Catenoid { radius, separation } => {
+                for (key, v) in [("radius", radius), ("separation", separation)] {
+                    if !positive(*v) {
+                        return Err(
+                            self.err(&shape(key), format!("`{key}` must be positive metres"))
+                        );
+                    }
+                }
+                if catenoid::exact_catenoid(*radius, *separation).is_none() {
+                    return Err(self.err(
+                        &shape("separation"),
+                        format!(
+                            "no catenoid spans rings {separation} m apart: the separation must \
+                             be at most 1.3255·radius ({} m)",
+                            1.3255 * radius
+                        ),
                     ));
                 }
             }
@@ -436,7 +479,7 @@ impl CmcSpec {
                     }
                 }
             }
-            ShapeSpec::Obj { volume, .. } => {
+            ShapeSpec::Obj { volume, .. } | ShapeSpec::Gltf { volume, .. } => {
                 for (i, v) in volume.iter().enumerate() {
                     if !positive(v.volume) {
                         return Err(self.err(
@@ -535,8 +578,11 @@ impl CmcSpec {
                 bubble_volume,
             } => generators::cube_frame(*edge, *bubble_volume, resolution)
                 .map_err(|e| at_shape(&e))?,
+            ShapeSpec::Catenoid { radius, separation } => {
+                catenoid::catenoid(*radius, *separation, resolution).map_err(|e| at_shape(&e))?
+            }
             ShapeSpec::OctahedronFrame { edge, topology } => {
-                generators::octahedron_frame(*edge, *topology, resolution)
+                octahedron::octahedron_frame(*edge, *topology, resolution)
                     .map_err(|e| at_shape(&e))?
             }
             ShapeSpec::UWires { width, depth } => {
@@ -554,7 +600,12 @@ impl CmcSpec {
                 file,
                 fix_boundary,
                 volume,
-            } => self.import(file, *fix_boundary, volume)?,
+            } => self.import(file, false, *fix_boundary, volume)?,
+            ShapeSpec::Gltf {
+                file,
+                fix_boundary,
+                volume,
+            } => self.import(file, true, *fix_boundary, volume)?,
         };
         let n = shape.mesh.vertex_count();
         let mut chords = Vec::new();
@@ -574,19 +625,28 @@ impl CmcSpec {
         Ok((shape, chords))
     }
 
+    /// Reads an OBJ (`gltf` false) or glTF start mesh and resolves its volume regions.
     fn import(
         &self,
         file: &str,
+        gltf: bool,
         fix_boundary: bool,
         volumes: &[VolumeToml],
     ) -> Result<Shape, InputError> {
         let dir = self.source.path.parent().unwrap_or(Path::new("."));
         let path = dir.join(file);
         let at_file = |m: String| self.err(&["shape".into(), "file".into()], m);
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| at_file(format!("cannot read `{}`: {e}", path.display())))?;
-        let mut mesh = super::import::read_obj(&text)
-            .map_err(|e| at_file(format!("`{}`: {e}", path.display())))?;
+        let mut mesh = if gltf {
+            if !path.is_file() {
+                return Err(at_file(format!("cannot read `{}`", path.display())));
+            }
+            super::import_gltf::read_gltf_file(&path)
+        } else {
+            let text = std::fs::read_to_string(&path)
+                .map_err(|e| at_file(format!("cannot read `{}`: {e}", path.display())))?;
+            super::import::read_obj(&text)
+        }
+        .map_err(|e| at_file(format!("`{}`: {e}", path.display())))?;
         if fix_boundary {
             mesh.fix_boundary();
         }
