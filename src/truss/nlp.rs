@@ -372,6 +372,11 @@ impl TrussNlp {
         }
     }
 
+    /// The variable of each coordinate of joint `i` (None where it is fixed).
+    pub fn joint_variables(&self, i: usize) -> [Option<usize>; 3] {
+        self.position_vars[i]
+    }
+
     /// Indices of the position variables (scaled by D).
     pub fn position_variables(&self) -> std::ops::Range<usize> {
         self.force_count..self.size_offset.unwrap_or(self.n)
@@ -733,9 +738,7 @@ impl TrussNlp {
                 }
             }
             let mut vars: Vec<Option<usize>> = (0..nc)
-                .flat_map(|c| {
-                    [self.tension_var(c, j), self.compression_var(c, j)]
-                })
+                .flat_map(|c| [self.tension_var(c, j), self.compression_var(c, j)])
                 .collect();
             vars.extend(self.position_vars[a]);
             vars.extend(self.position_vars[b]);

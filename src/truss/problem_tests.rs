@@ -197,7 +197,6 @@ fn check_mode_runs_the_shared_derivative_checker() {
     }
 }
 
-
 #[test]
 fn no_force_balance_row_vanishes_identically() {
     // Balance along a held axis at a joint whose beams all lie in its plane is 0 = 0; such rows

@@ -7,6 +7,8 @@ use super::mass::MassModel;
 use super::model::{JointKind, Structure, Support, Vec3};
 use super::nlp::TrussNlp;
 use super::plastic;
+use super::start;
+use crate::solver::qp::QpMethod;
 use crate::solver::{Nlp, Options};
 
 /// The half-wheel ground structure of plastic.rs's LP test (simple supports at (±1, 0), P = 1 N
@@ -41,10 +43,13 @@ fn half_wheel(h: f64) -> Structure {
     Structure { joints, beams }
 }
 
+/// The sparse interior-point QP: at fixed geometry with linear mass the first QP subproblem is
+/// the layout LP itself, which it solves to optimality.
 fn quiet() -> Options {
     Options {
         verbosity: 0,
         max_iterations: 300,
+        qp_method: QpMethod::Sparse,
         ..Options::default()
     }
 }
@@ -84,7 +89,16 @@ fn linear_sizing_equals_the_plastic_lp_and_geometry_improves_on_it() {
         "sizing {sized} vs LP {}",
         lp.volume
     );
-    let geometry = TrussNlp::new(s, linear_settings(true), lp.forces).unwrap();
+    // Geometry from the staged start: the layout LP's members with their LP forces and signs.
+    let staged = start::layout_start(&s, &linear_settings(true)).unwrap();
+    assert!((staged.cost[0] - lp.volume).abs() <= 1e-6 * lp.volume);
+    let geometry = TrussNlp::with_parts(
+        staged.structure,
+        linear_settings(true),
+        staged.forces,
+        staged.parts,
+    )
+    .unwrap();
     let sol = crate::solver::solve(&geometry, &quiet());
     assert!(sol.status.is_success(), "{:?}", sol.status);
     let volume = sol.objective * geometry.mass_scale();
@@ -100,74 +114,19 @@ fn linear_sizing_equals_the_plastic_lp_and_geometry_improves_on_it() {
     );
 }
 
-/// Largest net force on a non-anchor joint from beams.csv (forces of the first case, masses
-/// lumped), the problem's loads, and gravity; N.
-fn residual_from_csv(problem: &super::Problem, csv: &str) -> f64 {
-    let settings = &problem.model().settings;
-    let mut net: Vec<(Vec3, Vec3)> = Vec::new(); // (position, force)
-    let mut add = |p: Vec3, f: Vec3| match net.iter_mut().find(|(q, _)| (q - p).norm() < 1e-9) {
-        Some(e) => e.1 += f,
-        None => net.push((p, f)),
-    };
-    for line in csv.lines().skip(1) {
-        let v: Vec<f64> = line
-            .split(',')
-            .take(12)
-            .filter_map(|s| s.parse().ok())
-            .collect();
-        let cols: Vec<&str> = line.split(',').collect();
-        let (a, b) = (Vec3::new(v[3], v[4], v[5]), Vec3::new(v[6], v[7], v[8]));
-        let lambda: f64 = cols[10].parse().unwrap();
-        let mass: f64 = cols[cols.len() - 2].parse().unwrap();
-        let e = (b - a).normalize();
-        let w = if settings.self_weight {
-            0.5 * mass * super::mass::gravity()
-        } else {
-            Vec3::zeros()
-        };
-        add(a, -lambda * e + w);
-        add(b, lambda * e + w);
-    }
-    let joints = &problem.model().structure.joints;
-    for j in joints.iter().filter(|j| !j.is_free()) {
-        add(j.position, j.loads[0]);
-    }
-    net.iter()
-        .map(|(p, f)| {
-            match joints
-                .iter()
-                .find(|j| (j.position - p).norm() < 1e-9)
-                .map(|j| &j.kind)
-            {
-                Some(JointKind::Anchor(Support::Pinned)) => 0.0,
-                Some(JointKind::Anchor(Support::Roller(dirs))) => {
-                    // Orthonormalize the reaction directions and remove what they carry.
-                    let mut basis: Vec<Vec3> = Vec::new();
-                    for d in dirs {
-                        let mut v = *d;
-                        for q in &basis {
-                            v -= v.dot(q) * q;
-                        }
-                        basis.push(v.normalize());
-                    }
-                    let mut rest = *f;
-                    for q in &basis {
-                        rest -= rest.dot(q) * q;
-                    }
-                    rest.norm()
-                }
-                _ => f.norm(),
-            }
-        })
-        .fold(0.0, f64::max)
-}
-
 #[test]
 fn design_from_a_solve_reports_consistent_figures() {
     let s = half_wheel(0.5);
-    let forces = vec![0.0; s.beams.len()];
-    let nlp = TrussNlp::new(s, linear_settings(true), forces).unwrap();
+    let staged = start::layout_start(&s, &linear_settings(true)).unwrap();
+    let nlp = TrussNlp::with_parts(
+        staged.structure,
+        linear_settings(true),
+        staged.forces,
+        staged.parts,
+    )
+    .unwrap();
     let sol = crate::solver::solve(&nlp, &quiet());
+    assert!(sol.status.is_success(), "{:?}", sol.status);
     let design = Design::from_point(&nlp, &sol.x);
     let fig = design.figures(nlp.settings());
     assert!(fig.max_balance_residual_relative < 1e-6);

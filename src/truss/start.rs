@@ -190,15 +190,17 @@ fn mirror_beams(structure: &Structure, mirror: &Mirror) -> Option<Vec<usize>> {
         let p = mirror.reflect(&joints[i].position);
         (0..joints.len()).find(|&k| (joints[k].position - p).norm() <= 1e-9 * scale)
     };
-    let images: Vec<usize> = (0..joints.len())
-        .map(image_joint)
-        .collect::<Option<_>>()?;
+    let images: Vec<usize> = (0..joints.len()).map(image_joint).collect::<Option<_>>()?;
     let index: std::collections::HashMap<Beam, usize> = (structure.beams.iter())
         .enumerate()
         .map(|(j, b)| (*b, j))
         .collect();
     (structure.beams.iter())
-        .map(|b| index.get(&Beam::new(images[b.ends[0]], images[b.ends[1]])).copied())
+        .map(|b| {
+            index
+                .get(&Beam::new(images[b.ends[0]], images[b.ends[1]]))
+                .copied()
+        })
         .collect()
 }
 
