@@ -3,10 +3,11 @@
 //!
 //! Variables (scaled so the solver sees O(1) numbers; F = largest external load in N, D = the
 //! diagonal of the fixed joints' box in m (the span), M = k_T·F·D reference mass in kg):
-//! - `x[2(c·B + j)] = t_jc / F` and `x[2(c·B + j) + 1] = c_jc / F`: tension and compression
-//!   parts of the axial force of beam j in load case c, `λ = F·(x_c − x_t)` (+ compression),
-//!   bounds `0 ≤ t, c ≤ λ_max` (eq. 4.3). With linear mass this makes the fixed-geometry problem
-//!   exactly the plastic layout LP (see [`super::mass`]);
+//! - the force parts, first: per case and beam the tension part `t_jc/F` and the compression
+//!   part `c_jc/F` (λ = F·(c − t), + compression), bounds `0 ≤ t, c ≤ λ_max/F` (eq. 4.3). With
+//!   linear mass this makes the fixed-geometry problem exactly the plastic layout LP (see
+//!   [`super::mass`]). A member whose sign is known may have only the part of that sign
+//!   ([`ForceParts`]);
 //! - positions of free joints divided by D, one variable per coordinate that may move (not the
 //!   held axis, not z in planar problems);
 //! - with several load cases only: `x_s[j] = s_j / M ≥ 0`, the mass of beam j sized for its worst
@@ -66,6 +67,32 @@ pub enum SetupError {
     /// The structure has no beams.
     #[error("the ground structure has no beams")]
     NoBeams,
+}
+
+/// Which parts of a beam's axial force (in one load case) are variables.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ForceParts {
+    /// Tension t and compression c: the sign is free (ground structures).
+    #[default]
+    Both,
+    /// Tension only (λ = −t ≤ 0).
+    Tension,
+    /// Compression only (λ = c ≥ 0).
+    Compression,
+}
+
+impl ForceParts {
+    /// The parts that carry a force of sign `lambda` (N, + compression): the sign of a nonzero
+    /// force, both parts for zero.
+    pub fn of(lambda: f64) -> Self {
+        if lambda > 0.0 {
+            ForceParts::Compression
+        } else if lambda < 0.0 {
+            ForceParts::Tension
+        } else {
+            ForceParts::Both
+        }
+    }
 }
 
 /// A linear constraint row `Σ coef·x + constant` (symmetry, half-space).
@@ -141,6 +168,10 @@ pub struct TrussNlp {
     adjacency: Vec<Vec<(usize, f64)>>,
     /// Variable index per joint per axis.
     position_vars: Vec<[Option<usize>; 3]>,
+    /// [tension, compression] variable of beam j in case c at `c·beams + j`.
+    force_vars: Vec<[Option<usize>; 2]>,
+    /// Number of force variables (they come first).
+    force_count: usize,
     cases: usize,
     beams: usize,
     n: usize,
@@ -169,10 +200,25 @@ pub struct TrussNlp {
 
 impl TrussNlp {
     /// Sets up the problem. `start_forces` (N, case-major, length cases·beams) is the start of λ.
+    /// Every force has a tension and a compression part.
     pub fn new(
         structure: Structure,
         settings: Settings,
         start_forces: Vec<f64>,
+    ) -> Result<Self, SetupError> {
+        let parts = vec![ForceParts::Both; start_forces.len()];
+        Self::with_parts(structure, settings, start_forces, parts)
+    }
+
+    /// As [`TrussNlp::new`], with the force parts that are variables given per case and beam
+    /// (case-major): a member whose sign is known has only the part of that sign, which keeps the
+    /// other part's coupling (the Euler mass's steep slope at zero force times the length) out of
+    /// the Lagrangian Hessian.
+    pub fn with_parts(
+        structure: Structure,
+        settings: Settings,
+        start_forces: Vec<f64>,
+        parts: Vec<ForceParts>,
     ) -> Result<Self, SetupError> {
         if structure.beams.is_empty() {
             return Err(SetupError::NoBeams);
@@ -192,7 +238,20 @@ impl TrussNlp {
             adjacency[b.ends[1]].push((j, 1.0));
         }
 
-        let mut n = 2 * cases * beams;
+        assert_eq!(parts.len(), cases * beams, "force parts per case and beam");
+        let mut n = 0;
+        let mut next = || {
+            n += 1;
+            Some(n - 1)
+        };
+        let force_vars: Vec<[Option<usize>; 2]> = (parts.iter())
+            .map(|p| match p {
+                ForceParts::Both => [next(), next()],
+                ForceParts::Tension => [next(), None],
+                ForceParts::Compression => [None, next()],
+            })
+            .collect();
+        let force_count = n;
         let axes = settings.variable_axes();
         let mut position_vars = vec![[None; 3]; joints.len()];
         for (i, joint) in joints.iter().enumerate() {
@@ -213,7 +272,10 @@ impl TrussNlp {
         let mut balance_rows = 0;
         let mut balance_of_joint = vec![None; joints.len()];
         for (i, joint) in joints.iter().enumerate() {
-            let basis = balance_basis(&joint.kind, settings.balance_axes());
+            let mut basis = balance_basis(&joint.kind, settings.balance_axes());
+            if let Some(k) = idle_held_axis(&structure, &settings, &adjacency, i) {
+                basis = without_axis(&basis, k);
+            }
             if basis.is_empty() {
                 continue;
             }
@@ -261,6 +323,8 @@ impl TrussNlp {
             settings,
             adjacency,
             position_vars,
+            force_vars,
+            force_count,
             cases,
             beams,
             n,
@@ -301,11 +365,21 @@ impl TrussNlp {
 
     /// Scale of variable `v`: D for positions, 1 for forces and sizes.
     fn column_scale(&self, v: usize) -> f64 {
-        if (2 * self.cases * self.beams..self.size_offset.unwrap_or(self.n)).contains(&v) {
+        if self.position_variables().contains(&v) {
             self.length_scale
         } else {
             1.0
         }
+    }
+
+    /// The variable of each coordinate of joint `i` (None where it is fixed).
+    pub fn joint_variables(&self, i: usize) -> [Option<usize>; 3] {
+        self.position_vars[i]
+    }
+
+    /// Indices of the position variables (scaled by D).
+    pub fn position_variables(&self) -> std::ops::Range<usize> {
+        self.force_count..self.size_offset.unwrap_or(self.n)
     }
 
     /// Length scale D (the span), m.
@@ -388,7 +462,8 @@ impl TrussNlp {
 
     /// Scaled axial force λ/F of beam j in case c.
     fn lambda(&self, x: &[f64], c: usize, j: usize) -> f64 {
-        x[self.compression_var(c, j)] - x[self.tension_var(c, j)]
+        let part = |v: Option<usize>| v.map_or(0.0, |v| x[v]);
+        part(self.compression_var(c, j)) - part(self.tension_var(c, j))
     }
 
     /// Mass derivatives of beam j in case c under `model` at length `len` (m).
@@ -402,8 +477,8 @@ impl TrussNlp {
     ) -> MassDerivatives {
         let f = self.force_scale;
         model.derivatives(
-            x[self.tension_var(c, j)] * f,
-            x[self.compression_var(c, j)] * f,
+            self.tension_var(c, j).map_or(0.0, |v| x[v]) * f,
+            self.compression_var(c, j).map_or(0.0, |v| x[v]) * f,
             len,
         )
     }
@@ -420,12 +495,12 @@ impl TrussNlp {
             .fold(0.0, f64::max))
     }
 
-    fn tension_var(&self, c: usize, j: usize) -> usize {
-        2 * (c * self.beams + j)
+    fn tension_var(&self, c: usize, j: usize) -> Option<usize> {
+        self.force_vars[c * self.beams + j][0]
     }
 
-    fn compression_var(&self, c: usize, j: usize) -> usize {
-        2 * (c * self.beams + j) + 1
+    fn compression_var(&self, c: usize, j: usize) -> Option<usize> {
+        self.force_vars[c * self.beams + j][1]
     }
 
     fn states_unchecked(&self, x: &[f64]) -> Vec<BeamState> {
@@ -495,8 +570,12 @@ impl TrussNlp {
                                 (0.0, 0.0, 0.0)
                             };
                         let re = sign * r.dot(&st.e);
-                        emit(row, self.tension_var(c, j), -re + 0.5 * rg * m_t);
-                        emit(row, self.compression_var(c, j), re + 0.5 * rg * m_c);
+                        if let Some(v) = self.tension_var(c, j) {
+                            emit(row, v, -re + 0.5 * rg * m_t);
+                        }
+                        if let Some(v) = self.compression_var(c, j) {
+                            emit(row, v, re + 0.5 * rg * m_c);
+                        }
                         // ∂/∂d of r·(±λe) + ½ r·g m, divided by F.
                         let dd = (sign * lambda * projection_gradient(r, &st.e, st.length)
                             + 0.5 * rg * m_len * st.e)
@@ -519,8 +598,12 @@ impl TrussNlp {
                     let row = self.size_row_offset + c * self.beams + j;
                     let md = &st.mass[c];
                     let k = f_scale / self.mass_scale;
-                    emit(row, self.tension_var(c, j), md.m_t * k);
-                    emit(row, self.compression_var(c, j), md.m_c * k);
+                    if let Some(v) = self.tension_var(c, j) {
+                        emit(row, v, md.m_t * k);
+                    }
+                    if let Some(v) = self.compression_var(c, j) {
+                        emit(row, v, md.m_c * k);
+                    }
                     self.emit_ends(row, j, &(md.m_len / self.mass_scale * st.e), emit);
                     emit(row, o + j, -1.0);
                 }
@@ -655,12 +738,7 @@ impl TrussNlp {
                 }
             }
             let mut vars: Vec<Option<usize>> = (0..nc)
-                .flat_map(|c| {
-                    [
-                        Some(self.tension_var(c, j)),
-                        Some(self.compression_var(c, j)),
-                    ]
-                })
+                .flat_map(|c| [self.tension_var(c, j), self.compression_var(c, j)])
                 .collect();
             vars.extend(self.position_vars[a]);
             vars.extend(self.position_vars[b]);
@@ -773,8 +851,12 @@ impl TrussNlp {
                 for (j, s) in states.iter().enumerate() {
                     let md = self.case_mass(&self.objective_mass, x, 0, j, s.length);
                     let k = self.force_scale / self.mass_scale;
-                    grad[self.tension_var(0, j)] += md.m_t * k;
-                    grad[self.compression_var(0, j)] += md.m_c * k;
+                    if let Some(v) = self.tension_var(0, j) {
+                        grad[v] += md.m_t * k;
+                    }
+                    if let Some(v) = self.compression_var(0, j) {
+                        grad[v] += md.m_c * k;
+                    }
                     self.add_end_gradient(j, &(md.m_len / self.mass_scale * s.e), grad);
                 }
             }
@@ -810,7 +892,7 @@ impl Nlp for TrussNlp {
         xl.fill(f64::NEG_INFINITY);
         xu.fill(f64::INFINITY);
         let lmax = self.settings.max_force / self.force_scale;
-        for v in 0..2 * self.cases * self.beams {
+        for v in 0..self.force_count {
             xl[v] = 0.0;
             xu[v] = lmax;
         }
@@ -843,8 +925,16 @@ impl Nlp for TrussNlp {
         let lmax = self.settings.max_force / self.force_scale;
         for (k, f) in self.start_forces.iter().enumerate() {
             let lambda = (f / self.force_scale).clamp(-lmax, lmax);
-            x[2 * k] = (-lambda).max(0.0);
-            x[2 * k + 1] = lambda.max(0.0);
+            let [t, c] = self.force_vars[k];
+            match (t, c) {
+                (Some(t), Some(c)) => {
+                    x[t] = (-lambda).max(0.0);
+                    x[c] = lambda.max(0.0);
+                }
+                (Some(t), None) => x[t] = (-lambda).max(0.0),
+                (None, Some(c)) => x[c] = lambda.max(0.0),
+                (None, None) => {}
+            }
         }
         for (j, vars) in self.structure.joints.iter().zip(&self.position_vars) {
             for (k, var) in vars.iter().enumerate() {
@@ -1018,6 +1108,45 @@ pub(crate) fn balance_basis(kind: &JointKind, axes: usize) -> Vec<Vec3> {
         }
     }
     basis
+}
+
+/// The held axis k if joint i's balance along it vanishes identically: every beam at the joint
+/// keeps both ends at the same coordinate k (free joints keep theirs, fixed joints do not move),
+/// no load of any case and not gravity acts along k. The row `e_k·(Σ ±λe + ½gΣm + f) = 0` is
+/// then `0 = 0` for every value of the variables, a dependent row that would leave its
+/// multiplier undetermined (all-in-plane trusses of `hold_in_planes` problems).
+fn idle_held_axis(
+    structure: &Structure,
+    settings: &Settings,
+    adjacency: &[Vec<(usize, f64)>],
+    i: usize,
+) -> Option<usize> {
+    let k = settings.held_axis?;
+    let axis = Vec3::ith(k, 1.0);
+    let joints = &structure.joints;
+    let tol = 1e-12 * fixed_diagonal(structure).max(1.0);
+    let in_plane = adjacency[i].iter().all(|&(j, _)| {
+        let [a, b] = structure.beams[j].ends;
+        (joints[a].position[k] - joints[b].position[k]).abs() <= tol
+    });
+    let unloaded = joints[i].loads.iter().all(|f| f[k] == 0.0);
+    (in_plane && unloaded && gravity().dot(&axis) == 0.0).then_some(k)
+}
+
+/// An orthonormal basis of span(basis) projected on the complement of axis k.
+fn without_axis(basis: &[Vec3], k: usize) -> Vec<Vec3> {
+    let mut out: Vec<Vec3> = Vec::new();
+    for b in basis {
+        let mut v = *b;
+        v[k] = 0.0;
+        for q in &out {
+            v -= v.dot(q) * q;
+        }
+        if v.norm() > 1e-9 {
+            out.push(v.normalize());
+        }
+    }
+    out
 }
 
 fn fixed_diagonal(s: &Structure) -> f64 {

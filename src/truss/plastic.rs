@@ -50,15 +50,34 @@ pub fn layout(
     sigma_t: f64,
     sigma_c: f64,
 ) -> Result<PlasticLayout, LpError> {
-    let axes = if planar { 2 } else { 3 };
+    let costs: Vec<(f64, f64)> = (0..structure.beams.len())
+        .map(|j| {
+            let length = structure.length(j);
+            (length / sigma_t, length / sigma_c)
+        })
+        .collect();
+    layout_with_costs(structure, case, if planar { 2 } else { 3 }, &costs)
+}
+
+/// The layout LP with general per-beam costs: `costs[j] = (cost per newton of tension, cost per
+/// newton of compression)` of beam j (any unit; `volume` is in that unit times N), balance in
+/// the first `axes` coordinate directions.
+pub fn layout_with_costs(
+    structure: &Structure,
+    case: usize,
+    axes: usize,
+    costs: &[(f64, f64)],
+) -> Result<PlasticLayout, LpError> {
     let beams = structure.beams.len();
     let mut rows: Vec<(usize, nalgebra::Vector3<f64>)> = Vec::new();
+    let mut first_row = Vec::with_capacity(structure.joints.len());
     for (i, joint) in structure.joints.iter().enumerate() {
+        first_row.push(rows.len());
         for r in balance_basis(&joint.kind, axes) {
             rows.push((i, r));
         }
     }
-    let row_of = |i: usize| rows.iter().enumerate().filter(move |(_, (k, _))| *k == i);
+    first_row.push(rows.len());
     let mut a = DMatrix::<f64>::zeros(rows.len(), 2 * beams);
     let mut cost = vec![0.0; 2 * beams];
     for (j, beam) in structure.beams.iter().enumerate() {
@@ -66,15 +85,15 @@ pub fn layout(
         let [p, q] = beam.ends;
         let e = (structure.joints[q].position - structure.joints[p].position) / length;
         for (end, sign) in [(p, -1.0), (q, 1.0)] {
-            for (row, (_, r)) in row_of(end) {
-                let v = sign * r.dot(&e);
+            for row in first_row[end]..first_row[end + 1] {
+                let v = sign * rows[row].1.dot(&e);
                 // Column j: compression c_j (λ = +c); column beams + j: tension t_j (λ = −t).
                 a[(row, j)] += v;
                 a[(row, beams + j)] -= v;
             }
         }
-        cost[j] = length / sigma_c;
-        cost[beams + j] = length / sigma_t;
+        cost[j] = costs[j].1;
+        cost[beams + j] = costs[j].0;
     }
     let b: Vec<f64> = rows
         .iter()

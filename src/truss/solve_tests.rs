@@ -1,15 +1,14 @@
-//! End-to-end solves. They need `crate::solver::solve`, which is not on this branch yet: every
-//! test here is ignored until the SQP solver is merged.
-
-use std::path::Path;
+//! End-to-end solves of the `linear` mass option against certified references: the plastic
+//! layout LP of the same ground structure (solved by our own simplex, `super::lp`) and Michell's
+//! closed forms. Whole examples are run by the golden tests and the benchmarks.
 
 use super::design::Design;
 use super::mass::MassModel;
 use super::model::{JointKind, Structure, Support, Vec3};
 use super::nlp::TrussNlp;
 use super::plastic;
-use super::problem_tests::EXAMPLES;
-use crate::run::RunOptions;
+use super::start;
+use crate::solver::qp::QpMethod;
 use crate::solver::{Nlp, Options};
 
 /// The half-wheel ground structure of plastic.rs's LP test (simple supports at (±1, 0), P = 1 N
@@ -44,10 +43,13 @@ fn half_wheel(h: f64) -> Structure {
     Structure { joints, beams }
 }
 
+/// The sparse interior-point QP: at fixed geometry with linear mass the first QP subproblem is
+/// the layout LP itself, which it solves to optimality.
 fn quiet() -> Options {
     Options {
         verbosity: 0,
         max_iterations: 300,
+        qp_method: QpMethod::Sparse,
         ..Options::default()
     }
 }
@@ -73,20 +75,30 @@ fn linear_settings(move_joints: bool) -> super::model::Settings {
 }
 
 #[test]
-#[ignore = "needs the SQP solver"]
 fn linear_sizing_equals_the_plastic_lp_and_geometry_improves_on_it() {
     let s = half_wheel(0.25);
     let lp = plastic::layout(&s, 0, true, 1.0, 1.0).unwrap();
-    let sizing = TrussNlp::new(s.clone(), linear_settings(false), lp.forces.clone()).unwrap();
+    // Sizing at fixed geometry from zero forces: the SQP must find the LP optimum itself.
+    let zero = vec![0.0; s.beams.len()];
+    let sizing = TrussNlp::new(s.clone(), linear_settings(false), zero).unwrap();
     let sol = crate::solver::solve(&sizing, &quiet());
     assert!(sol.status.is_success(), "{:?}", sol.status);
+    let sized = sol.objective * sizing.mass_scale();
     assert!(
-        (sol.objective * sizing.mass_scale() - lp.volume).abs() <= 5e-3 * lp.volume,
-        "sizing {} vs LP {}",
-        sol.objective * sizing.mass_scale(),
+        (sized - lp.volume).abs() <= 5e-3 * lp.volume,
+        "sizing {sized} vs LP {}",
         lp.volume
     );
-    let geometry = TrussNlp::new(s, linear_settings(true), lp.forces).unwrap();
+    // Geometry from the staged start: the layout LP's members with their LP forces and signs.
+    let staged = start::layout_start(&s, &linear_settings(true)).unwrap();
+    assert!((staged.cost[0] - lp.volume).abs() <= 1e-6 * lp.volume);
+    let geometry = TrussNlp::with_parts(
+        staged.structure,
+        linear_settings(true),
+        staged.forces,
+        staged.parts,
+    )
+    .unwrap();
     let sol = crate::solver::solve(&geometry, &quiet());
     assert!(sol.status.is_success(), "{:?}", sol.status);
     let volume = sol.objective * geometry.mass_scale();
@@ -97,156 +109,26 @@ fn linear_sizing_equals_the_plastic_lp_and_geometry_improves_on_it() {
     );
     let exact = plastic::michell_half_wheel_volume(1.0, 1.0, 1.0);
     println!(
-        "half-wheel: LP {} geometry {volume} Michell {exact}",
+        "half-wheel h = 0.25: sizing {sized} LP {} geometry {volume} Michell {exact}",
         lp.volume
     );
 }
 
 #[test]
-#[ignore = "needs the SQP solver"]
-fn every_example_solves_and_balances() {
-    for name in EXAMPLES {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("problems/truss")
-            .join(format!("{name}.toml"));
-        let problem = super::load(&path).unwrap();
-        let opts = RunOptions {
-            quiet: true,
-            max_iter: Some(300),
-            ..Default::default()
-        };
-        let started = std::time::Instant::now();
-        let outcome = super::run(&problem, &opts).unwrap();
-        let status = outcome.status.unwrap();
-        println!(
-            "{name}: {status:?}, {} iterations, {:.2} s, mass {} kg",
-            outcome.summary.iterations,
-            started.elapsed().as_secs_f64(),
-            outcome.summary.figures["mass_kg"]
-        );
-        assert!(status.is_success(), "{name}: {status:?}");
-        // Recompute balance from the written beams.csv, independently of the NLP.
-        let csv = outcome
-            .artifacts
-            .iter()
-            .find(|a| a.name == "beams.csv")
-            .unwrap();
-        let text = String::from_utf8(csv.bytes.clone()).unwrap();
-        let residual = residual_from_csv(&problem, &text);
-        let largest = outcome.summary.figures["max_balance_residual_n"]
-            .as_f64()
-            .unwrap()
-            / outcome.summary.figures["max_balance_residual_relative"]
-                .as_f64()
-                .unwrap()
-                .max(f64::MIN_POSITIVE);
-        assert!(residual <= 1e-6 * largest, "{name}: residual {residual} N");
-    }
-}
-
-/// Largest net force on a non-anchor joint from beams.csv (forces of the first case, masses
-/// lumped), the problem's loads, and gravity; N.
-fn residual_from_csv(problem: &super::Problem, csv: &str) -> f64 {
-    let settings = &problem.model().settings;
-    let mut net: Vec<(Vec3, Vec3)> = Vec::new(); // (position, force)
-    let mut add = |p: Vec3, f: Vec3| match net.iter_mut().find(|(q, _)| (q - p).norm() < 1e-9) {
-        Some(e) => e.1 += f,
-        None => net.push((p, f)),
-    };
-    for line in csv.lines().skip(1) {
-        let v: Vec<f64> = line
-            .split(',')
-            .take(12)
-            .filter_map(|s| s.parse().ok())
-            .collect();
-        let cols: Vec<&str> = line.split(',').collect();
-        let (a, b) = (Vec3::new(v[3], v[4], v[5]), Vec3::new(v[6], v[7], v[8]));
-        let lambda: f64 = cols[10].parse().unwrap();
-        let mass: f64 = cols[cols.len() - 2].parse().unwrap();
-        let e = (b - a).normalize();
-        let w = if settings.self_weight {
-            0.5 * mass * super::mass::gravity()
-        } else {
-            Vec3::zeros()
-        };
-        add(a, -lambda * e + w);
-        add(b, lambda * e + w);
-    }
-    let joints = &problem.model().structure.joints;
-    for j in joints.iter().filter(|j| !j.is_free()) {
-        add(j.position, j.loads[0]);
-    }
-    net.iter()
-        .map(|(p, f)| {
-            match joints
-                .iter()
-                .find(|j| (j.position - p).norm() < 1e-9)
-                .map(|j| &j.kind)
-            {
-                Some(JointKind::Anchor(Support::Pinned)) => 0.0,
-                Some(JointKind::Anchor(Support::Roller(dirs))) => {
-                    // Orthonormalize the reaction directions and remove what they carry.
-                    let mut basis: Vec<Vec3> = Vec::new();
-                    for d in dirs {
-                        let mut v = *d;
-                        for q in &basis {
-                            v -= v.dot(q) * q;
-                        }
-                        basis.push(v.normalize());
-                    }
-                    let mut rest = *f;
-                    for q in &basis {
-                        rest -= rest.dot(q) * q;
-                    }
-                    rest.norm()
-                }
-                _ => f.norm(),
-            }
-        })
-        .fold(0.0, f64::max)
-}
-
-#[test]
-#[ignore = "needs the SQP solver"]
 fn design_from_a_solve_reports_consistent_figures() {
     let s = half_wheel(0.5);
-    let forces = vec![0.0; s.beams.len()];
-    let nlp = TrussNlp::new(s, linear_settings(true), forces).unwrap();
+    let staged = start::layout_start(&s, &linear_settings(true)).unwrap();
+    let nlp = TrussNlp::with_parts(
+        staged.structure,
+        linear_settings(true),
+        staged.forces,
+        staged.parts,
+    )
+    .unwrap();
     let sol = crate::solver::solve(&nlp, &quiet());
+    assert!(sol.status.is_success(), "{:?}", sol.status);
     let design = Design::from_point(&nlp, &sol.x);
     let fig = design.figures(nlp.settings());
     assert!(fig.max_balance_residual_relative < 1e-6);
     assert!(nlp.dims().n > 0);
-}
-
-/// Solves one example with a given Hessian mode and prints the outcome (diagnostics).
-#[test]
-#[ignore = "needs the SQP solver; diagnostics, prints only"]
-fn warren_bridge_by_hessian_mode() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/truss/warren_bridge.toml");
-    let problem = super::load(&path).unwrap();
-    let nlp = problem.nlp(problem.model(), 0).unwrap();
-    for mode in [
-        crate::solver::HessianMode::Bfgs,
-        crate::solver::HessianMode::Exact,
-    ] {
-        let options = Options {
-            hessian: mode,
-            max_time: Some(60.0),
-            ..quiet()
-        };
-        let started = std::time::Instant::now();
-        let sol = crate::solver::solve(&nlp, &options);
-        let design = Design::from_point(&nlp, &sol.x);
-        let fig = design.figures(nlp.settings());
-        println!(
-            "{mode:?}: {:?} after {} iterations, {:.2} s, mass {:.1} kg, violation {:e}, residual {:e}",
-            sol.status,
-            sol.iterations,
-            started.elapsed().as_secs_f64(),
-            fig.mass_kg,
-            sol.max_violation,
-            fig.max_balance_residual_relative
-        );
-    }
 }

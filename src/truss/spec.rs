@@ -15,7 +15,8 @@
 //! hold_in_planes = "z"            # free joints keep their z: they move in vertical planes
 //! move_joints = true              # false: size the beams of the fixed ground structure only
 //! seed = 1                        # seed for random ground structures and starts
-//! start_forces = "random"         # "random" (small, seeded) or "zero"
+//! start_forces = "layout"         # "layout" (LP at the start geometry, idle beams dropped),
+//!                                 # "random" (small, seeded) or "zero"
 //! [mass]  model = "seed" (k_t, k_c) | "linear" (sigma_t, sigma_c, density); blend_force
 //! [[joint]] kind = "anchor" | "load" | "free"; at = [x, y, z]; optional to = [...], count = n
 //!           (a row of n evenly spaced joints from `at` to `to`); name; anchors: support =
@@ -147,8 +148,11 @@ impl Axis {
 #[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum StartForces {
-    /// Uniform in ±10% of the largest load, from the seeded generator.
+    /// The layout LP at the start geometry; the beams it leaves idle are dropped (see
+    /// `crate::truss::start`).
     #[default]
+    Layout,
+    /// Uniform in ±10% of the largest load, from the seeded generator.
     Random,
     /// All zero.
     Zero,

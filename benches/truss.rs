@@ -1,0 +1,49 @@
+//! Truss solve times: whole runs (`optimize::truss::run`: staged layout-LP start, then the
+//! geometry and sizing SQP, then export) of the shipped examples, and the layout LP alone.
+//! Figures go to BENCHMARKS.md (truss section).
+
+use std::path::Path;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use optimize::run::RunOptions;
+use optimize::truss::{load, start};
+
+/// Examples timed as whole runs: warren_bridge (the sub-second target) and the largest
+/// ground structure, cooling_tower.
+const RUNS: [&str; 3] = ["warren_bridge", "roof_fink", "cooling_tower"];
+
+fn path(name: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("problems/truss")
+        .join(format!("{name}.toml"))
+}
+
+fn runs(c: &mut Criterion) {
+    for name in RUNS {
+        let problem = load(&path(name)).expect("loads");
+        let opts = RunOptions {
+            quiet: true,
+            ..Default::default()
+        };
+        c.bench_function(&format!("truss run {name}"), |b| {
+            b.iter(|| optimize::truss::run(&problem, &opts).expect("runs"))
+        });
+    }
+}
+
+fn layout(c: &mut Criterion) {
+    for name in ["warren_bridge", "michell", "cooling_tower"] {
+        let problem = load(&path(name)).expect("loads");
+        let model = problem.model();
+        c.bench_function(&format!("truss layout LP {name}"), |b| {
+            b.iter(|| start::layout_start(&model.structure, &model.settings).expect("solves"))
+        });
+    }
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().sample_size(10);
+    targets = layout, runs
+}
+criterion_main!(benches);

@@ -1,0 +1,258 @@
+//! Staged start: a plastic layout LP on the fixed ground structure gives the geometry solve
+//! forces that balance the loads, and the beams it leaves idle are dropped before that solve.
+//!
+//! Stage 1 (sizing at fixed geometry, a linear program solved by [`super::lp`]): per load case
+//! ```text
+//!     min Σ_j (a_j·t_j + b_j·c_j)   s.t. force balance (the NLP's rows, self-weight left out),
+//!                                        t, c ≥ 0,  λ = c − t   (N, + compression)
+//! ```
+//! with per-newton costs that follow the mass model at the start lengths L_j (m):
+//! - tension `a_j = k_T·L_j`;
+//! - compression, linear law `b_j = w·k_C·L_j`; Euler law `b_j = w·k_C·L_j²/√F`, the secant of
+//!   `k_C·√c·L²` through 0 and the largest load F (members carrying about F are priced exactly,
+//!   lighter ones too cheaply, heavier ones too dearly);
+//! - the `length` objective prices every newton by `L_j` (the load path).
+//!
+//! With `linear` mass and no self-weight, stage 1 is exactly the plastic layout optimum of the
+//! ground structure. Stage 2 (the caller) optimizes geometry and sizes from these forces.
+//!
+//! Signs: stage 2 keeps each active member's LP sign (it may go idle, not reverse): only the
+//! part of that sign is a variable (`ForceParts`). The Euler mass's slope at zero compression
+//! is steep (G′(0) ∝ 1/√δ), so the unused compression part of a tension member would couple to
+//! the member's length with a large mixed second derivative and make the Lagrangian Hessian
+//! strongly indefinite.
+//!
+//! Pruning: beams whose |λ| is at most `IDLE_FRACTION` of the largest in every case are dropped,
+//! and free joints left without beams with them. Idle beams are the degenerate part of the
+//! geometry problem: their mass and balance terms vanish, so their joints' positions do not
+//! enter any active constraint and the reduced Hessian is singular along them.
+//!
+//! Degeneracy: most balance rows have a zero right-hand side (unloaded joints), so the simplex
+//! method takes long runs of degenerate pivots. Every balanced joint gets a seeded load of at
+//! most `PERTURBATION`·F per component (the classical perturbation remedy); the forces it causes
+//! are of that size, far below the idle threshold, and the start's imbalance stays below 1e-8·F
+//! (stage 2 removes it).
+//!
+//! Symmetry: the LP is solved on the whole ground structure; with mirror planes the forces are
+//! averaged with their mirror images plane by plane (the average of two balanced force sets is
+//! balanced when the loads are symmetric), so that pruning keeps mirror pairs together.
+//! Obstacles: beams that cut a sphere obstacle, and joints inside one, are left out of the LP when
+//! the rest can carry the loads.
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::lp::LpError;
+use super::mass::Compression;
+use super::model::{Beam, Mirror, Objective, Obstacle, Settings, Structure};
+use super::nlp::ForceParts;
+use super::plastic;
+
+/// Beams carrying at most this fraction of the largest |λ| in every case are idle.
+pub const IDLE_FRACTION: f64 = 1e-6;
+
+/// Size of the load perturbation that breaks the LP's degeneracy, relative to the largest load.
+const PERTURBATION: f64 = 1e-9;
+
+/// The result of stage 1.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LayoutStart {
+    /// The pruned structure (joints renumbered in their original order).
+    pub structure: Structure,
+    /// LP forces on the pruned structure, N, case-major.
+    pub forces: Vec<f64>,
+    /// The sign of each LP force (both parts where a case leaves the beam idle), case-major.
+    pub parts: Vec<ForceParts>,
+    /// LP objective per case (the model's units: kg, or m·N for the length objective).
+    pub cost: Vec<f64>,
+    /// Beams dropped as idle or cutting an obstacle.
+    pub dropped_beams: usize,
+    /// Free joints dropped.
+    pub dropped_joints: usize,
+}
+
+/// Per-newton LP costs of every beam at its start length (module header).
+pub fn beam_costs(structure: &Structure, settings: &Settings, force_scale: f64) -> Vec<(f64, f64)> {
+    let mass = &settings.mass;
+    let weight = match settings.objective {
+        Objective::MassTensionPreference(w) => w,
+        _ => 1.0,
+    };
+    (0..structure.beams.len())
+        .map(|j| {
+            let length = structure.length(j);
+            if settings.objective == Objective::Length {
+                return (length, length);
+            }
+            let compression = match mass.compression {
+                Compression::Linear { k_c } => k_c * length,
+                Compression::Euler { k_c } => k_c * length * length / force_scale.sqrt(),
+            };
+            (mass.k_t * length, weight * compression)
+        })
+        .collect()
+}
+
+/// Stage 1 on `structure` (module header). Fails only if no subset tried can carry the loads.
+pub fn layout_start(structure: &Structure, settings: &Settings) -> Result<LayoutStart, LpError> {
+    let clear: Vec<bool> = (structure.beams.iter())
+        .map(|b| clears_spheres(structure, b, &settings.obstacles))
+        .collect();
+    match solve_on(structure, settings, &clear) {
+        Err(_) if clear.iter().any(|&c| !c) => {
+            solve_on(structure, settings, &vec![true; structure.beams.len()])
+        }
+        result => result,
+    }
+}
+
+/// Whether a beam and its end joints stay outside every sphere obstacle.
+fn clears_spheres(structure: &Structure, beam: &Beam, obstacles: &[Obstacle]) -> bool {
+    let [a, b] = beam.ends;
+    let (pa, pb) = (structure.joints[a].position, structure.joints[b].position);
+    obstacles.iter().all(|o| match o {
+        Obstacle::Sphere { center, radius } => {
+            let (d, _) = super::geometry::segment_point_distance(&pa, &pb, center);
+            d >= *radius * (1.0 - 1e-9)
+        }
+        Obstacle::HalfSpace { .. } => true,
+    })
+}
+
+/// Solves the LP on the beams marked `usable`, symmetrizes, prunes.
+fn solve_on(
+    structure: &Structure,
+    settings: &Settings,
+    usable: &[bool],
+) -> Result<LayoutStart, LpError> {
+    let kept: Vec<usize> = (0..structure.beams.len()).filter(|&j| usable[j]).collect();
+    let force_scale = (structure.joints.iter())
+        .flat_map(|j| j.loads.iter())
+        .map(|f| f.norm())
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    // Loads scaled to O(1) for the simplex tolerances, and perturbed (module header).
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    let sub = Structure {
+        joints: (structure.joints.iter())
+            .map(|j| {
+                let mut j = j.clone();
+                for f in j.loads.iter_mut() {
+                    *f /= force_scale;
+                    for k in 0..3 {
+                        f[k] += PERTURBATION * (2.0 * rng.random::<f64>() - 1.0);
+                    }
+                }
+                j
+            })
+            .collect(),
+        beams: kept.iter().map(|&j| structure.beams[j]).collect(),
+    };
+    let costs = beam_costs(&sub, settings, force_scale);
+    let cost_scale = costs
+        .iter()
+        .map(|c| c.0.max(c.1))
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let scaled: Vec<(f64, f64)> = (costs.iter())
+        .map(|c| (c.0 / cost_scale, c.1 / cost_scale))
+        .collect();
+    let cases = settings.load_cases.len();
+    let mut forces = vec![vec![0.0; structure.beams.len()]; cases];
+    let mut cost = Vec::with_capacity(cases);
+    for (c, case_forces) in forces.iter_mut().enumerate() {
+        let sol = plastic::layout_with_costs(&sub, c, settings.balance_axes(), &scaled)?;
+        for (k, &j) in kept.iter().enumerate() {
+            case_forces[j] = sol.forces[k] * force_scale;
+        }
+        cost.push(sol.volume * cost_scale * force_scale);
+    }
+    for mirror in &settings.symmetry {
+        if let Some(image) = mirror_beams(structure, mirror) {
+            for case_forces in forces.iter_mut() {
+                let old = case_forces.clone();
+                for (j, f) in case_forces.iter_mut().enumerate() {
+                    *f = 0.5 * (old[j] + old[image[j]]);
+                }
+            }
+        }
+    }
+    Ok(prune(structure, forces, cost))
+}
+
+/// The mirror image of every beam, if the ground structure is mirror symmetric.
+fn mirror_beams(structure: &Structure, mirror: &Mirror) -> Option<Vec<usize>> {
+    let joints = &structure.joints;
+    let scale = (joints.iter())
+        .map(|j| j.position.norm())
+        .fold(1.0, f64::max);
+    let image_joint = |i: usize| {
+        let p = mirror.reflect(&joints[i].position);
+        (0..joints.len()).find(|&k| (joints[k].position - p).norm() <= 1e-9 * scale)
+    };
+    let images: Vec<usize> = (0..joints.len()).map(image_joint).collect::<Option<_>>()?;
+    let index: std::collections::HashMap<Beam, usize> = (structure.beams.iter())
+        .enumerate()
+        .map(|(j, b)| (*b, j))
+        .collect();
+    (structure.beams.iter())
+        .map(|b| {
+            index
+                .get(&Beam::new(images[b.ends[0]], images[b.ends[1]]))
+                .copied()
+        })
+        .collect()
+}
+
+/// Drops idle beams and the free joints they leave without beams (module header).
+fn prune(structure: &Structure, forces: Vec<Vec<f64>>, cost: Vec<f64>) -> LayoutStart {
+    let largest = (forces.iter().flatten())
+        .map(|f| f.abs())
+        .fold(0.0, f64::max);
+    let active: Vec<usize> = (0..structure.beams.len())
+        .filter(|&j| forces.iter().any(|f| f[j].abs() > IDLE_FRACTION * largest))
+        .collect();
+    let mut used = vec![false; structure.joints.len()];
+    for &j in &active {
+        for e in structure.beams[j].ends {
+            used[e] = true;
+        }
+    }
+    let keep: Vec<bool> = (structure.joints.iter().zip(&used))
+        .map(|(joint, &u)| u || !joint.is_free())
+        .collect();
+    let mut renumber = vec![usize::MAX; structure.joints.len()];
+    let mut joints = Vec::new();
+    for (i, joint) in structure.joints.iter().enumerate() {
+        if keep[i] {
+            renumber[i] = joints.len();
+            joints.push(joint.clone());
+        }
+    }
+    let beams: Vec<Beam> = (active.iter())
+        .map(|&j| {
+            let [a, b] = structure.beams[j].ends;
+            Beam::new(renumber[a], renumber[b])
+        })
+        .collect();
+    let start: Vec<f64> = (forces.iter())
+        .flat_map(|f| active.iter().map(|&j| f[j]))
+        .collect();
+    let parts = (start.iter())
+        .map(|&f| {
+            if f.abs() > IDLE_FRACTION * largest {
+                ForceParts::of(f)
+            } else {
+                ForceParts::Both
+            }
+        })
+        .collect();
+    LayoutStart {
+        dropped_beams: structure.beams.len() - beams.len(),
+        dropped_joints: structure.joints.len() - joints.len(),
+        structure: Structure { joints, beams },
+        forces: start,
+        parts,
+        cost,
+    }
+}
