@@ -116,13 +116,9 @@ impl<'p> Reduced<'p> {
             .iter()
             .map(|c| (segment_of(c.step), c.time, None))
             .collect();
-        for k in 1..s {
+        for (k, &b) in boundaries.iter().enumerate().take(s).skip(1) {
             for i in 0..nx {
-                rows.push((
-                    k - 1,
-                    boundaries[k] as f64 * h,
-                    Some(n_par + (k - 1) * nx + i),
-                ));
+                rows.push((k - 1, b as f64 * h, Some(n_par + (k - 1) * nx + i)));
             }
         }
         for (r, &(k, t, own)) in rows.iter().enumerate() {
