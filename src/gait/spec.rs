@@ -1211,6 +1211,14 @@ min = 0.1
         assert_eq!(p.constraints[0].step, 500);
         assert_eq!(p.horizon, 0.5);
         assert_eq!(p.start, vec![vec![0.0; 6]]);
+        assert_eq!(p.segments, 1);
+        let p = load(&BASE.replacen(
+            "[[task]]",
+            "[controls]\nshooting_segments = 500\n[[task]]",
+            1,
+        ))
+        .unwrap();
+        assert_eq!(p.segments, 500);
         // World velocity (1, 0) seen from a link rotated by 0.5 rad.
         assert!(
             (p.initial.v[1] - 0.5f64.cos()).abs() < 1e-15
@@ -1249,6 +1257,26 @@ min = 0.1
                 bad.contains(key) || bad.contains("[[task]]") || bad.contains("quantity"),
                 "{to}: line {line} `{bad}`"
             );
+        }
+    }
+
+    #[test]
+    fn shooting_segments_out_of_range_point_at_the_key() {
+        for bad in [0, 501] {
+            let text = BASE.replacen(
+                "[[task]]",
+                &format!("[controls]\nshooting_segments = {bad}\n[[task]]"),
+                1,
+            );
+            let e = load(&text).unwrap_err();
+            assert!(
+                e.message.contains("`shooting_segments` must be in 1..=500"),
+                "{}",
+                e.message
+            );
+            let (line, _) = e.position.unwrap();
+            let at = text.lines().nth(line - 1).unwrap();
+            assert!(at.contains("shooting_segments"), "line {line} `{at}`");
         }
     }
 }
