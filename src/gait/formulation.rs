@@ -13,7 +13,9 @@
 //!
 //! **Scaling.** Variable `z_j = x_j / σ_j` with `σ = (hi − lo)/2` for knot values and `σ = S`
 //! for slopes, so every variable ranges over about `[−1, 1]`; the objective `∫ΣF²dt` (N²·s) is
-//! divided by `Σₐ σₐ²·T`. Constraints keep their units (m, rad, m/s).
+//! divided by `Σₐ σₐ²·T`. Constraints keep their units (m, rad, m/s). With multiple shooting
+//! the segment start states follow the spline parameters as variables, unscaled (m, rad, m/s,
+//! rad/s) and unbounded; they start at the rollout of the start forces.
 
 use super::reduced::Reduced;
 use super::spec::Problem;
@@ -22,7 +24,10 @@ use crate::solver::{Dims, EvalError, Nlp};
 /// The scaled, spline-bounded reduced-gradient NLP (module header).
 #[derive(Debug, Clone)]
 pub struct Formulation<'p> {
+    /// The NLP solved: `[controls] shooting_segments` segments.
     inner: Reduced<'p>,
+    /// Single shooting: the motion the spline parameters actually produce.
+    single: Reduced<'p>,
     /// Physical value of one scaled unit per variable (N, N·m, N/s or N·m/s).
     scale: Vec<f64>,
     /// Physical bounds per variable.
@@ -40,11 +45,16 @@ impl<'p> Formulation<'p> {
     /// Builds the formulation of `problem`.
     pub fn new(problem: &'p Problem) -> Self {
         let inner = Reduced::new(problem);
+        let single = Reduced::with_segments(problem, 1);
         let d = inner.dims();
         let grid = inner.grid();
         let (k, block) = (grid.knots, grid.per_actuator());
         let margin = problem.trials.slope_margin;
-        let (mut scale, mut lower, mut upper) = (vec![0.0; d.n], vec![0.0; d.n], vec![0.0; d.n]);
+        let (mut scale, mut lower, mut upper) = (
+            vec![1.0; d.n],
+            vec![f64::NEG_INFINITY; d.n],
+            vec![f64::INFINITY; d.n],
+        );
         let mut objective_scale = 0.0;
         for (a, act) in problem.model.actuators.iter().enumerate() {
             let [lo, hi] = act.bounds;
@@ -68,8 +78,10 @@ impl<'p> Formulation<'p> {
         for (x, (lo, hi)) in start.iter_mut().zip(lower.iter().zip(&upper)) {
             *x = x.clamp(*lo, *hi);
         }
+        inner.fill_states(&mut start);
         Formulation {
             inner,
+            single,
             scale,
             lower,
             upper,
@@ -79,17 +91,28 @@ impl<'p> Formulation<'p> {
         }
     }
 
-    /// The same problem starting from `x` (physical units), clamped into the bounds.
+    /// The same problem starting from `x` (physical units), clamped into the bounds: all
+    /// variables, or the spline parameters alone, the segment start states then taken from
+    /// their rollout.
     pub fn starting_at(&self, x: &[f64]) -> Self {
         let mut out = self.clone();
-        for (j, s) in out.start.iter_mut().enumerate() {
+        for (j, s) in out.start.iter_mut().enumerate().take(x.len()) {
             *s = x[j].clamp(self.lower[j], self.upper[j]);
+        }
+        if x.len() < out.start.len() {
+            self.inner.fill_states(&mut out.start);
         }
         out
     }
 
-    /// The unscaled NLP.
+    /// The unscaled single-shooting NLP: its constraints are those of the motion the spline
+    /// parameters produce (the first [`Reduced::parameters`] variables of any formulation).
     pub fn reduced(&self) -> &Reduced<'p> {
+        &self.single
+    }
+
+    /// The unscaled NLP solved (multiple shooting when the problem asks for it).
+    pub fn shooting(&self) -> &Reduced<'p> {
         &self.inner
     }
 
@@ -103,7 +126,7 @@ impl<'p> Formulation<'p> {
         x.iter().zip(&self.scale).map(|(x, s)| x / s).collect()
     }
 
-    /// Physical bounds `(lower, upper)` of the spline parameters.
+    /// Physical bounds `(lower, upper)` of the variables (spline parameters first).
     pub fn physical_bounds(&self) -> (&[f64], &[f64]) {
         (&self.lower, &self.upper)
     }

@@ -1,16 +1,29 @@
-//! The reduced-gradient spacetime problem (seed §3.5, eq. 3.22) as an [`Nlp`]:
+//! The reduced-gradient spacetime problem (seed §3.5, eq. 3.22) as an [`Nlp`], by single or
+//! multiple shooting:
 //! ```text
-//!   min_p  Σₐ ∫₀ᵀ Fₐ(t; p)² dt    s.t.   lower ≤ C(x(t_i; p)) ≤ upper   (pose constraints)
-//!   bounds: knot values within the actuator's force bounds, slopes free
+//!   min_{p, s₁…s_{S−1}}  Σₐ ∫₀ᵀ Fₐ(t; p)² dt
+//!   s.t.  lower ≤ C(x(t_i; p, s_k(i))) ≤ upper        (pose constraints)
+//!         x(b_k; p, s_{k−1}) − s_k = 0,  k = 1…S−1      (continuity)
+//!   bounds: knot values within the actuator's force bounds, slopes and states free
 //! ```
-//! where `p` are the Hermite spline parameters of the actuator forces ([`crate::gait::spline`])
-//! and `x(t; p)` is the RK4 simulation from the fixed initial state. `eval` simulates only to the
-//! last constraint time. `eval_derivatives` differentiates the whole rollout exactly by forward
-//! sensitivities of the RK4 map with analytical ABA derivatives (`reduced/sensitivity.rs`; ≈ 6× one
+//! where `p` are the Hermite spline parameters of the actuator forces ([`crate::gait::spline`]).
+//! The interval `[0, t_last]` up to the last constraint time is split into `S` segments at the
+//! RK4 steps `b_k = round(k·N/S)` (`N` = steps to `t_last`; `[controls] shooting_segments`).
+//! Segment `k` is simulated by RK4 from its start state `s_k = (q, v)` at `b_k` under the same
+//! force splines (absolute time); `s₀` is the problem's initial state, `s₁…s_{S−1}` are
+//! variables, ordered after `p`, `nq + nv` each. A pose constraint at step `n` reads the segment
+//! with `b_k < n ≤ b_{k+1}` (segment 0 also owns `n = 0`). `S = 1` is single shooting: the
+//! variables are `p` alone and the arithmetic is that of one rollout. Multiple shooting keeps
+//! each segment short, so the constraints depend less violently on the variables across
+//! impacts; the segments are independent and run in parallel (rayon; each writes its own rows).
+//!
+//! `eval` simulates only to the last constraint time. `eval_derivatives` differentiates each
+//! segment exactly by forward sensitivities of the RK4 map with analytical ABA derivatives,
+//! seeded with the identity for the segment's start state (`reduced/sensitivity.rs`; ≈ 6× one
 //! simulation on the Luxo leap). The reference oracle, and the fallback for floating bases, is
-//! forward dual numbers (`DualSVec64<8>`): the columns are split into chunks of 8 directions, ordered by
-//! knot so that a chunk of late knots runs a short rollout — a knot whose support starts at or
-//! after a constraint's time cannot affect it, so that Jacobian entry is structurally zero and
+//! forward dual numbers (`DualSVec64<8>`): the columns are split into chunks of 8 directions,
+//! ordered by knot. A knot's basis vanishes outside `(t_{k−1}, t_{k+1})`, so a row whose segment
+//! lies outside that interval cannot depend on it: that Jacobian entry is structurally zero and
 //! absent from the pattern. Chunks run in parallel (rayon); each chunk's result is independent
 //! of scheduling. The objective and its gradient are closed-form and need no simulation.
 
@@ -25,19 +38,27 @@ use super::spline::{KnotGrid, SplineControls};
 use crate::solver::{Dims, EvalError, Nlp};
 
 mod sensitivity;
+#[cfg(test)]
+mod shooting_tests;
 
 /// Directions propagated per dual rollout.
 pub const CHUNK: usize = 8;
 
-/// The reduced-gradient NLP of one gait problem.
+/// The reduced-gradient NLP of one gait problem (module header).
 #[derive(Debug, Clone)]
 pub struct Reduced<'p> {
     problem: &'p Problem,
     grid: KnotGrid,
-    /// Distinct sample steps, ascending.
-    steps: Vec<usize>,
-    /// For each constraint row, its index into `steps`.
-    row_sample: Vec<usize>,
+    /// Spline parameters (the first variables).
+    n_par: usize,
+    /// State size `nq + nv`.
+    nx: usize,
+    /// Segment boundaries in RK4 steps, `0 = b₀ < b₁ < … < b_S`.
+    boundaries: Vec<usize>,
+    /// Per segment, its distinct sample steps, ascending.
+    samples: Vec<Vec<usize>>,
+    /// For each pose-constraint row, its segment and index into that segment's samples.
+    row_sample: Vec<(usize, usize)>,
     /// Jacobian pattern, (row, col), row-major.
     pattern: Vec<(usize, usize)>,
     /// Position of (row, col) in `pattern`, dense m×n.
@@ -47,38 +68,94 @@ pub struct Reduced<'p> {
 }
 
 impl<'p> Reduced<'p> {
-    /// Builds the NLP; the problem's constraints must be sorted by time (the loader does this).
+    /// Builds the NLP with the problem's `segments`; the problem's constraints must be sorted by
+    /// time (the loader does this).
     pub fn new(problem: &'p Problem) -> Self {
+        Self::with_segments(problem, problem.segments)
+    }
+
+    /// Builds the NLP with `segments` shooting segments (clamped to `1..=` the steps to the last
+    /// constraint, so every segment has at least one step).
+    pub fn with_segments(problem: &'p Problem, segments: usize) -> Self {
         let grid = KnotGrid {
             knots: problem.knots,
             horizon: problem.horizon,
         };
-        let mut steps: Vec<usize> = problem.constraints.iter().map(|c| c.step).collect();
-        steps.dedup();
+        let last = problem.constraints.last().map_or(0, |c| c.step);
+        let s = segments.clamp(1, last.max(1));
+        let boundaries: Vec<usize> = (0..=s)
+            .map(|k| ((k * last) as f64 / s as f64).round() as usize)
+            .collect();
+        let segment_of = |step: usize| (0..s).find(|&k| step <= boundaries[k + 1]).unwrap_or(s - 1);
+        let mut samples = vec![Vec::new(); s];
         let row_sample = problem
             .constraints
             .iter()
-            .map(|c| steps.binary_search(&c.step).unwrap_or(0))
+            .map(|c| {
+                let k = segment_of(c.step);
+                if samples[k].last() != Some(&c.step) {
+                    samples[k].push(c.step);
+                }
+                (k, samples[k].len() - 1)
+            })
             .collect();
-        let n = problem.model.actuators.len() * grid.per_actuator();
-        let m = problem.constraints.len();
+        let n_par = problem.model.actuators.len() * grid.per_actuator();
+        let nx = problem.model.nq + problem.model.nv;
+        let n = n_par + (s - 1) * nx;
+        let m = problem.constraints.len() + (s - 1) * nx;
+        let h = problem.dt;
         let mut pattern = Vec::new();
         let mut slot = vec![None; m * n];
-        for (r, c) in problem.constraints.iter().enumerate() {
-            for j in 0..n {
-                if Self::affects(&grid, j, c.time) {
-                    slot[r * n + j] = Some(pattern.len());
-                    pattern.push((r, j));
+        let mut push = |r: usize, j: usize| {
+            slot[r * n + j] = Some(pattern.len());
+            pattern.push((r, j));
+        };
+        // Row r depends on the parameters acting in (b_k·h, t] and on its segment's start state.
+        let mut rows: Vec<(usize, f64, Option<usize>)> = problem
+            .constraints
+            .iter()
+            .map(|c| (segment_of(c.step), c.time, None))
+            .collect();
+        for (k, &b) in boundaries.iter().enumerate().take(s).skip(1) {
+            for i in 0..nx {
+                rows.push((k - 1, b as f64 * h, Some(n_par + (k - 1) * nx + i)));
+            }
+        }
+        for (r, &(k, t, own)) in rows.iter().enumerate() {
+            let t_lo = boundaries[k] as f64 * h;
+            for j in 0..n_par {
+                if Self::affects(&grid, j, t_lo, t) {
+                    push(r, j);
                 }
+            }
+            let mut cols: Vec<usize> = if k > 0 {
+                (0..nx).map(|i| n_par + (k - 1) * nx + i).collect()
+            } else {
+                Vec::new()
+            };
+            cols.extend(own);
+            cols.sort_unstable();
+            for j in cols {
+                push(r, j);
             }
         }
         let mut cols: Vec<usize> = (0..n).collect();
-        cols.sort_by_key(|&j| (grid.knot_of(j % grid.per_actuator()), j));
+        cols.sort_by_key(|&j| {
+            let knot = if j < n_par {
+                grid.knot_of(j % grid.per_actuator())
+            } else {
+                0
+            };
+            (j >= n_par, knot, j)
+        });
         let chunks = cols.chunks(CHUNK).map(|c| c.to_vec()).collect();
         Reduced {
             problem,
             grid,
-            steps,
+            n_par,
+            nx,
+            boundaries,
+            samples,
             row_sample,
             pattern,
             slot,
@@ -86,11 +163,14 @@ impl<'p> Reduced<'p> {
         }
     }
 
-    /// Whether parameter `j` can influence the motion before time `t` (s): knot `k`'s basis
-    /// functions vanish on `[0, t_{k−1}]`.
-    fn affects(grid: &KnotGrid, j: usize, t: f64) -> bool {
+    /// Whether spline parameter `j` can influence the motion on `(t_lo, t]` (s): knot `k`'s
+    /// basis functions vanish outside `(t_{k−1}, t_{k+1})` (kept when `t_{k+1}` is within
+    /// round-off of `t_lo`).
+    fn affects(grid: &KnotGrid, j: usize, t_lo: f64, t: f64) -> bool {
         let k = grid.knot_of(j % grid.per_actuator());
-        k == 0 || grid.time(k - 1) < t
+        let starts_before = k == 0 || grid.time(k - 1) < t;
+        let ends_after = k + 1 >= grid.knots || grid.time(k + 1) >= t_lo - 1e-9 * grid.spacing();
+        starts_before && ends_after
     }
 
     /// The knot grid.
@@ -98,76 +178,159 @@ impl<'p> Reduced<'p> {
         self.grid
     }
 
-    /// Simulates with parameters `x` (scalar type `T`) up to `last` samples and writes the
-    /// constraint rows whose sample is among them via `write(row, value)`.
-    fn simulate<T: Real>(
+    /// Number of shooting segments.
+    pub fn segments(&self) -> usize {
+        self.boundaries.len() - 1
+    }
+
+    /// Number of spline parameters (the leading variables).
+    pub fn parameters(&self) -> usize {
+        self.n_par
+    }
+
+    /// Number of pose-constraint rows (the leading rows; continuity rows follow).
+    fn pose_rows(&self) -> usize {
+        self.problem.constraints.len()
+    }
+
+    /// Row of continuity component `i` at the start of segment `k ≥ 1`.
+    fn continuity_row(&self, k: usize, i: usize) -> usize {
+        self.pose_rows() + (k - 1) * self.nx + i
+    }
+
+    /// Column of start-state component `i` of segment `k ≥ 1`.
+    fn state_column(&self, k: usize, i: usize) -> usize {
+        self.n_par + (k - 1) * self.nx + i
+    }
+
+    /// Start state of segment `k` from the variables `x`: the initial state for `k = 0`.
+    fn start_state<T: Real>(&self, k: usize, x: &[T]) -> State<T> {
+        let nq = self.problem.model.nq;
+        if k == 0 {
+            let init = &self.problem.initial;
+            State {
+                q: init.q.iter().map(|&z| T::from(z)).collect(),
+                v: init.v.iter().map(|&z| T::from(z)).collect(),
+            }
+        } else {
+            let s = &x[self.state_column(k, 0)..self.state_column(k, 0) + self.nx];
+            State {
+                q: s[..nq].to_vec(),
+                v: s[nq..].to_vec(),
+            }
+        }
+    }
+
+    /// The states at the segment starts `b₁…b_{S−1}` of one rollout of spline parameters `p`
+    /// from the initial state, flattened as the state variables (`(q, v)` per segment).
+    pub fn rollout_states(&self, p: &[f64]) -> Result<Vec<f64>, SimError> {
+        let h = self.problem.dt;
+        let controls = SplineControls {
+            grid: self.grid,
+            params: p[..self.n_par].to_vec(),
+        };
+        let mut state = self.problem.initial.clone();
+        let mut sim = Simulator::<f64>::new(&self.problem.model);
+        let mut out = Vec::with_capacity((self.segments() - 1) * self.nx);
+        let mut n = 0;
+        for &b in &self.boundaries[1..self.segments()] {
+            while n < b {
+                sim.step(n as f64 * h, h, &mut state, &controls)?;
+                n += 1;
+            }
+            out.extend(state.q.iter().chain(&state.v));
+        }
+        Ok(out)
+    }
+
+    /// Simulates segment `k` with variables `x` (scalar type `T`) and writes its rows via
+    /// `write(row, value)`: the pose constraints it owns, then the continuity defects
+    /// `x(b_{k+1}) − s_{k+1}` unless it is the last segment.
+    fn simulate_segment<T: Real>(
         &self,
-        x: Vec<T>,
-        last: usize,
+        k: usize,
+        x: &[T],
         mut write: impl FnMut(usize, &T),
     ) -> Result<(), SimError> {
         let p = self.problem;
         let m = &p.model;
+        let h = p.dt;
         let controls = SplineControls {
             grid: self.grid,
-            params: x,
+            params: x[..self.n_par].to_vec(),
         };
-        let mut state = State {
-            q: p.initial.q.iter().map(|&z| T::from(z)).collect(),
-            v: p.initial.v.iter().map(|&z| T::from(z)).collect(),
-        };
+        let mut state = self.start_state(k, x);
         let mut sim = Simulator::<T>::new(m);
-        let rows = &self.row_sample;
-        sim.rollout(
-            &mut state,
-            p.dt,
-            &self.steps[..last],
-            &controls,
-            |k, s, sim| {
-                for (r, c) in p.constraints.iter().enumerate() {
-                    if rows[r] == k {
-                        write(r, &c.quantity.value(m, s, &sim.dynamics));
-                    }
+        let mut n = self.boundaries[k];
+        for (i, &target) in self.samples[k].iter().enumerate() {
+            while n < target {
+                sim.step(n as f64 * h, h, &mut state, &controls)?;
+                n += 1;
+            }
+            sim.observe(&state);
+            for (r, c) in p.constraints.iter().enumerate() {
+                if self.row_sample[r] == (k, i) {
+                    write(r, &c.quantity.value(m, &state, &sim.dynamics));
                 }
-            },
-        )
+            }
+        }
+        if k + 1 < self.segments() {
+            while n < self.boundaries[k + 1] {
+                sim.step(n as f64 * h, h, &mut state, &controls)?;
+                n += 1;
+            }
+            let next = self.start_state(k + 1, x);
+            let ends = state.q.iter().chain(&state.v);
+            for (i, (a, b)) in ends.zip(next.q.iter().chain(&next.v)).enumerate() {
+                write(self.continuity_row(k + 1, i), &(*a - *b));
+            }
+        }
+        Ok(())
     }
 
-    /// Jacobian values (pattern order) by propagating parameter directions: chunks of
-    /// [`CHUNK`] parameters seeded as dual directions through whole rollouts, in parallel.
+    /// Whether row `r` belongs to segment `k` (a pose row it samples, or the continuity defect
+    /// at its end).
+    fn row_in_segment(&self, r: usize, k: usize) -> bool {
+        if r < self.pose_rows() {
+            self.row_sample[r].0 == k
+        } else {
+            (r - self.pose_rows()) / self.nx == k
+        }
+    }
+
+    /// Jacobian values (pattern order) by propagating variable directions: chunks of
+    /// [`CHUNK`] variables seeded as dual directions through the segments they affect, in
+    /// parallel.
     pub fn jacobian_by_parameter_duals(&self, x: &[f64], jac: &mut [f64]) -> Result<(), SimError> {
         let n = x.len();
+        let m = self.dims().m;
         let results: Vec<Result<Vec<(usize, f64)>, SimError>> = self
             .chunks
             .par_iter()
             .map(|cols| {
-                // Rows this chunk can affect; simulate up to the last of their samples.
-                let last = self
-                    .problem
-                    .constraints
-                    .iter()
-                    .enumerate()
-                    .filter(|(r, _)| cols.iter().any(|&j| self.slot[r * n + j].is_some()))
-                    .map(|(r, _)| self.row_sample[r] + 1)
-                    .max()
-                    .unwrap_or(0);
-                let mut out = Vec::new();
-                if last == 0 {
-                    return Ok(out);
-                }
                 let mut params: Vec<DualSVec64<CHUNK>> =
                     x.iter().map(|&z| DualSVec64::from_re(z)).collect();
                 for (d, &j) in cols.iter().enumerate() {
                     params[j] = params[j].derivative(d);
                 }
-                self.simulate(params, last, |r, v| {
-                    for (d, &j) in cols.iter().enumerate() {
-                        if let Some(s) = self.slot[r * n + j] {
-                            let eps = v.eps.0.as_ref().map_or(0.0, |e| e[d]);
-                            out.push((s, eps));
-                        }
+                let mut out = Vec::new();
+                for k in 0..self.segments() {
+                    let needed = (0..m).any(|r| {
+                        self.row_in_segment(r, k)
+                            && cols.iter().any(|&j| self.slot[r * n + j].is_some())
+                    });
+                    if !needed {
+                        continue;
                     }
-                })?;
+                    self.simulate_segment(k, &params, |r, v| {
+                        for (d, &j) in cols.iter().enumerate() {
+                            if let Some(s) = self.slot[r * n + j] {
+                                let eps = v.eps.0.as_ref().map_or(0.0, |e| e[d]);
+                                out.push((s, eps));
+                            }
+                        }
+                    })?;
+                }
                 Ok(out)
             })
             .collect();
@@ -187,7 +350,8 @@ impl<'p> Reduced<'p> {
     /// constraint row is `∂C/∂x · S` at its sample. The cost per step does not grow with the
     /// number of parameters (apart from the small product); on the Luxo leap it takes about as
     /// long as the chunked method on one thread (BENCHMARKS.md), which also runs its chunks in
-    /// parallel, so this is the independent cross-check rather than the default.
+    /// parallel, so this is the independent cross-check rather than the default. Single
+    /// shooting only (one segment).
     pub fn jacobian_by_tangents<const N: usize>(
         &self,
         x: &[f64],
@@ -199,6 +363,11 @@ impl<'p> Reduced<'p> {
         let (nq, nv, na) = (m.nq, m.nv, m.actuators.len());
         let nx = nq + nv;
         assert!(nx + 3 * na <= N, "too few dual directions");
+        assert_eq!(
+            self.segments(),
+            1,
+            "tangent propagation covers single shooting"
+        );
         let n_par = x.len();
         let block = self.grid.per_actuator();
         let h = p.dt;
@@ -225,7 +394,7 @@ impl<'p> Reduced<'p> {
         let mut state = p.initial.clone();
         let mut sim = Simulator::<D<N>>::new(m);
         let mut n = 0;
-        for (k, &target) in self.steps.iter().enumerate() {
+        for (k, &target) in self.samples[0].iter().enumerate() {
             while n < target {
                 let t0 = n as f64 * h;
                 let mut xd = lift(&state);
@@ -266,7 +435,7 @@ impl<'p> Reduced<'p> {
             let xd = lift(&state);
             sim.observe(&xd);
             for (r, c) in p.constraints.iter().enumerate() {
-                if self.row_sample[r] != k {
+                if self.row_sample[r] != (0, k) {
                     continue;
                 }
                 let v = c.quantity.value(m, &xd, &sim.dynamics);
@@ -282,10 +451,12 @@ impl<'p> Reduced<'p> {
 
     fn objective(&self, x: &[f64], grad: Option<&mut [f64]>) -> f64 {
         let block = self.grid.per_actuator();
+        let x = &x[..self.n_par];
         let mut f = 0.0;
         match grad {
             Some(g) => {
                 g.fill(0.0);
+                let g = &mut g[..self.n_par];
                 for (xa, ga) in x.chunks(block).zip(g.chunks_mut(block)) {
                     f += self.grid.integral_of_square(xa, Some(ga));
                 }
@@ -298,6 +469,16 @@ impl<'p> Reduced<'p> {
         }
         f
     }
+    /// Overwrites the state variables of `x` with the segment start states of the rollout of
+    /// its spline parameters (the initial state where that rollout fails).
+    pub fn fill_states(&self, x: &mut [f64]) {
+        let states = self.rollout_states(x).unwrap_or_else(|_| {
+            let init = &self.problem.initial;
+            let one: Vec<f64> = init.q.iter().chain(&init.v).copied().collect();
+            one.repeat(self.segments() - 1)
+        });
+        x[self.n_par..].copy_from_slice(&states);
+    }
 }
 
 fn domain(e: SimError) -> EvalError {
@@ -306,9 +487,10 @@ fn domain(e: SimError) -> EvalError {
 
 impl Nlp for Reduced<'_> {
     fn dims(&self) -> Dims {
+        let extra = (self.segments() - 1) * self.nx;
         Dims {
-            n: self.problem.model.actuators.len() * self.grid.per_actuator(),
-            m: self.problem.constraints.len(),
+            n: self.n_par + extra,
+            m: self.pose_rows() + extra,
             jac_nnz: self.pattern.len(),
             hess_nnz: 0,
         }
@@ -316,29 +498,31 @@ impl Nlp for Reduced<'_> {
 
     fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
         let (k, block) = (self.grid.knots, self.grid.per_actuator());
+        xl.fill(f64::NEG_INFINITY);
+        xu.fill(f64::INFINITY);
         for (a, act) in self.problem.model.actuators.iter().enumerate() {
-            for j in 0..block {
-                let (lo, hi) = if j < k {
-                    (act.bounds[0], act.bounds[1])
-                } else {
-                    (f64::NEG_INFINITY, f64::INFINITY)
-                };
-                xl[a * block + j] = lo;
-                xu[a * block + j] = hi;
+            for j in 0..k {
+                xl[a * block + j] = act.bounds[0];
+                xu[a * block + j] = act.bounds[1];
             }
         }
+        cl.fill(0.0);
+        cu.fill(0.0);
         for (r, c) in self.problem.constraints.iter().enumerate() {
             cl[r] = c.lower;
             cu[r] = c.upper;
         }
     }
 
+    /// The hand-made forces, slopes zero, and the segment start states of their rollout (the
+    /// initial state where that rollout fails).
     fn start(&self, x: &mut [f64]) {
         let (k, block) = (self.grid.knots, self.grid.per_actuator());
         x.fill(0.0);
         for (a, s) in self.problem.start.iter().enumerate() {
             x[a * block..a * block + k].copy_from_slice(s);
         }
+        self.fill_states(x);
     }
 
     fn jacobian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
@@ -350,8 +534,19 @@ impl Nlp for Reduced<'_> {
 
     fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
         *f = self.objective(x, None);
-        self.simulate(x.to_vec(), self.steps.len(), |r, v| c[r] = *v)
-            .map_err(domain)?;
+        let parts: Vec<Result<Vec<(usize, f64)>, SimError>> = (0..self.segments())
+            .into_par_iter()
+            .map(|k| {
+                let mut out = Vec::new();
+                self.simulate_segment(k, x, |r, v| out.push((r, *v)))?;
+                Ok(out)
+            })
+            .collect();
+        for part in parts {
+            for (r, v) in part.map_err(domain)? {
+                c[r] = v;
+            }
+        }
         if f.is_finite() && c.iter().all(|v| v.is_finite()) {
             Ok(())
         } else {
@@ -380,7 +575,17 @@ impl Nlp for Reduced<'_> {
     }
 
     fn constraint_name(&self, row: usize) -> String {
-        self.problem.constraints[row].name.clone()
+        match row.checked_sub(self.pose_rows()) {
+            None => self.problem.constraints[row].name.clone(),
+            Some(i) => {
+                let k = i / self.nx + 1;
+                format!(
+                    "t={:.4} continuity x[{}]",
+                    self.boundaries[k] as f64 * self.problem.dt,
+                    i % self.nx
+                )
+            }
+        }
     }
 }
 

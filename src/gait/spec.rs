@@ -296,6 +296,8 @@ pub struct ControlsSpec {
     pub knots: Option<usize>,
     /// Control horizon (s); default the last task time.
     pub horizon: Option<f64>,
+    /// Multiple-shooting segments over `[0, last task time]`; default 1 (single shooting).
+    pub shooting_segments: Option<usize>,
 }
 
 /// Simulated quantity a task constrains.
@@ -367,6 +369,8 @@ pub struct Problem {
     pub knots: usize,
     /// Control horizon (s).
     pub horizon: f64,
+    /// Multiple-shooting segments (1 = single shooting; `crate::gait::reduced`).
+    pub segments: usize,
     /// Starting knot forces per actuator (N·m or N).
     pub start: Vec<Vec<f64>>,
     /// Pose constraints, ordered by time.
@@ -703,6 +707,17 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
             .file_stem()
             .map_or("gait".into(), |s| s.to_string_lossy().into_owned())
     });
+    let segments = file.controls.shooting_segments.unwrap_or(1);
+    let last_step = constraints.last().map_or(0, |c| c.step);
+    if segments == 0 || (segments > 1 && segments > last_step) {
+        return Err(err(
+            path(&["controls".into(), "shooting_segments".into()]),
+            format!(
+                "`shooting_segments` must be in 1..={} (one RK4 step per segment at least), got {segments}",
+                last_step.max(1)
+            ),
+        ));
+    }
     let trials = build_trials(source, &file.trials)?;
     Ok(Problem {
         name,
@@ -711,6 +726,7 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
         dt: file.dt,
         knots,
         horizon,
+        segments,
         start,
         constraints,
         trials,
@@ -1195,6 +1211,14 @@ min = 0.1
         assert_eq!(p.constraints[0].step, 500);
         assert_eq!(p.horizon, 0.5);
         assert_eq!(p.start, vec![vec![0.0; 6]]);
+        assert_eq!(p.segments, 1);
+        let p = load(&BASE.replacen(
+            "[[task]]",
+            "[controls]\nshooting_segments = 500\n[[task]]",
+            1,
+        ))
+        .unwrap();
+        assert_eq!(p.segments, 500);
         // World velocity (1, 0) seen from a link rotated by 0.5 rad.
         assert!(
             (p.initial.v[1] - 0.5f64.cos()).abs() < 1e-15
@@ -1233,6 +1257,26 @@ min = 0.1
                 bad.contains(key) || bad.contains("[[task]]") || bad.contains("quantity"),
                 "{to}: line {line} `{bad}`"
             );
+        }
+    }
+
+    #[test]
+    fn shooting_segments_out_of_range_point_at_the_key() {
+        for bad in [0, 501] {
+            let text = BASE.replacen(
+                "[[task]]",
+                &format!("[controls]\nshooting_segments = {bad}\n[[task]]"),
+                1,
+            );
+            let e = load(&text).unwrap_err();
+            assert!(
+                e.message.contains("`shooting_segments` must be in 1..=500"),
+                "{}",
+                e.message
+            );
+            let (line, _) = e.position.unwrap();
+            let at = text.lines().nth(line - 1).unwrap();
+            assert!(at.contains("shooting_segments"), "line {line} `{at}`");
         }
     }
 }

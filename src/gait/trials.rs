@@ -72,10 +72,12 @@ impl Assessment {
     }
 }
 
-/// Evaluates physical spline parameters `x`; `None` if the simulation fails.
+/// Evaluates the motion of physical spline parameters `x` (the leading entries; segment start
+/// states after them are ignored) by one rollout; `None` if the simulation fails.
 pub fn assess(f: &Formulation<'_>, x: &[f64]) -> Option<Assessment> {
     let nlp = f.reduced();
     let d = nlp.dims();
+    let x = &x[..d.n];
     let (mut cost, mut c) = (0.0, vec![0.0; d.m]);
     nlp.eval(x, &mut cost, &mut c).ok()?;
     let (mut xl, mut xu, mut cl, mut cu) = (
@@ -155,10 +157,11 @@ pub fn classify(start: Option<&Assessment>, end: Option<&Assessment>, tol: f64) 
     }
 }
 
-/// The starting spline parameters (physical units) of every trial, in trial order.
+/// The starting spline parameters (physical units) of every trial, in trial order (without
+/// segment start states: [`Formulation::starting_at`] rolls them out).
 pub fn starts(problem: &Problem, f: &Formulation<'_>, seed: u64) -> Vec<Vec<f64>> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let hand = f.hand_made_start().to_vec();
+    let hand = f.hand_made_start()[..f.reduced().parameters()].to_vec();
     let grid = f.reduced().grid();
     let (k, block) = (grid.knots, grid.per_actuator());
     let (lo, hi) = f.physical_bounds();
@@ -237,6 +240,7 @@ pub fn solve_trial(
         }
     }
     solution.log = log;
+    x.truncate(f.reduced().parameters());
     TrialResult {
         trial,
         origin: if trial == 1 { "hand-made" } else { "random" },
@@ -374,7 +378,7 @@ mod tests {
         let a = starts(&p, &f, 8);
         assert_eq!(a, starts(&p, &f, 8));
         assert_ne!(a[1], starts(&p, &f, 9)[1]);
-        assert_eq!(a[0], f.hand_made_start());
+        assert_eq!(a[0], f.hand_made_start()[..f.reduced().parameters()]);
         let (lo, hi) = f.physical_bounds();
         for x in &a {
             for j in 0..x.len() {

@@ -19,6 +19,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use num_dual::DualSVec64;
+use rayon::prelude::*;
 
 use super::Reduced;
 use crate::gait::aba::derivatives::StageLinearizer;
@@ -30,25 +31,61 @@ const LANES: usize = 8;
 
 impl Reduced<'_> {
     /// Jacobian values (pattern order) by forward sensitivities through RK4 with analytical
-    /// stage Jacobians. Returns `Ok(false)` without touching `jac` if the model has a joint the
-    /// analytical path does not cover (a floating base).
+    /// stage Jacobians, one segment per task (rayon). Returns `Ok(false)` without touching
+    /// `jac` if the model has a joint the analytical path does not cover (a floating base).
     pub fn jacobian_by_sensitivities(&self, x: &[f64], jac: &mut [f64]) -> Result<bool, SimError> {
+        if StageLinearizer::new(&self.problem.model).is_none() {
+            return Ok(false);
+        }
+        let parts: Vec<Result<Vec<(usize, f64)>, SimError>> = (0..self.segments())
+            .into_par_iter()
+            .map(|k| self.segment_sensitivities(k, x))
+            .collect();
+        for part in parts {
+            for (slot, v) in part? {
+                jac[slot] = v;
+            }
+        }
+        Ok(true)
+    }
+
+    /// The Jacobian entries `(slot, value)` of the rows segment `k` owns. The sensitivity
+    /// columns are the spline parameters and, for `k ≥ 1`, the segment's start state (seeded
+    /// with the identity).
+    fn segment_sensitivities(&self, k: usize, x: &[f64]) -> Result<Vec<(usize, f64)>, SimError> {
         let p = self.problem;
         let m = &p.model;
-        let Some(mut lin) = StageLinearizer::new(m) else {
-            return Ok(false);
-        };
+        let mut lin = StageLinearizer::new(m).expect("checked by the caller");
         let (nq, nv, na) = (m.nq, m.nv, m.actuators.len());
         let nx = nq + nv;
         let ncol = nx + 3 * na;
-        let n_par = x.len();
+        let n_var = x.len();
+        let n_par = self.n_par + if k > 0 { nx } else { 0 };
+        // Variable c (spline parameters actuator-major, then this segment's start state): its
+        // global column, and its column in the sensitivity matrix (spline parameters stored
+        // knot-major, [`Self::knot_major`]; start-state columns after them).
+        let global = |c: usize| {
+            if c < self.n_par {
+                c
+            } else {
+                self.state_column(k, c - self.n_par)
+            }
+        };
+        let column = |c: usize| {
+            if c < self.n_par {
+                self.knot_major(c)
+            } else {
+                c
+            }
+        };
+        let mut out = Vec::new();
         let block = self.grid.per_actuator();
         let h = p.dt;
         let spline = SplineControls {
             grid: self.grid,
-            params: x.to_vec(),
+            params: x[..self.n_par].to_vec(),
         };
-        let mut state = p.initial.clone();
+        let mut state = self.start_state(k, x);
         let mut tmp = state.clone();
         let mut kq = vec![vec![0.0; nq]; 4];
         let mut kv = vec![vec![0.0; nv]; 4];
@@ -59,13 +96,23 @@ impl Reduced<'_> {
         let mut dk = vec![vec![0.0; nx * ncol]; 4];
         let mut step_t = vec![0.0; nx * ncol];
         let mut sens = vec![0.0; nx * n_par];
+        if k > 0 {
+            for i in 0..nx {
+                sens[i * n_par + self.n_par + i] = 1.0;
+            }
+        }
         let mut next = vec![0.0; nx * n_par];
         let mut grad_c = vec![0.0; nx];
         let mut observer = Simulator::<DualSVec64<LANES>>::new(m);
         let stages = [(0.0, 0.0, 0), (0.5, 0.5, 1), (0.5, 0.5, 1), (1.0, 1.0, 2)];
-        let mut n = 0;
-        for (k, &target) in self.steps.iter().enumerate() {
-            while n < target {
+        let mut n = self.boundaries[k];
+        let mut targets: Vec<Option<usize>> = self.samples[k].iter().map(|&t| Some(t)).collect();
+        if k + 1 < self.segments() {
+            targets.push(None);
+        }
+        for (i_sample, target) in targets.into_iter().enumerate() {
+            let end = target.unwrap_or(self.boundaries[(k + 1).min(self.segments())]);
+            while n < end {
                 let t0 = n as f64 * h;
                 // The RK4 step, arithmetic as in `Simulator::step`, with stage Jacobians.
                 for (s, &(dt_frac, x_frac, _)) in stages.iter().enumerate() {
@@ -138,7 +185,12 @@ impl Reduced<'_> {
                 // other columns are zero in S and in the update; time only moves forward).
                 let basis: [_; 3] =
                     std::array::from_fn(|st| self.grid.weights(t0 + 0.5 * h * st as f64));
-                let live = (basis[2].0[2] + 1) * 2 * na;
+                // Start-state columns (segments after the first) are live from the start.
+                let live = if n_par > self.n_par {
+                    n_par
+                } else {
+                    (basis[2].0[2] + 1) * 2 * na
+                };
                 for r in 0..nx {
                     let row = &mut next[r * n_par..r * n_par + live];
                     row.fill(0.0);
@@ -163,9 +215,23 @@ impl Reduced<'_> {
                 std::mem::swap(&mut sens, &mut next);
                 n += 1;
             }
+            if target.is_none() {
+                // The continuity defects x(b_{k+1}) − s_{k+1}.
+                for i in 0..nx {
+                    let r = self.continuity_row(k + 1, i);
+                    for c in 0..n_par {
+                        if let Some(slot) = self.slot[r * n_var + global(c)] {
+                            out.push((slot, sens[i * n_par + column(c)]));
+                        }
+                    }
+                    let own = self.slot[r * n_var + self.state_column(k + 1, i)];
+                    out.push((own.expect("continuity pattern"), -1.0));
+                }
+                continue;
+            }
             // Constraint rows sampled here: ∂C/∂x by dual numbers, LANES directions at a time.
             for (r, c) in p.constraints.iter().enumerate() {
-                if self.row_sample[r] != k {
+                if self.row_sample[r] != (k, i_sample) {
                     continue;
                 }
                 for start in (0..nx).step_by(LANES) {
@@ -195,14 +261,17 @@ impl Reduced<'_> {
                     }
                 }
                 for j in 0..n_par {
-                    if let Some(slot) = self.slot[r * n_par + j] {
-                        let col = self.knot_major(j);
-                        jac[slot] = (0..nx).map(|i| grad_c[i] * sens[i * n_par + col]).sum();
+                    if let Some(slot) = self.slot[r * n_var + global(j)] {
+                        let col = column(j);
+                        out.push((
+                            slot,
+                            (0..nx).map(|i| grad_c[i] * sens[i * n_par + col]).sum(),
+                        ));
                     }
                 }
             }
         }
-        Ok(true)
+        Ok(out)
     }
 }
 
