@@ -38,6 +38,8 @@ pub struct Regularization {
     pub pivot_threshold: f64,
     /// Magnitude given to a replaced pivot.
     pub pivot_replacement: f64,
+    /// Whether to equilibrate (S from Ruiz); false factors K itself (S = I).
+    pub equilibrate: bool,
 }
 
 impl Default for Regularization {
@@ -47,6 +49,7 @@ impl Default for Regularization {
             dual: 1e-9,
             pivot_threshold: 1e-13,
             pivot_replacement: 1e-7,
+            equilibrate: true,
         }
     }
 }
@@ -75,7 +78,12 @@ impl KktSolver {
     /// equilibration) and returns its inertia.
     pub fn factor(&mut self, reg: Regularization) -> Result<Inertia, KktError> {
         self.factored = false;
-        self.equilibrate();
+        if reg.equilibrate {
+            self.equilibrate();
+        } else {
+            self.scale.fill(1.0);
+            self.shifted.copy_from_slice(&self.values);
+        }
         for (k, &p) in self.diag_pos.iter().enumerate() {
             // min(relative, absolute): δ in the scaled matrix, but never more than δ in K.
             let weight = self.scale[k].powi(2).min(1.0);
