@@ -419,6 +419,38 @@ fn hanging_chain_through_the_sparse_qp() {
     }
 }
 
+/// The hanging chain at 250 links with the exact Hessian through the sparse QP. Its QPs have
+/// only equality rows and a convexification shift of ~3e4, so the Schur complement
+/// A(H + δI)⁻¹Aᵀ is ~1e-9 with a smallest eigenvalue far below that; before the KKT matrix was
+/// equilibrated, the factorization's absolute dual regularization (1e-9) swamped it, the QPs'
+/// equality rows were never met, and the solve stalled after three iterations.
+#[test]
+fn long_hanging_chain_through_the_sparse_qp() {
+    let chain = Chain {
+        links: 250,
+        exact: true,
+    };
+    let s = solve(
+        &chain,
+        &Options {
+            hessian: HessianMode::Exact,
+            qp_method: QpMethod::Sparse,
+            ..quiet()
+        },
+    );
+    println!(
+        "chain 250: {:?}, f = {:.10}, {} iterations",
+        s.status, s.objective, s.iterations
+    );
+    assert_eq!(s.status, Status::Optimal);
+    assert!(s.max_violation <= 1e-6);
+    assert!(s.iterations <= 30, "{} iterations", s.iterations);
+    for k in 1..chain.links {
+        let (p, q) = (chain.point(&s.x, k), chain.point(&s.x, chain.links - k));
+        assert!((p.0 + q.0 - 1.0).abs() < 1e-4 && (p.1 - q.1).abs() < 1e-4);
+    }
+}
+
 #[test]
 fn unbounded_objective_is_reported() {
     // min −x₀ − x₁ s.t. x₀ − x₁ = 0: decreases without limit along x₀ = x₁ → ∞.

@@ -1,9 +1,13 @@
-//! Numeric LDLᵀ factorization of the KKT matrix, with static and dynamic regularization, and
-//! the inertia read off the pivots.
+//! Numeric LDLᵀ factorization of the equilibrated KKT matrix, with static and dynamic
+//! regularization, and the inertia read off the pivots.
 //!
 //! ```text
-//!     K + diag(δ_p I, −δ_d I) = P L D Lᵀ Pᵀ,   inertia(K + reg) = (#D>0, #D<0, #D=0)
+//!     S K S + diag(δ_p W_p, −δ_d W_d) = P L D Lᵀ Pᵀ,   W = diag(min(1, s_k²)),   inertia(K) = inertia(SKS) ≈ (#D>0, #D<0, #D=0)
 //! ```
+//! S = diag(s) > 0 by symmetric Ruiz equilibration: repeatedly `s_k ← s_k / √‖(SKS)_k,:‖∞`
+//! until every row norm lies within [`RUIZ_TOLERANCE`] of 1 or [`RUIZ_PASSES`] passes are done.
+//! Rows that are entirely zero keep s_k = 1. The weights W make the static regularization the
+//! smaller of δ relative to the equilibrated matrix and δ absolute in K itself.
 //! Dynamic regularization (as in Clarabel/QDLDL): a pivot with |d| ≤ `pivot_threshold` is
 //! replaced by ±`pivot_replacement`, keeping its sign, and counted in [`Inertia::regularized`].
 
@@ -16,7 +20,13 @@ use faer::sparse::linalg::cholesky::{SymbolicCholeskyRaw, supernodal};
 
 use super::{KktError, KktSolver};
 
-/// Regularization applied during the numeric factorization (absolute values).
+/// Maximum number of Ruiz equilibration passes.
+const RUIZ_PASSES: usize = 20;
+/// Equilibration stops when every nonzero row ∞-norm is within this of 1.
+const RUIZ_TOLERANCE: f64 = 0.1;
+
+/// Regularization applied during the numeric factorization: δ_p, δ_d relative to the
+/// equilibrated matrix (rows of ∞-norm ≈ 1) and capped at the same absolute value in K.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Regularization {
     /// Added to every primal diagonal entry (δ_p ≥ 0).
@@ -28,6 +38,8 @@ pub struct Regularization {
     pub pivot_threshold: f64,
     /// Magnitude given to a replaced pivot.
     pub pivot_replacement: f64,
+    /// Whether to equilibrate (S from Ruiz); false factors K itself (S = I).
+    pub equilibrate: bool,
 }
 
 impl Default for Regularization {
@@ -37,6 +49,7 @@ impl Default for Regularization {
             dual: 1e-9,
             pivot_threshold: 1e-13,
             pivot_replacement: 1e-7,
+            equilibrate: true,
         }
     }
 }
@@ -61,16 +74,25 @@ impl Inertia {
 }
 
 impl KktSolver {
-    /// Factors `K + diag(δ_p I, −δ_d I)` numerically (no allocation) and returns its inertia.
+    /// Factors `S K S + diag(δ_p W_p, −δ_d W_d)` numerically (no allocation; S from
+    /// equilibration) and returns its inertia.
     pub fn factor(&mut self, reg: Regularization) -> Result<Inertia, KktError> {
         self.factored = false;
-        self.shifted.copy_from_slice(&self.values);
+        if reg.equilibrate {
+            self.equilibrate();
+        } else {
+            self.scale.fill(1.0);
+            self.shifted.copy_from_slice(&self.values);
+        }
         for (k, &p) in self.diag_pos.iter().enumerate() {
-            self.shifted[p] += if k < self.n_primal {
-                reg.primal
-            } else {
-                -reg.dual
-            };
+            // min(relative, absolute): δ in the scaled matrix, but never more than δ in K.
+            let weight = self.scale[k].powi(2).min(1.0);
+            self.shifted[p] += weight
+                * if k < self.n_primal {
+                    reg.primal
+                } else {
+                    -reg.dual
+                };
         }
         let pattern = SymbolicSparseColMatRef::new_checked(
             self.dim,
@@ -132,6 +154,44 @@ impl KktSolver {
         self.inertia = inertia;
         self.factored = true;
         Ok(inertia)
+    }
+
+    /// Computes the Ruiz scaling of `values` into `scale` and writes `S values S` into
+    /// `shifted` (uses `residual` as scratch).
+    fn equilibrate(&mut self) {
+        self.scale.fill(1.0);
+        self.shifted.copy_from_slice(&self.values);
+        let norms = &mut self.residual;
+        for _ in 0..RUIZ_PASSES {
+            norms.fill(0.0);
+            for c in 0..self.dim {
+                for p in self.col_ptr[c]..self.col_ptr[c + 1] {
+                    let (r, v) = (self.row_idx[p], self.shifted[p].abs());
+                    norms[r] = norms[r].max(v);
+                    norms[c] = norms[c].max(v);
+                }
+            }
+            let balanced = norms
+                .iter()
+                .all(|&n| n == 0.0 || (n - 1.0).abs() <= RUIZ_TOLERANCE);
+            if balanced {
+                break;
+            }
+            for (s, n) in self.scale.iter_mut().zip(norms.iter_mut()) {
+                // Reuse `norms` for this pass's factor.
+                *n = if *n > 0.0 && n.is_finite() {
+                    1.0 / n.sqrt()
+                } else {
+                    1.0
+                };
+                *s *= *n;
+            }
+            for c in 0..self.dim {
+                for p in self.col_ptr[c]..self.col_ptr[c + 1] {
+                    self.shifted[p] *= norms[self.row_idx[p]] * norms[c];
+                }
+            }
+        }
     }
 
     /// Inertia of the last successful factorization.

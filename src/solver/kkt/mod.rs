@@ -12,6 +12,14 @@
 //! factorization exists and is stable for every symmetric ordering (Vanderbei 1995,
 //! "Symmetric quasi-definite matrices", SIAM J. Optim. 5(1)).
 //!
+//! Before factoring, K is equilibrated symmetrically (Ruiz 2001, "A scaling algorithm to
+//! equilibrate both rows and columns norms in matrices", RAL-TR-2001-034): a positive diagonal
+//! S with every row of `K̃ = S K S` of ∞-norm ≈ 1, and K̃ plus the static regularization is
+//! factored, the regularization being the smaller of δ relative to K̃ and δ absolute in K. Without it an
+//! absolute δ_d can exceed the Schur complement `A (H + D_p)⁻¹ Aᵀ` of a KKT matrix whose
+//! primal block is large (a big convexification shift), and refinement then cannot restore
+//! the equality rows. S is a congruence, so the inertia is unchanged.
+//!
 //! The symbolic analysis (ordering, elimination tree, fill pattern) runs once in
 //! [`KktSolver::new`]; each [`KktSolver::factor`] works in buffers allocated there. Solves refine
 //! iteratively against the *unregularized* matrix, so the static regularization only affects
@@ -64,8 +72,10 @@ pub struct KktSolver {
     values: Vec<f64>,
     /// Position of each diagonal entry in `values`.
     diag_pos: Vec<usize>,
-    /// `values` plus the static regularization, handed to the numeric factorization.
+    /// `S values S` plus the static regularization, handed to the numeric factorization.
     shifted: Vec<f64>,
+    /// The equilibrating diagonal S of the last factorization.
+    scale: Vec<f64>,
     symbolic: SymbolicCholesky<usize>,
     l_values: Vec<f64>,
     factor_mem: MemBuffer,
@@ -114,6 +124,7 @@ impl KktSolver {
             values: vec![0.0; nnz],
             diag_pos,
             shifted: vec![0.0; nnz],
+            scale: vec![1.0; dim],
             symbolic,
             l_values: vec![0.0; l_len],
             factor_mem: MemBuffer::new(factor_req),

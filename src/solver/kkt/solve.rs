@@ -61,8 +61,11 @@ impl KktSolver {
         Ok(report)
     }
 
-    /// Solves `(K + reg) x = b` in place with the factors only (no refinement).
+    /// Solves `(K + S⁻¹ reg S⁻¹) x = b` in place with the factors only (no refinement).
     pub fn solve_factored(&mut self, rhs: &mut [f64]) {
+        for (x, s) in rhs.iter_mut().zip(&self.scale) {
+            *x *= s;
+        }
         let factor = LdltRef::new(&self.symbolic, &self.l_values);
         let stack = MemStack::new(&mut self.solve_mem);
         let n = rhs.len();
@@ -72,9 +75,12 @@ impl KktSolver {
             Par::Seq,
             stack,
         );
+        for (x, s) in rhs.iter_mut().zip(&self.scale) {
+            *x *= s;
+        }
     }
 
-    /// Solves `(K + reg) X = B` in place for `columns` right-hand sides stored column-major in
+    /// Solves `(K + S⁻¹ reg S⁻¹) X = B` in place for `columns` right-hand sides stored column-major in
     /// `rhs` (length dim × columns), with the factors only. The workspace grows on the first
     /// call with more columns than before, and is reused afterwards.
     pub fn solve_factored_columns(&mut self, rhs: &mut [f64], columns: usize) {
@@ -85,6 +91,11 @@ impl KktSolver {
             );
             self.solve_columns = columns;
         }
+        for column in rhs.chunks_exact_mut(self.dim) {
+            for (x, s) in column.iter_mut().zip(&self.scale) {
+                *x *= s;
+            }
+        }
         let factor = LdltRef::new(&self.symbolic, &self.l_values);
         let stack = MemStack::new(&mut self.solve_mem);
         factor.solve_in_place_with_conj(
@@ -93,6 +104,11 @@ impl KktSolver {
             Par::Seq,
             stack,
         );
+        for column in rhs.chunks_exact_mut(self.dim) {
+            for (x, s) in column.iter_mut().zip(&self.scale) {
+                *x *= s;
+            }
+        }
     }
 
     /// `y ← K x` with the unregularized symmetric K (from its lower triangle).
