@@ -38,7 +38,8 @@
 //! is served by L-BFGS (no n×n matrix on the large-problem path).
 //!
 //! QP method ([`Options::qp_method`], see `qp::select`): the dense active-set method up to
-//! [`qp::DENSE_LIMIT`] variables, the sparse interior-point method above, with the exact
+//! [`qp::DENSE_LIMIT`] variables (up to [`EXACT_SPARSE_LIMIT`] with the exact Hessian), the
+//! sparse interior-point method above, with the exact
 //! Hessian kept as a sparse lower triangle (convexified inside the QP) and L-BFGS in compact
 //! form; elastic and least-violation subproblems use the same method.
 
@@ -56,12 +57,20 @@ use super::hessian::{self, DenseBfgs, InertiaShift, Lbfgs, Model};
 use super::log;
 use super::merit;
 use super::multipliers::{self, LinearizedPoint};
-use super::qp::{self, QpHessian, QpProblem, QpSolution, QpStatus, WarmStart};
+use super::qp::{self, QpHessian, QpMethod, QpProblem, QpSolution, QpStatus, WarmStart};
 use super::termination::{self, Kkt, KktInput};
 use super::{EvalError, HessianMode, IterationRecord, Nlp, Options, Solution, Status};
 
 /// Largest n for which `HessianMode::Auto` picks dense BFGS over L-BFGS.
 pub const DENSE_BFGS_LIMIT: usize = 500;
+
+/// Variables above which [`QpMethod::Auto`] sends problems solved with their exact Hessian to
+/// the sparse QP method, below [`qp::DENSE_LIMIT`]: the dense method's O(m·n²) work per QP
+/// dominates from a few hundred variables (double bubble, n ≈ 600 and 1668: sparse 15–22×
+/// faster, same optimum to 3e-12; hanging chain of 100 links: 15×; see BENCHMARKS.md). Kept at
+/// 1000, not lower, because a small octahedral film (the `cmc_octahedron_square_short` golden
+/// case) still reaches its iteration limit on the sparse path where the dense one converges.
+pub const EXACT_SPARSE_LIMIT: usize = 1000;
 
 /// Armijo constant of the line search.
 const ARMIJO: f64 = 1e-4;
@@ -148,6 +157,9 @@ struct Sqp<'a> {
     /// For the least-violation subproblems (their own shape, so their own sparse analysis).
     feasibility_warm: RefCell<WarmStart>,
     jac_shape: (Vec<usize>, Vec<usize>),
+    /// The QP method in effect ([`Options::qp_method`], with `Auto` resolved for exact
+    /// Hessians above [`EXACT_SPARSE_LIMIT`]).
+    qp_method: QpMethod,
 }
 
 /// Solves `nlp` from its starting point (see the module documentation for the method).
@@ -176,6 +188,10 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
         },
         _ => Model::Bfgs(DenseBfgs::new(n)),
     };
+    let qp_method = match options.qp_method {
+        QpMethod::Auto if mode == HessianMode::Exact && n > EXACT_SPARSE_LIMIT => QpMethod::Sparse,
+        other => other,
+    };
     let jac_shape = (ev.jac_rows.clone(), ev.jac_cols.clone());
     let m = ev.dims.m;
     let mut sqp = Sqp {
@@ -187,9 +203,10 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
         live: RefCell::new(log::LiveLog::stderr(options.verbosity)),
         model,
         rho: vec![0.0; m],
-        warm: WarmStart::new(options.qp_method),
-        elastic_warm: WarmStart::new(options.qp_method),
-        feasibility_warm: RefCell::new(WarmStart::new(options.qp_method)),
+        warm: WarmStart::new(qp_method),
+        elastic_warm: WarmStart::new(qp_method),
+        feasibility_warm: RefCell::new(WarmStart::new(qp_method)),
+        qp_method,
         jac_shape,
     };
     sqp.run()
@@ -204,7 +221,7 @@ impl<'a> Sqp<'a> {
 
     /// Whether QPs go to the sparse method (no n×n matrices).
     fn sparse_qp(&self) -> bool {
-        self.options.qp_method.is_sparse(self.ev.dims.n)
+        self.qp_method.is_sparse(self.ev.dims.n)
     }
 
     fn elapsed(&self) -> f64 {
