@@ -642,41 +642,61 @@ fn scan_columns(
                 d.best(0, grad[j]),
                 true,
             )];
-            let mut declared = by_col[j].iter().peekable();
-            for r in 0..m {
-                match declared.peek() {
-                    Some(&&(row, v)) if row == r => {
-                        declared.next();
-                        out.push(entry(
-                            nlp,
-                            Block::Jacobian,
-                            Some(r),
-                            j,
-                            v,
-                            d.best(r + 1, v),
-                            true,
-                        ));
-                    }
-                    _ => {
-                        let estimate = d.best(r + 1, 0.0);
-                        if relative_error(0.0, estimate) > options.tolerance {
-                            out.push(entry(
-                                nlp,
-                                Block::Jacobian,
-                                Some(r),
-                                j,
-                                0.0,
-                                estimate,
-                                false,
-                            ));
-                        }
-                    }
-                }
-            }
+            compare_rows(
+                nlp,
+                Block::Jacobian,
+                j,
+                0..m,
+                1,
+                &by_col[j],
+                &d,
+                options,
+                &mut out,
+            );
             Ok((out, d.evaluations, d.alternatives.len()))
         })
         .collect();
     gather(results)
+}
+
+/// Compares column `j` of `block` over `rows`: every declared entry (`declared`, sorted by row),
+/// and undeclared rows whose estimate exceeds the tolerance. Component `offset + r` of `d` is
+/// row r's estimate.
+#[allow(clippy::too_many_arguments)]
+fn compare_rows(
+    nlp: &dyn Nlp,
+    block: Block,
+    j: usize,
+    rows: std::ops::Range<usize>,
+    offset: usize,
+    declared: &[(usize, f64)],
+    d: &ColumnDifferences,
+    options: &CheckOptions,
+    out: &mut Vec<EntryCheck>,
+) {
+    let mut declared = declared.iter().peekable();
+    for r in rows {
+        match declared.peek() {
+            Some(&&(row, v)) if row == r => {
+                declared.next();
+                out.push(entry(
+                    nlp,
+                    block,
+                    Some(r),
+                    j,
+                    v,
+                    d.best(offset + r, v),
+                    true,
+                ));
+            }
+            _ => {
+                let estimate = d.best(offset + r, 0.0);
+                if relative_error(0.0, estimate) > options.tolerance {
+                    out.push(entry(nlp, block, Some(r), j, 0.0, estimate, false));
+                }
+            }
+        }
+    }
 }
 
 /// Concatenates per-column results: entries, evaluations (plus the one at x), kinks.
@@ -789,29 +809,17 @@ fn hessian_entries_at(
         .map(|&j| {
             let d = column_differences(&eval, setup, x, j, &g0, options)?;
             let mut out = Vec::new();
-            let mut declared = by_col[j].iter().peekable();
-            for r in j..setup.n {
-                match declared.peek() {
-                    Some(&&(row, v)) if row == r => {
-                        declared.next();
-                        out.push(entry(
-                            nlp,
-                            Block::Hessian,
-                            Some(r),
-                            j,
-                            v,
-                            d.best(r, v),
-                            true,
-                        ));
-                    }
-                    _ => {
-                        let estimate = d.best(r, 0.0);
-                        if relative_error(0.0, estimate) > options.tolerance {
-                            out.push(entry(nlp, Block::Hessian, Some(r), j, 0.0, estimate, false));
-                        }
-                    }
-                }
-            }
+            compare_rows(
+                nlp,
+                Block::Hessian,
+                j,
+                j..setup.n,
+                0,
+                &by_col[j],
+                &d,
+                options,
+                &mut out,
+            );
             Ok((out, d.evaluations, d.alternatives.len()))
         })
         .collect();
