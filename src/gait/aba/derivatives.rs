@@ -4,24 +4,36 @@
 //! `∂v̇/∂u = M⁻¹·B`, with `v̇*` the articulated-body solution held fixed (implicit function
 //! theorem on `M(q)·v̇ + C(q, v) = τ(q, v, u)`).
 //!
-//! Tangent RNEA in link coordinates. A configuration direction `δ` on joint `i` (a column `s` of
-//! its motion subspace, link coordinates) moves link `i` and its subtree rigidly by the twist `s`:
-//! the parent-to-link transform changes as `δ(ⁱX_λ) = −s×·ⁱX_λ`, so, for links `j` in the
-//! subtree (`X = ʲX_λ`, `v_J = S_j·q̇_j`, `X·v_λ`, `X·a_λ` the parent's velocity and
-//! acceleration seen from `j`):
+//! All directions at once, in world coordinates (Carpentier & Mansard 2018, "Analytical
+//! derivatives of rigid body dynamics algorithms", RSS). With every spatial quantity in world
+//! coordinates, `S_c` the motion-subspace column of velocity coordinate `c` on link `L(c)`,
+//! `v_j`, `a_j` (including the fictitious `a₀ = [0; −g]`), `I_j`, `h_j = I_j·v_j`,
+//! `f_j = I_j·a_j + v_j ×* h_j − f_ext,j` and the subtree sums `F_k = Σ_{j ⪰ k} f_j`, a
+//! configuration tangent along column `i` moves link `L(i)` and its subtree rigidly by the world
+//! twist `ε = S_i`; with `v_p`, `a_p` the velocity and acceleration of `L(i)`'s parent (`0`, `a₀`
+//! at the root), for links `j` in the subtree:
 //! ```text
-//!   j = i (position):  δv = −s × (X·v_λ)            δa = −s × (X·a_λ) + δv × v_J    ξ = s
-//!   j = i (velocity):  δv = s                       δa = δv × v_J + v × s           ξ = 0
-//!   j below i:         δv = X·δv_λ                  δa = X·δa_λ + δv × v_J          ξ = X·ξ_λ
-//!   δf_j = I·δa + δv ×* (I·v) + v ×* (I·δv) − δf_ext      (inertia I constant in link coords)
-//!   δF_λ += Xᵀ·δF_j  (+ Xᵀ·(s ×* F_j) when j = i, position)   δτ_k = S_kᵀ·δF_{link k}
+//!   position:  δv_j = ε × v_j − w,  δa_j = ε × a_j − α − w × (v_j − v_p),  δI_j = ε ×* I_j − I_j·ε×
+//!              w = ε × v_p,  α = ε × a_p
+//!   velocity:  δv_j = ε,            δa_j = ε × v_j − β,   β = ε × (v_L(i) + v_p)
+//!   ⇒ δf_j = ε ×* f_j − I_j·(α − w × v_p) − B_j·w + K_j·ε      (position)
+//!      δf_j = B_j·ε − I_j·β                                      (velocity)
+//!   B_j·ε = I_j·(ε × v_j) + ε ×* h_j + v_j ×* (I_j·ε) + Σ_contacts −Pᵀ D_v P·ε
+//!   K_j·ε = Σ_contacts −Pᵀ·(D_h·(P·ε)_y + D_v·(ω_ε × u) + F × ω_ε)
 //! ```
-//! `ξ` is the link's pose perturbation (a twist in link coordinates), giving the contact points'
-//! world displacement `Eᵀ(ξ_lin + ξ_ang × p)` and velocity change
-//! `Eᵀ(δv_lin + δv_ang × p + ξ_ang × (v_lin + v_ang × p))`, chained through the contact law's
-//! partials (seed eq. 3.26–3.27 and the friction of [`crate::gait::contact`]); the link-frame
-//! force changes by `E·δF_w − ξ_ang × (E·F_w)`. Passive springs, dampers and limit springs
-//! add `∂τ_p/∂q`, `∂τ_p/∂q̇` on their scalar joints.
+//! where, per contact point at world `p` with world velocity `u` and force `F` (seed eq.
+//! 3.26–3.27 and the friction of [`crate::gait::contact`]), `P·ε = ε_lin + ε_ang × p` is the
+//! point's displacement, `Pᵀ·f = [p × f; f]`, `D_h = ∂F/∂p_y`, `D_v = ∂F/∂ṗ`. Summed over
+//! subtrees (plain sums in world coordinates: `Iᶜ_k`, `Bᶜ_k`, `Kᶜ_k`), and with
+//! `δS_c·F + S_c·(ε ×* F) = 0` for columns that move with the tangent:
+//! ```text
+//!   L(c) in the subtree of L(i):  δτ_c = S_c·(−Iᶜ·(α − w × v_p) − Bᶜ·w + Kᶜ·ε)  at L(c)
+//!                                  δτ_c = S_c·(Bᶜ·ε − Iᶜ·β)                       (velocity)
+//!   L(c) a strict ancestor:        δτ_c = S_c·(ε ×* F + the same bracket at L(i))
+//! ```
+//! so the `2·nv` right-hand-side columns cost one dot product per pair after an O(n) set-up,
+//! and the mass matrix is `M_cd = S_dᵀ·Iᶜ_{L(c)}·S_c` (CRBA in world coordinates). Passive
+//! springs, dampers and limit springs add `∂τ_p/∂q`, `∂τ_p/∂q̇` on their scalar joints.
 //!
 //! The tangent directions are per velocity coordinate; a planar base `q = (x, y, θ)` with body
 //! velocities `v = (ω, v_x, v_y)` maps coordinates to tangents by
@@ -37,23 +49,12 @@
 use super::Dynamics;
 use crate::gait::character::{JointKind, Model};
 use crate::gait::contact::{add_contact_forces, contact_force};
-use crate::gait::spatial::{ArticulatedInertia, Force, Motion, RigidInertia, Vec3};
+use crate::gait::spatial::{Force, Motion, Vec3};
 
-/// Contact-point data reused by every tangent direction of one evaluation.
-#[derive(Debug, Clone, Copy)]
-struct ContactPoint {
-    link: usize,
-    /// Point in link coordinates (m).
-    p: Vec3<f64>,
-    /// Contact force in link coordinates (N).
-    f_link: Vec3<f64>,
-    /// Link-frame velocity of the point, `v_lin + v_ang × p` (m/s).
-    u: Vec3<f64>,
-    /// `∂F_w/∂h` (N/m), h the height.
-    d_height: [f64; 3],
-    /// `∂F_w/∂ṗ_w` (N·s/m), rows = force components.
-    d_vel: [[f64; 3]; 3],
-}
+/// A spatial vector `[angular; linear]` in world coordinates.
+type V6 = [f64; 6];
+/// A 6×6 matrix (row-major) mapping motion vectors to force vectors.
+type M6 = [[f64; 6]; 6];
 
 /// Reusable evaluator of `f(x, u)` and its Jacobians for one model.
 #[derive(Debug, Clone)]
@@ -62,34 +63,30 @@ pub struct StageLinearizer<'m> {
     dynamics: Dynamics<f64>,
     f_ext: Vec<Force<f64>>,
     tau: Vec<f64>,
-    inertia: Vec<RigidInertia<f64>>,
-    /// Joint velocity `S·q̇` per link.
-    vj: Vec<Motion<f64>>,
-    /// Parent velocity and acceleration in link coordinates.
-    xv: Vec<Motion<f64>>,
-    xa: Vec<Motion<f64>>,
-    acc: Vec<Motion<f64>>,
-    /// `I·v` per link.
-    momentum: Vec<Force<f64>>,
-    /// Subtree forces of RNEA at `v̇*`.
-    subtree: Vec<Force<f64>>,
-    contacts: Vec<ContactPoint>,
-    /// Each link's own spatial inertia as a 6×6 block matrix (constant in link coordinates).
-    body_blocks: Vec<ArticulatedInertia<f64>>,
-    composite: Vec<ArticulatedInertia<f64>>,
+    /// Each link's own spatial inertia as a 6×6 matrix (link coordinates, constant).
+    body: Vec<M6>,
+    /// World-coordinate link velocity and acceleration.
+    vel: Vec<V6>,
+    acc: Vec<V6>,
+    /// Subtree force sums `F_k` (world).
+    force: Vec<V6>,
+    /// Subtree sums of `I_j`, `B_j` and `K_j` (world).
+    inertia: Vec<M6>,
+    coriolis: Vec<M6>,
+    contact: Vec<M6>,
+    /// Per velocity coordinate: `S_c`, `Iᶜ·S_c`, `Bᶜᵀ·S_c`, `Kᶜᵀ·S_c` at its link (world).
+    s: Vec<V6>,
+    s_inertia: Vec<V6>,
+    s_coriolis: Vec<V6>,
+    s_contact: Vec<V6>,
     /// Mass matrix, then its Cholesky factor (row-major nv × nv).
     chol: Vec<f64>,
     /// Right-hand sides / solutions, column-major, `2nv + na` columns of length nv.
     cols: Vec<f64>,
-    dv: Vec<Motion<f64>>,
-    da: Vec<Motion<f64>>,
-    xi: Vec<Motion<f64>>,
-    df: Vec<Force<f64>>,
-    inside: Vec<bool>,
-    /// Whether a link's subtree carries contact points (its pose perturbation matters).
-    touches: Vec<bool>,
     /// Each velocity coordinate's link and motion-subspace column (link coordinates).
     columns: Vec<(usize, Motion<f64>)>,
+    /// `below[j·n + i]`: link `j` is `i` or one of its descendants.
+    below: Vec<bool>,
 }
 
 impl<'m> StageLinearizer<'m> {
@@ -104,41 +101,43 @@ impl<'m> StageLinearizer<'m> {
         }
         let n = model.links.len();
         let nv = model.nv;
-        let mz = vec![Motion::zero(); n];
-        let fz = vec![Force::zero(); n];
+        let mut below = vec![false; n * n];
+        for j in 0..n {
+            let mut k = Some(j);
+            while let Some(i) = k {
+                below[j * n + i] = true;
+                k = model.links[i].parent;
+            }
+        }
         Some(StageLinearizer {
             model,
             dynamics: Dynamics::new(model),
-            f_ext: fz.clone(),
+            f_ext: vec![Force::zero(); n],
             tau: vec![0.0; nv],
-            inertia: model.links.iter().map(|l| l.inertia_t::<f64>()).collect(),
-            vj: mz.clone(),
-            xv: mz.clone(),
-            xa: mz.clone(),
-            acc: mz.clone(),
-            momentum: fz.clone(),
-            subtree: fz.clone(),
-            contacts: Vec::new(),
-            body_blocks: model
+            body: model
                 .links
                 .iter()
-                .map(|l| l.inertia_t::<f64>().to_articulated())
+                .map(|l| inertia_matrix(&l.inertia_t::<f64>().to_articulated()))
                 .collect(),
-            composite: vec![ArticulatedInertia::zero(); n],
+            vel: vec![[0.0; 6]; n],
+            acc: vec![[0.0; 6]; n],
+            force: vec![[0.0; 6]; n],
+            inertia: vec![[[0.0; 6]; 6]; n],
+            coriolis: vec![[[0.0; 6]; 6]; n],
+            contact: vec![[[0.0; 6]; 6]; n],
+            s: vec![[0.0; 6]; nv],
+            s_inertia: vec![[0.0; 6]; nv],
+            s_coriolis: vec![[0.0; 6]; nv],
+            s_contact: vec![[0.0; 6]; nv],
             chol: vec![0.0; nv * nv],
             cols: vec![0.0; nv * (2 * nv + model.actuators.len())],
-            dv: mz.clone(),
-            da: mz.clone(),
-            xi: mz,
-            df: fz,
-            inside: vec![false; n],
-            touches: subtree_contacts(model),
             columns: model
                 .links
                 .iter()
                 .enumerate()
                 .flat_map(|(i, l)| (0..l.joint.nv()).map(move |k| (i, l.joint.subspace(k))))
                 .collect(),
+            below,
         })
     }
 
@@ -172,20 +171,16 @@ impl<'m> StageLinearizer<'m> {
         m.qdot(q, v, qd);
         self.dynamics.accelerations(m, &self.tau, &self.f_ext, vd);
 
-        self.rnea(v, vd);
-        self.linearize_contacts();
+        self.world_rnea(v, vd);
+        self.subtree_sums();
         self.mass_matrix();
         cholesky(nv, &mut self.chol);
 
         // Right-hand sides: ∂(τ_p − RNEA)/∂(δ, v) and the actuator columns.
         let mut cols = std::mem::take(&mut self.cols);
         cols.fill(0.0);
-        for (i, l) in m.links.iter().enumerate() {
-            for k in 0..l.joint.nv() {
-                let c = l.v_index + k;
-                self.tangent(i, k, true, &mut cols[c * nv..(c + 1) * nv]);
-                self.tangent(i, k, false, &mut cols[(nv + c) * nv..(nv + c + 1) * nv]);
-            }
+        self.rnea_partials(&mut cols);
+        for l in &m.links {
             if l.joint.is_scalar() {
                 let (qi, c) = (q[l.q_index], l.v_index);
                 if let Some(s) = l.spring {
@@ -248,60 +243,77 @@ impl<'m> StageLinearizer<'m> {
         }
         self.cols = cols;
     }
-
-    /// RNEA at the computed accelerations: link accelerations and subtree forces.
-    fn rnea(&mut self, v: &[f64], vd: &[f64]) {
+    /// RNEA at the computed accelerations `vd` in world coordinates: per link `S_c`, `v_j`,
+    /// `a_j`, `I_j`, `B_j` (without contacts) and `f_j`; contact forces and their partials
+    /// `B_j`, `K_j` terms are added by [`Self::add_contacts`].
+    fn world_rnea(&mut self, v: &[f64], vd: &[f64]) {
         let m = self.model;
         let d = &self.dynamics;
-        let a0 = Motion {
-            ang: Vec3::zero(),
-            lin: -Vec3::from_f64(m.gravity),
-        };
-        for (i, l) in m.links.iter().enumerate() {
-            let (mut vj, mut aj) = (Motion::zero(), Motion::zero());
-            for k in 0..l.joint.nv() {
-                let s = l.joint.subspace::<f64>(k);
-                vj += s.scale(v[l.v_index + k]);
-                aj += s.scale(vd[l.v_index + k]);
-            }
+        let a0 = [0.0, 0.0, 0.0, -m.gravity[0], -m.gravity[1], -m.gravity[2]];
+        for (j, l) in m.links.iter().enumerate() {
+            let x = &d.world[j];
+            let vel = m6(&x.inv_apply_motion(&d.vel[j]));
             let (vp, ap) = match l.parent {
-                Some(p) => (d.vel[p], self.acc[p]),
-                None => (Motion::zero(), a0),
+                Some(p) => (self.vel[p], self.acc[p]),
+                None => ([0.0; 6], a0),
             };
-            self.vj[i] = vj;
-            self.xv[i] = d.up[i].apply_motion(&vp);
-            self.xa[i] = d.up[i].apply_motion(&ap);
-            self.acc[i] = self.xa[i] + d.vel[i].cross_motion(&vj) + aj;
-            let body = &self.inertia[i];
-            self.momentum[i] = body.mul_motion(&d.vel[i]);
-            self.subtree[i] = body.mul_motion(&self.acc[i])
-                + d.vel[i].cross_force(&self.momentum[i])
-                - self.f_ext[i];
-        }
-        for i in (0..m.links.len()).rev() {
-            if let Some(p) = m.links[i].parent {
-                let f = d.up[i].tr_apply_force(&self.subtree[i]);
-                self.subtree[p] += f;
+            // a_j = a_p + v_p × v_J + S·q̈ (v_j × v_J = v_p × v_J).
+            let mut vj = [0.0; 6];
+            let mut acc = ap;
+            for k in 0..l.joint.nv() {
+                let c = l.v_index + k;
+                let s = m6(&x.inv_apply_motion(&self.columns[c].1));
+                self.s[c] = s;
+                for r in 0..6 {
+                    vj[r] += s[r] * v[c];
+                    acc[r] += s[r] * vd[c];
+                }
             }
+            let vpj = cross_motion(&vp, &vj);
+            for r in 0..6 {
+                acc[r] += vpj[r];
+            }
+            self.vel[j] = vel;
+            self.acc[j] = acc;
+            let inertia = transform_to_world(&self.body[j], x);
+            let h = mat_vec(&inertia, &vel);
+            let ia = mat_vec(&inertia, &acc);
+            let vh = cross_force(&vel, &h);
+            let fe = f6(&x.tr_apply_force(&self.f_ext[j]));
+            self.force[j] = std::array::from_fn(|r| ia[r] + vh[r] - fe[r]);
+            // B_j·ε = I·(ε × v) + ε ×* h + v ×* (I·ε), column by column.
+            let b = &mut self.coriolis[j];
+            for k in 0..6 {
+                let mut e = [0.0; 6];
+                e[k] = 1.0;
+                let i_ev = mat_vec(&inertia, &cross_motion(&e, &vel));
+                let eh = cross_force(&e, &h);
+                let ie: V6 = std::array::from_fn(|r| inertia[r][k]);
+                let vie = cross_force(&vel, &ie);
+                for r in 0..6 {
+                    b[r][k] = i_ev[r] + eh[r] + vie[r];
+                }
+            }
+            self.inertia[j] = inertia;
+            self.contact[j] = [[0.0; 6]; 6];
         }
+        self.add_contacts();
     }
 
-    /// Partials of the contact law at every contact point.
-    fn linearize_contacts(&mut self) {
+    /// Adds each contact point's partials to its link's `B_j` (`−Pᵀ·D_v·P`) and `K_j`.
+    fn add_contacts(&mut self) {
         let m = self.model;
         let cp = &m.contact;
-        self.contacts.clear();
+        let d = &self.dynamics;
         for (j, l) in m.links.iter().enumerate() {
-            let e = self.dynamics.world[j].e;
-            let vel = self.dynamics.vel[j];
             for point in &l.contacts {
-                let p = Vec3(*point);
-                let pos = self.dynamics.point_position(j, &p);
-                let u = vel.lin + vel.ang.cross(&p);
-                let pvel = e.tr_mul_vec(&u);
-                let f_w = contact_force(cp, &pos, &pvel);
-                let h = pos.0[1] - cp.ground;
-                let [vx, vy, vz] = pvel.0;
+                let p_link = Vec3(*point);
+                let p = d.point_position(j, &p_link).0;
+                let u = d.point_velocity(j, &p_link);
+                let f_w = contact_force(cp, &Vec3(p), &u).0;
+                let h = p[1] - cp.ground;
+                let [vx, vy, vz] = u.0;
+                let u = u.0;
                 let spring = ((h - cp.spring_offset) * -cp.spring_rate).exp() * cp.spring_force;
                 let d_spring = -cp.spring_rate * spring;
                 let big = ((h - cp.damping_offset) * cp.damping_rate).exp() * cp.damping_factor;
@@ -312,149 +324,246 @@ impl<'m> StageLinearizer<'m> {
                 let d_scale_h = -(d_spring * cp.friction) / slip;
                 let d_scale_v = spring * cp.friction / (slip * slip * slip);
                 let (dsx, dsz) = (d_scale_v * vx, d_scale_v * vz);
-                self.contacts.push(ContactPoint {
-                    link: j,
-                    p,
-                    f_link: e.mul_vec(&f_w),
-                    u,
-                    d_height: [
-                        vx * d_scale_h,
-                        d_spring - cp.damping * vy * d_g,
-                        vz * d_scale_h,
-                    ],
-                    d_vel: [
-                        [scale + vx * dsx, 0.0, vx * dsz],
-                        [0.0, -cp.damping * g, 0.0],
-                        [vz * dsx, 0.0, scale + vz * dsz],
-                    ],
-                });
-            }
-        }
-    }
-
-    /// Joint-space mass matrix by the composite-rigid-body algorithm into `chol`.
-    fn mass_matrix(&mut self) {
-        let m = self.model;
-        let nv = m.nv;
-        let up = &self.dynamics.up;
-        self.chol.fill(0.0);
-        self.composite.copy_from_slice(&self.body_blocks);
-        for i in (0..m.links.len()).rev() {
-            if let Some(p) = m.links[i].parent {
-                let t = self.composite[i].transform_back(&up[i]);
-                self.composite[p] += t;
-            }
-        }
-        for (i, li) in m.links.iter().enumerate() {
-            for k in 0..li.joint.nv() {
-                let row = li.v_index + k;
-                let mut f = self.composite[i].mul_motion(&li.joint.subspace(k));
-                for kk in 0..li.joint.nv() {
-                    self.chol[row * nv + li.v_index + kk] = li.joint.subspace::<f64>(kk).dot(&f);
-                }
-                let mut j = i;
-                while let Some(p) = m.links[j].parent {
-                    f = up[j].tr_apply_force(&f);
-                    j = p;
-                    let lj = &m.links[j];
-                    for kk in 0..lj.joint.nv() {
-                        let val = lj.joint.subspace::<f64>(kk).dot(&f);
-                        self.chol[row * nv + lj.v_index + kk] = val;
-                        self.chol[(lj.v_index + kk) * nv + row] = val;
+                // ∂F/∂p_y and ∂F/∂ṗ (world; rows = force components).
+                let d_h = [
+                    vx * d_scale_h,
+                    d_spring - cp.damping * vy * d_g,
+                    vz * d_scale_h,
+                ];
+                let d_v = [
+                    [scale + vx * dsx, 0.0, vx * dsz],
+                    [0.0, -cp.damping * g, 0.0],
+                    [vz * dsx, 0.0, scale + vz * dsz],
+                ];
+                let (b, k) = (&mut self.coriolis[j], &mut self.contact[j]);
+                for c in 0..6 {
+                    // Unit twist e_c: the point's displacement P·e and ω_e.
+                    let (pe, w) = if c < 3 {
+                        let mut w = [0.0; 3];
+                        w[c] = 1.0;
+                        (cross3(&w, &p), w)
+                    } else {
+                        let mut t = [0.0; 3];
+                        t[c - 3] = 1.0;
+                        (t, [0.0; 3])
+                    };
+                    let dpe = mat3_vec(&d_v, &pe);
+                    let wu = cross3(&w, &u);
+                    let dwu = mat3_vec(&d_v, &wu);
+                    let fw = cross3(&f_w, &w);
+                    let kk: [f64; 3] = std::array::from_fn(|r| d_h[r] * pe[1] + dwu[r] + fw[r]);
+                    // −Pᵀ·y = −[p × y; y].
+                    let (pb, pk) = (cross3(&p, &dpe), cross3(&p, &kk));
+                    for r in 0..3 {
+                        b[r][c] -= pb[r];
+                        b[r + 3][c] -= dpe[r];
+                        k[r][c] -= pk[r];
+                        k[r + 3][c] -= kk[r];
                     }
                 }
             }
         }
     }
 
-    /// `∂(−RNEA)/∂` (position tangent or velocity) along column `k` of joint `i`, into `out`.
-    fn tangent(&mut self, i: usize, k: usize, position: bool, out: &mut [f64]) {
+    /// Subtree sums of `f`, `I`, `B`, `K` and the per-column products `Iᶜ·S`, `Bᶜᵀ·S`, `Kᶜᵀ·S`.
+    fn subtree_sums(&mut self) {
         let m = self.model;
-        let d = &self.dynamics;
-        let links = &m.links;
-        let s = self.columns[links[i].v_index + k].1;
-        let neg = |x: Motion<f64>| x.scale(-1.0);
-        self.inside[..i].fill(false);
-        self.df[..i].fill(Force::zero());
-        for j in i..links.len() {
-            self.inside[j] = j == i || links[j].parent.is_some_and(|p| self.inside[p]);
-            if !self.inside[j] {
-                self.df[j] = Force::zero();
-                continue;
-            }
-            let (vel, vj) = (d.vel[j], self.vj[j]);
-            let (dv, da, xi) = if j == i {
-                if position {
-                    let dv = neg(s.cross_motion(&self.xv[j]));
-                    let da = neg(s.cross_motion(&self.xa[j])) + dv.cross_motion(&vj);
-                    (dv, da, s)
-                } else {
-                    let da = s.cross_motion(&vj) + vel.cross_motion(&s);
-                    (s, da, Motion::zero())
+        for i in (0..m.links.len()).rev() {
+            if let Some(p) = m.links[i].parent {
+                let (lo, hi) = self.force.split_at_mut(i);
+                add6(&mut lo[p], &hi[0]);
+                for mats in [&mut self.inertia, &mut self.coriolis, &mut self.contact] {
+                    let (lo, hi) = mats.split_at_mut(i);
+                    add66(&mut lo[p], &hi[0]);
                 }
-            } else {
-                let p = links[j].parent.unwrap_or(0);
-                let x = &d.up[j];
-                let dv = x.apply_motion(&self.dv[p]);
-                let da = x.apply_motion(&self.da[p]) + dv.cross_motion(&vj);
-                let xi = if position && self.touches[j] {
-                    x.apply_motion(&self.xi[p])
-                } else {
-                    Motion::zero()
-                };
-                (dv, da, xi)
+            }
+        }
+        for (c, &(l, _)) in self.columns.iter().enumerate() {
+            let s = &self.s[c];
+            self.s_inertia[c] = mat_vec(&self.inertia[l], s);
+            self.s_coriolis[c] = mat_tr_vec(&self.coriolis[l], s);
+            self.s_contact[c] = mat_tr_vec(&self.contact[l], s);
+        }
+    }
+
+    /// Joint-space mass matrix `M_cd = S_dᵀ·Iᶜ_{L(c)}·S_c` (`L(d)` an ancestor of or equal to
+    /// `L(c)`) into `chol`.
+    fn mass_matrix(&mut self) {
+        let (nv, n) = (self.model.nv, self.model.links.len());
+        for c in 0..nv {
+            let lc = self.columns[c].0;
+            for e in 0..nv {
+                let le = self.columns[e].0;
+                if self.below[lc * n + le] {
+                    let val = dot6(&self.s[e], &self.s_inertia[c]);
+                    self.chol[c * nv + e] = val;
+                    self.chol[e * nv + c] = val;
+                }
+            }
+        }
+    }
+
+    /// `∂(−RNEA)/∂` along every position tangent and velocity coordinate: column `i` into
+    /// `cols[i·nv..]`, column `nv + i` into `cols[(nv + i)·nv..]` (entries not reached stay as
+    /// they are: the caller zeroes them).
+    fn rnea_partials(&self, cols: &mut [f64]) {
+        let m = self.model;
+        let (nv, n) = (m.nv, m.links.len());
+        let a0 = [0.0, 0.0, 0.0, -m.gravity[0], -m.gravity[1], -m.gravity[2]];
+        for i in 0..nv {
+            let li = self.columns[i].0;
+            let eps = &self.s[i];
+            let (vp, ap) = match m.links[li].parent {
+                Some(p) => (self.vel[p], self.acc[p]),
+                None => ([0.0; 6], a0),
             };
-            self.dv[j] = dv;
-            self.da[j] = da;
-            self.xi[j] = xi;
-            let body = &self.inertia[j];
-            self.df[j] = body.mul_motion(&da)
-                + dv.cross_force(&self.momentum[j])
-                + vel.cross_force(&body.mul_motion(&dv));
-        }
-        for c in &self.contacts {
-            let j = c.link;
-            if !self.inside[j] {
-                continue;
-            }
-            let (dv, xi) = (self.dv[j], self.xi[j]);
-            let e = &d.world[j].e;
-            let dpos = e.tr_mul_vec(&(xi.lin + xi.ang.cross(&c.p)));
-            let dvel = e.tr_mul_vec(&(dv.lin + dv.ang.cross(&c.p) + xi.ang.cross(&c.u)));
-            let df_w = Vec3(std::array::from_fn(|r| {
-                c.d_height[r] * dpos.0[1]
-                    + c.d_vel[r][0] * dvel.0[0]
-                    + c.d_vel[r][1] * dvel.0[1]
-                    + c.d_vel[r][2] * dvel.0[2]
-            }));
-            let df_link = e.mul_vec(&df_w) - xi.ang.cross(&c.f_link);
-            self.df[j] = self.df[j] - Force::at_point(&c.p, &df_link);
-        }
-        for j in (0..links.len()).rev() {
-            if let Some(p) = links[j].parent {
-                let mut f = self.df[j];
-                if position && j == i {
-                    f += s.cross_force(&self.subtree[j]);
+            let w = cross_motion(eps, &vp);
+            let alpha = cross_motion(eps, &ap);
+            let wvp = cross_motion(&w, &vp);
+            let z: V6 = std::array::from_fn(|r| alpha[r] - wvp[r]);
+            let vsum: V6 = std::array::from_fn(|r| self.vel[li][r] + vp[r]);
+            let beta = cross_motion(eps, &vsum);
+            // The brackets at L(i), for the columns of its strict ancestors.
+            let (ic, bc, kc) = (
+                &self.inertia[li],
+                &self.coriolis[li],
+                &self.contact[li],
+            );
+            let (iz, bw, ke, be, ib) = (
+                mat_vec(ic, &z),
+                mat_vec(bc, &w),
+                mat_vec(kc, eps),
+                mat_vec(bc, eps),
+                mat_vec(ic, &beta),
+            );
+            let ef = cross_force(eps, &self.force[li]);
+            let y_pos: V6 = std::array::from_fn(|r| ef[r] - iz[r] - bw[r] + ke[r]);
+            let y_vel: V6 = std::array::from_fn(|r| be[r] - ib[r]);
+            let (pos, vel) = cols[i * nv..].split_at_mut(nv * nv);
+            let vel = &mut vel[..nv];
+            for c in 0..nv {
+                let lc = self.columns[c].0;
+                if self.below[lc * n + li] {
+                    pos[c] = dot6(&self.s_inertia[c], &z) + dot6(&self.s_coriolis[c], &w)
+                        - dot6(&self.s_contact[c], eps);
+                    vel[c] = dot6(&self.s_inertia[c], &beta) - dot6(&self.s_coriolis[c], eps);
+                } else if self.below[li * n + lc] {
+                    pos[c] = -dot6(&self.s[c], &y_pos);
+                    vel[c] = -dot6(&self.s[c], &y_vel);
                 }
-                let f = d.up[j].tr_apply_force(&f);
-                self.df[p] += f;
             }
-        }
-        for (o, (j, col)) in out.iter_mut().zip(&self.columns) {
-            *o = -col.dot(&self.df[*j]);
         }
     }
 }
 
-/// For each link, whether it or a descendant has contact points.
-fn subtree_contacts(model: &Model) -> Vec<bool> {
-    let mut out: Vec<bool> = model.links.iter().map(|l| !l.contacts.is_empty()).collect();
-    for i in (0..model.links.len()).rev() {
-        if let Some(p) = model.links[i].parent {
-            out[p] |= out[i];
-        }
+/// `[ang; lin]` of a motion vector.
+fn m6(x: &Motion<f64>) -> V6 {
+    [
+        x.ang.0[0], x.ang.0[1], x.ang.0[2], x.lin.0[0], x.lin.0[1], x.lin.0[2],
+    ]
+}
+
+/// `[ang; lin]` of a force vector.
+fn f6(x: &Force<f64>) -> V6 {
+    [
+        x.ang.0[0], x.ang.0[1], x.ang.0[2], x.lin.0[0], x.lin.0[1], x.lin.0[2],
+    ]
+}
+
+fn cross3(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn mat3_vec(m: &[[f64; 3]; 3], v: &[f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|r| m[r][0] * v[0] + m[r][1] * v[1] + m[r][2] * v[2])
+}
+
+/// Motion cross product `a ×m b`.
+fn cross_motion(a: &V6, b: &V6) -> V6 {
+    let (aw, av) = ([a[0], a[1], a[2]], [a[3], a[4], a[5]]);
+    let (bw, bv) = ([b[0], b[1], b[2]], [b[3], b[4], b[5]]);
+    let ang = cross3(&aw, &bw);
+    let (l1, l2) = (cross3(&aw, &bv), cross3(&av, &bw));
+    [
+        ang[0],
+        ang[1],
+        ang[2],
+        l1[0] + l2[0],
+        l1[1] + l2[1],
+        l1[2] + l2[2],
+    ]
+}
+
+/// Force cross product `a ×f f`.
+fn cross_force(a: &V6, f: &V6) -> V6 {
+    let (aw, av) = ([a[0], a[1], a[2]], [a[3], a[4], a[5]]);
+    let (fn_, ff) = ([f[0], f[1], f[2]], [f[3], f[4], f[5]]);
+    let (n1, n2) = (cross3(&aw, &fn_), cross3(&av, &ff));
+    let lin = cross3(&aw, &ff);
+    [
+        n1[0] + n2[0],
+        n1[1] + n2[1],
+        n1[2] + n2[2],
+        lin[0],
+        lin[1],
+        lin[2],
+    ]
+}
+
+fn dot6(a: &V6, b: &V6) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] + a[4] * b[4] + a[5] * b[5]
+}
+
+fn mat_vec(m: &M6, v: &V6) -> V6 {
+    std::array::from_fn(|r| dot6(&m[r], v))
+}
+
+fn mat_tr_vec(m: &M6, v: &V6) -> V6 {
+    std::array::from_fn(|c| (0..6).map(|r| m[r][c] * v[r]).sum())
+}
+
+fn add6(a: &mut V6, b: &V6) {
+    for r in 0..6 {
+        a[r] += b[r];
     }
-    out
+}
+
+fn add66(a: &mut M6, b: &M6) {
+    for r in 0..6 {
+        add6(&mut a[r], &b[r]);
+    }
+}
+
+/// The 6×6 matrix `[A B; Bᵀ C]` of an inertia.
+fn inertia_matrix(i: &crate::gait::spatial::ArticulatedInertia<f64>) -> M6 {
+    std::array::from_fn(|r| {
+        std::array::from_fn(|c| match (r < 3, c < 3) {
+            (true, true) => i.a.0[r][c],
+            (true, false) => i.b.0[r][c - 3],
+            (false, true) => i.b.0[c][r - 3],
+            (false, false) => i.c.0[r - 3][c - 3],
+        })
+    })
+}
+
+/// `Xᵀ·I·X`: a link-coordinate inertia `I` in world coordinates (`x`: world → link).
+fn transform_to_world(i: &M6, x: &crate::gait::spatial::Xform<f64>) -> M6 {
+    // Columns of X: the world unit motions seen in link coordinates.
+    let cols: [V6; 6] = std::array::from_fn(|k| {
+        let mut e = [0.0; 6];
+        e[k] = 1.0;
+        let mo = Motion {
+            ang: Vec3([e[0], e[1], e[2]]),
+            lin: Vec3([e[3], e[4], e[5]]),
+        };
+        m6(&x.apply_motion(&mo))
+    });
+    let ix: [V6; 6] = std::array::from_fn(|k| mat_vec(i, &cols[k]));
+    std::array::from_fn(|r| std::array::from_fn(|c| dot6(&cols[r], &ix[c])))
 }
 
 /// `∂τ/∂q` of [`crate::gait::character::Limits::torque`]:
