@@ -49,7 +49,7 @@
 use super::Dynamics;
 use crate::gait::character::{JointKind, Model};
 use crate::gait::contact::{add_contact_forces, contact_force};
-use crate::gait::spatial::{Force, Motion, Vec3};
+use crate::gait::spatial::{ArticulatedInertia, Force, Mat3, Motion, Vec3};
 
 /// A spatial vector `[angular; linear]` in world coordinates.
 type V6 = [f64; 6];
@@ -63,8 +63,8 @@ pub struct StageLinearizer<'m> {
     dynamics: Dynamics<f64>,
     f_ext: Vec<Force<f64>>,
     tau: Vec<f64>,
-    /// Each link's own spatial inertia as a 6×6 matrix (link coordinates, constant).
-    body: Vec<M6>,
+    /// Each link's own spatial inertia (link coordinates, constant).
+    body: Vec<ArticulatedInertia<f64>>,
     /// World-coordinate link velocity and acceleration.
     vel: Vec<V6>,
     acc: Vec<V6>,
@@ -81,7 +81,9 @@ pub struct StageLinearizer<'m> {
     s_contact: Vec<V6>,
     /// Mass matrix, then its Cholesky factor (row-major nv × nv).
     chol: Vec<f64>,
-    /// Right-hand sides / solutions, column-major, `2nv + na` columns of length nv.
+    /// Reciprocals of the Cholesky factor's diagonal.
+    inv_diag: Vec<f64>,
+    /// Right-hand sides / solutions, row-major nv × (2nv + na).
     cols: Vec<f64>,
     /// Each velocity coordinate's link and motion-subspace column (link coordinates).
     columns: Vec<(usize, Motion<f64>)>,
@@ -117,7 +119,7 @@ impl<'m> StageLinearizer<'m> {
             body: model
                 .links
                 .iter()
-                .map(|l| inertia_matrix(&l.inertia_t::<f64>().to_articulated()))
+                .map(|l| l.inertia_t::<f64>().to_articulated())
                 .collect(),
             vel: vec![[0.0; 6]; n],
             acc: vec![[0.0; 6]; n],
@@ -130,6 +132,7 @@ impl<'m> StageLinearizer<'m> {
             s_coriolis: vec![[0.0; 6]; nv],
             s_contact: vec![[0.0; 6]; nv],
             chol: vec![0.0; nv * nv],
+            inv_diag: vec![0.0; nv],
             cols: vec![0.0; nv * (2 * nv + model.actuators.len())],
             columns: model
                 .links
@@ -174,30 +177,29 @@ impl<'m> StageLinearizer<'m> {
         self.world_rnea(v, vd);
         self.subtree_sums();
         self.mass_matrix();
-        cholesky(nv, &mut self.chol);
+        cholesky(nv, &mut self.chol, &mut self.inv_diag);
 
         // Right-hand sides: ∂(τ_p − RNEA)/∂(δ, v) and the actuator columns.
         let mut cols = std::mem::take(&mut self.cols);
         cols.fill(0.0);
         self.rnea_partials(&mut cols);
+        let nc = 2 * nv + na;
         for l in &m.links {
             if l.joint.is_scalar() {
                 let (qi, c) = (q[l.q_index], l.v_index);
                 if let Some(s) = l.spring {
-                    cols[c * nv + c] -= s.stiffness;
-                    cols[(nv + c) * nv + c] -= s.damping;
+                    cols[c * nc + c] -= s.stiffness;
+                    cols[c * nc + nv + c] -= s.damping;
                 }
                 if let Some(lim) = l.limits {
-                    cols[c * nv + c] += limit_stiffness(&lim, qi);
+                    cols[c * nc + c] += limit_stiffness(&lim, qi);
                 }
             }
         }
         for (a, act) in m.actuators.iter().enumerate() {
-            cols[(2 * nv + a) * nv + m.links[act.link].v_index] = 1.0;
+            cols[m.links[act.link].v_index * nc + 2 * nv + a] = 1.0;
         }
-        for col in cols.chunks_mut(nv) {
-            cholesky_solve(nv, &self.chol, col);
-        }
+        cholesky_solve(nv, nc, &self.chol, &self.inv_diag, &mut cols);
 
         // Assemble jx = [[∂q̇/∂q, ∂q̇/∂v], [∂v̇/∂q, ∂v̇/∂v]] and ju = [0; ∂v̇/∂u].
         jx.fill(0.0);
@@ -205,10 +207,10 @@ impl<'m> StageLinearizer<'m> {
         for r in 0..nv {
             let row = &mut jx[(nq + r) * nx..(nq + r + 1) * nx];
             for c in 0..nv {
-                row[nq + c] = cols[(nv + c) * nv + r];
+                row[nq + c] = cols[r * nc + nv + c];
             }
             for a in 0..na {
-                ju[(nq + r) * na + a] = cols[(2 * nv + a) * nv + r];
+                ju[(nq + r) * na + a] = cols[r * nc + 2 * nv + a];
             }
         }
         for l in &m.links {
@@ -226,7 +228,7 @@ impl<'m> StageLinearizer<'m> {
                     jx[(a + 1) * nx + a + 2] = co * v[b + 1] - s * v[b + 2];
                     // ∂v̇/∂(x, y, θ) from the tangent columns (ω, v_x, v_y).
                     for r in 0..nv {
-                        let t = |k: usize| cols[(b + k) * nv + r];
+                        let t = |k: usize| cols[r * nc + b + k];
                         let row = &mut jx[(nq + r) * nx..];
                         row[a] = co * t(1) - s * t(2);
                         row[a + 1] = s * t(1) + co * t(2);
@@ -236,7 +238,7 @@ impl<'m> StageLinearizer<'m> {
                 _ => {
                     jx[a * nx + nq + b] = 1.0;
                     for r in 0..nv {
-                        jx[(nq + r) * nx + a] = cols[b * nv + r];
+                        jx[(nq + r) * nx + a] = cols[r * nc + b];
                     }
                 }
             }
@@ -275,25 +277,28 @@ impl<'m> StageLinearizer<'m> {
             }
             self.vel[j] = vel;
             self.acc[j] = acc;
-            let inertia = transform_to_world(&self.body[j], x);
+            let blocks = self.body[j].transform_back(x);
+            let inertia = inertia_matrix(&blocks);
             let h = mat_vec(&inertia, &vel);
             let ia = mat_vec(&inertia, &acc);
             let vh = cross_force(&vel, &h);
             let fe = f6(&x.tr_apply_force(&self.f_ext[j]));
             self.force[j] = std::array::from_fn(|r| ia[r] + vh[r] - fe[r]);
-            // B_j·ε = I·(ε × v) + ε ×* h + v ×* (I·ε), column by column.
+            // B_j = −T − Tᵀ + H with T = I·crm(v) (so I·(ε × v) = −T·ε and
+            // v ×* (I·ε) = crf(v)·I·ε = −Tᵀ·ε) and H·ε = ε ×* h.
+            let (w, vl) = (Vec3([vel[0], vel[1], vel[2]]), Vec3([vel[3], vel[4], vel[5]]));
+            let (ia_, ib, ic) = (&blocks.a, &blocks.b, &blocks.c);
+            let t00 = ia_.mul_skew(&w) + ib.mul_skew(&vl);
+            let t01 = ib.mul_skew(&w);
+            let t10 = ib.transpose().mul_skew(&w) + ic.mul_skew(&vl);
+            let t11 = ic.mul_skew(&w);
+            let hn = Mat3::skew(&Vec3([h[0], h[1], h[2]]));
+            let hf = Mat3::skew(&Vec3([h[3], h[4], h[5]]));
             let b = &mut self.coriolis[j];
-            for k in 0..6 {
-                let mut e = [0.0; 6];
-                e[k] = 1.0;
-                let i_ev = mat_vec(&inertia, &cross_motion(&e, &vel));
-                let eh = cross_force(&e, &h);
-                let ie: V6 = std::array::from_fn(|r| inertia[r][k]);
-                let vie = cross_force(&vel, &ie);
-                for r in 0..6 {
-                    b[r][k] = i_ev[r] + eh[r] + vie[r];
-                }
-            }
+            set_block(b, 0, 0, &neg_sum(&[&t00, &t00.transpose(), &hn]));
+            set_block(b, 0, 3, &neg_sum(&[&t01, &t10.transpose(), &hf]));
+            set_block(b, 3, 0, &neg_sum(&[&t10, &t01.transpose(), &hf]));
+            set_block(b, 3, 3, &neg_sum(&[&t11, &t11.transpose()]));
             self.inertia[j] = inertia;
             self.contact[j] = [[0.0; 6]; 6];
         }
@@ -335,31 +340,27 @@ impl<'m> StageLinearizer<'m> {
                     [0.0, -cp.damping * g, 0.0],
                     [vz * dsx, 0.0, scale + vz * dsz],
                 ];
-                let (b, k) = (&mut self.coriolis[j], &mut self.contact[j]);
-                for c in 0..6 {
-                    // Unit twist e_c: the point's displacement P·e and ω_e.
-                    let (pe, w) = if c < 3 {
-                        let mut w = [0.0; 3];
-                        w[c] = 1.0;
-                        (cross3(&w, &p), w)
-                    } else {
-                        let mut t = [0.0; 3];
-                        t[c - 3] = 1.0;
-                        (t, [0.0; 3])
-                    };
-                    let dpe = mat3_vec(&d_v, &pe);
-                    let wu = cross3(&w, &u);
-                    let dwu = mat3_vec(&d_v, &wu);
-                    let fw = cross3(&f_w, &w);
-                    let kk: [f64; 3] = std::array::from_fn(|r| d_h[r] * pe[1] + dwu[r] + fw[r]);
-                    // −Pᵀ·y = −[p × y; y].
-                    let (pb, pk) = (cross3(&p, &dpe), cross3(&p, &kk));
-                    for r in 0..3 {
-                        b[r][c] -= pb[r];
-                        b[r + 3][c] -= dpe[r];
-                        k[r][c] -= pk[r];
-                        k[r + 3][c] -= kk[r];
-                    }
+                let d_v = Mat3(d_v);
+                // −Pᵀ·D_v·P into B_j, P = [−[p]×, 1], Pᵀ·y = [p × y; y].
+                let pv = Vec3(p);
+                let dp = d_v.mul_skew(&pv);
+                let b = &mut self.coriolis[j];
+                add_block(b, 0, 0, &Mat3::skew_mul(&pv, &dp));
+                add_block(b, 0, 3, &neg_sum(&[&Mat3::skew_mul(&pv, &d_v)]));
+                add_block(b, 3, 0, &dp);
+                add_block(b, 3, 3, &neg_sum(&[&d_v]));
+                // K_j += −Pᵀ·G, G·ε = D_h·(P·ε)_y + D_v·(ω × u) + F × ω = [G_a, D_h·e_yᵀ]·ε.
+                let (px, pz) = (p[0], p[2]);
+                let g_a = Mat3(std::array::from_fn(|r| [-d_h[r] * pz, 0.0, d_h[r] * px]))
+                    + Mat3::skew(&Vec3(f_w))
+                    - d_v.mul_skew(&Vec3(u));
+                let k = &mut self.contact[j];
+                add_block(k, 0, 0, &neg_sum(&[&Mat3::skew_mul(&pv, &g_a)]));
+                add_block(k, 3, 0, &neg_sum(&[&g_a]));
+                let pd = pv.cross(&Vec3(d_h));
+                for r in 0..3 {
+                    k[r][4] -= pd.0[r];
+                    k[r + 3][4] -= d_h[r];
                 }
             }
         }
@@ -403,12 +404,13 @@ impl<'m> StageLinearizer<'m> {
         }
     }
 
-    /// `∂(−RNEA)/∂` along every position tangent and velocity coordinate: column `i` into
-    /// `cols[i·nv..]`, column `nv + i` into `cols[(nv + i)·nv..]` (entries not reached stay as
+    /// `∂(−RNEA)/∂` along every position tangent and velocity coordinate: columns `i` and
+    /// `nv + i` of the row-major `nv × (2nv + na)` matrix `cols` (entries not reached stay as
     /// they are: the caller zeroes them).
     fn rnea_partials(&self, cols: &mut [f64]) {
         let m = self.model;
         let (nv, n) = (m.nv, m.links.len());
+        let nc = 2 * nv + m.actuators.len();
         let a0 = [0.0, 0.0, 0.0, -m.gravity[0], -m.gravity[1], -m.gravity[2]];
         for i in 0..nv {
             let li = self.columns[i].0;
@@ -439,17 +441,17 @@ impl<'m> StageLinearizer<'m> {
             let ef = cross_force(eps, &self.force[li]);
             let y_pos: V6 = std::array::from_fn(|r| ef[r] - iz[r] - bw[r] + ke[r]);
             let y_vel: V6 = std::array::from_fn(|r| be[r] - ib[r]);
-            let (pos, vel) = cols[i * nv..].split_at_mut(nv * nv);
-            let vel = &mut vel[..nv];
             for c in 0..nv {
                 let lc = self.columns[c].0;
+                let row = &mut cols[c * nc..];
                 if self.below[lc * n + li] {
-                    pos[c] = dot6(&self.s_inertia[c], &z) + dot6(&self.s_coriolis[c], &w)
+                    row[i] = dot6(&self.s_inertia[c], &z) + dot6(&self.s_coriolis[c], &w)
                         - dot6(&self.s_contact[c], eps);
-                    vel[c] = dot6(&self.s_inertia[c], &beta) - dot6(&self.s_coriolis[c], eps);
+                    row[nv + i] =
+                        dot6(&self.s_inertia[c], &beta) - dot6(&self.s_coriolis[c], eps);
                 } else if self.below[li * n + lc] {
-                    pos[c] = -dot6(&self.s[c], &y_pos);
-                    vel[c] = -dot6(&self.s[c], &y_vel);
+                    row[i] = -dot6(&self.s[c], &y_pos);
+                    row[nv + i] = -dot6(&self.s[c], &y_vel);
                 }
             }
         }
@@ -476,10 +478,6 @@ fn cross3(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
         a[2] * b[0] - a[0] * b[2],
         a[0] * b[1] - a[1] * b[0],
     ]
-}
-
-fn mat3_vec(m: &[[f64; 3]; 3], v: &[f64; 3]) -> [f64; 3] {
-    std::array::from_fn(|r| m[r][0] * v[0] + m[r][1] * v[1] + m[r][2] * v[2])
 }
 
 /// Motion cross product `a ×m b`.
@@ -539,7 +537,7 @@ fn add66(a: &mut M6, b: &M6) {
 }
 
 /// The 6×6 matrix `[A B; Bᵀ C]` of an inertia.
-fn inertia_matrix(i: &crate::gait::spatial::ArticulatedInertia<f64>) -> M6 {
+fn inertia_matrix(i: &ArticulatedInertia<f64>) -> M6 {
     std::array::from_fn(|r| {
         std::array::from_fn(|c| match (r < 3, c < 3) {
             (true, true) => i.a.0[r][c],
@@ -550,20 +548,29 @@ fn inertia_matrix(i: &crate::gait::spatial::ArticulatedInertia<f64>) -> M6 {
     })
 }
 
-/// `Xᵀ·I·X`: a link-coordinate inertia `I` in world coordinates (`x`: world → link).
-fn transform_to_world(i: &M6, x: &crate::gait::spatial::Xform<f64>) -> M6 {
-    // Columns of X: the world unit motions seen in link coordinates.
-    let cols: [V6; 6] = std::array::from_fn(|k| {
-        let mut e = [0.0; 6];
-        e[k] = 1.0;
-        let mo = Motion {
-            ang: Vec3([e[0], e[1], e[2]]),
-            lin: Vec3([e[3], e[4], e[5]]),
-        };
-        m6(&x.apply_motion(&mo))
-    });
-    let ix: [V6; 6] = std::array::from_fn(|k| mat_vec(i, &cols[k]));
-    std::array::from_fn(|r| std::array::from_fn(|c| dot6(&cols[r], &ix[c])))
+/// Writes the 3×3 block `b` at row `r0`, column `c0` of `m`.
+fn set_block(m: &mut M6, r0: usize, c0: usize, b: &Mat3<f64>) {
+    for r in 0..3 {
+        m[r0 + r][c0..c0 + 3].copy_from_slice(&b.0[r]);
+    }
+}
+
+/// Adds the 3×3 block `b` at row `r0`, column `c0` of `m`.
+fn add_block(m: &mut M6, r0: usize, c0: usize, b: &Mat3<f64>) {
+    for r in 0..3 {
+        for c in 0..3 {
+            m[r0 + r][c0 + c] += b.0[r][c];
+        }
+    }
+}
+
+/// `−Σ mᵢ`.
+fn neg_sum(ms: &[&Mat3<f64>]) -> Mat3<f64> {
+    let mut out = Mat3::zero();
+    for m in ms {
+        out = out - **m;
+    }
+    out
 }
 
 /// `∂τ/∂q` of [`crate::gait::character::Limits::torque`]:
@@ -583,8 +590,9 @@ fn logistic(x: f64) -> f64 {
     }
 }
 
-/// In-place Cholesky factor `L` (lower triangle, row-major) of an SPD `n × n` matrix.
-fn cholesky(n: usize, a: &mut [f64]) {
+/// In-place Cholesky factor `L` (lower triangle, row-major) of an SPD `n × n` matrix, and the
+/// reciprocals of its diagonal.
+fn cholesky(n: usize, a: &mut [f64], inv_diag: &mut [f64]) {
     for j in 0..n {
         let mut djj = a[j * n + j];
         for k in 0..j {
@@ -592,31 +600,46 @@ fn cholesky(n: usize, a: &mut [f64]) {
         }
         let ljj = djj.sqrt();
         a[j * n + j] = ljj;
+        let inv = ljj.recip();
+        inv_diag[j] = inv;
         for i in j + 1..n {
             let mut s = a[i * n + j];
             for k in 0..j {
                 s -= a[i * n + k] * a[j * n + k];
             }
-            a[i * n + j] = s / ljj;
+            a[i * n + j] = s * inv;
         }
     }
 }
 
-/// Solves `L·Lᵀ·x = b` in place.
-fn cholesky_solve(n: usize, l: &[f64], b: &mut [f64]) {
+/// Solves `L·Lᵀ·X = B` in place for the row-major `n × m` right-hand sides `b` (all columns
+/// at once, row operations).
+fn cholesky_solve(n: usize, m: usize, l: &[f64], inv_diag: &[f64], b: &mut [f64]) {
     for i in 0..n {
-        let mut s = b[i];
+        let (done, rest) = b.split_at_mut(i * m);
+        let row = &mut rest[..m];
         for k in 0..i {
-            s -= l[i * n + k] * b[k];
+            let f = l[i * n + k];
+            for (x, y) in row.iter_mut().zip(&done[k * m..(k + 1) * m]) {
+                *x -= f * y;
+            }
         }
-        b[i] = s / l[i * n + i];
+        for x in row.iter_mut() {
+            *x *= inv_diag[i];
+        }
     }
     for i in (0..n).rev() {
-        let mut s = b[i];
+        let (head, tail) = b.split_at_mut((i + 1) * m);
+        let row = &mut head[i * m..];
         for k in i + 1..n {
-            s -= l[k * n + i] * b[k];
+            let f = l[k * n + i];
+            for (x, y) in row.iter_mut().zip(&tail[(k - i - 1) * m..(k - i) * m]) {
+                *x -= f * y;
+            }
         }
-        b[i] = s / l[i * n + i];
+        for x in row.iter_mut() {
+            *x *= inv_diag[i];
+        }
     }
 }
 
