@@ -48,7 +48,6 @@
 
 use super::Dynamics;
 use crate::gait::character::{JointKind, Model};
-use crate::gait::contact::{add_contact_forces, contact_force};
 use crate::gait::spatial::{ArticulatedInertia, Force, Mat3, Motion, Vec3};
 
 /// A spatial vector `[angular; linear]` in world coordinates.
@@ -164,8 +163,7 @@ impl<'m> StageLinearizer<'m> {
         let nx = nq + nv;
         // The state derivative, as in the simulator.
         self.dynamics.kinematics(m, q, v);
-        self.f_ext.fill(Force::zero());
-        add_contact_forces(m, &self.dynamics, &mut self.f_ext);
+        self.contacts();
         self.tau.fill(0.0);
         m.add_passive(q, v, &mut self.tau);
         for (a, f) in m.actuators.iter().zip(act) {
@@ -246,8 +244,8 @@ impl<'m> StageLinearizer<'m> {
         self.cols = cols;
     }
     /// RNEA at the computed accelerations `vd` in world coordinates: per link `S_c`, `v_j`,
-    /// `a_j`, `I_j`, `B_j` (without contacts) and `f_j`; contact forces and their partials
-    /// `B_j`, `K_j` terms are added by [`Self::add_contacts`].
+    /// `a_j`, `I_j`, `f_j`, and the velocity terms of `B_j` (added to the contact terms of
+    /// [`Self::contacts`]).
     fn world_rnea(&mut self, v: &[f64], vd: &[f64]) {
         let m = self.model;
         let d = &self.dynamics;
@@ -295,37 +293,43 @@ impl<'m> StageLinearizer<'m> {
             let hn = Mat3::skew(&Vec3([h[0], h[1], h[2]]));
             let hf = Mat3::skew(&Vec3([h[3], h[4], h[5]]));
             let b = &mut self.coriolis[j];
-            set_block(b, 0, 0, &neg_sum(&[&t00, &t00.transpose(), &hn]));
-            set_block(b, 0, 3, &neg_sum(&[&t01, &t10.transpose(), &hf]));
-            set_block(b, 3, 0, &neg_sum(&[&t10, &t01.transpose(), &hf]));
-            set_block(b, 3, 3, &neg_sum(&[&t11, &t11.transpose()]));
+            add_block(b, 0, 0, &neg_sum(&[&t00, &t00.transpose(), &hn]));
+            add_block(b, 0, 3, &neg_sum(&[&t01, &t10.transpose(), &hf]));
+            add_block(b, 3, 0, &neg_sum(&[&t10, &t01.transpose(), &hf]));
+            add_block(b, 3, 3, &neg_sum(&[&t11, &t11.transpose()]));
             self.inertia[j] = inertia;
-            self.contact[j] = [[0.0; 6]; 6];
         }
-        self.add_contacts();
     }
 
-    /// Adds each contact point's partials to its link's `B_j` (`−Pᵀ·D_v·P`) and `K_j`.
-    fn add_contacts(&mut self) {
+    /// The contact forces `f_ext` (link coordinates, as [`crate::gait::contact`] computes them)
+    /// and their partials: `B_j` starts as `Σ −Pᵀ·D_v·P` over its contact points, `K_j` as
+    /// their position terms.
+    fn contacts(&mut self) {
         let m = self.model;
         let cp = &m.contact;
         let d = &self.dynamics;
+        self.coriolis.fill([[0.0; 6]; 6]);
+        self.contact.fill([[0.0; 6]; 6]);
+        self.f_ext.fill(Force::zero());
         for (j, l) in m.links.iter().enumerate() {
             for point in &l.contacts {
                 let p_link = Vec3(*point);
                 let p = d.point_position(j, &p_link).0;
                 let u = d.point_velocity(j, &p_link);
-                let f_w = contact_force(cp, &Vec3(p), &u).0;
                 let h = p[1] - cp.ground;
                 let [vx, vy, vz] = u.0;
                 let u = u.0;
+                // The force exactly as `contact::contact_force` computes it.
                 let spring = ((h - cp.spring_offset) * -cp.spring_rate).exp() * cp.spring_force;
-                let d_spring = -cp.spring_rate * spring;
                 let big = ((h - cp.damping_offset) * cp.damping_rate).exp() * cp.damping_factor;
                 let g = (big + 1.0).recip();
-                let d_g = -cp.damping_rate * big * g * g;
                 let slip = (vx * vx + vz * vz + cp.slip_speed * cp.slip_speed).sqrt();
                 let scale = -(spring * cp.friction) / slip;
+                let f_w = [vx * scale, spring - vy * g * cp.damping, vz * scale];
+                let f_link = d.world[j].e.mul_vec(&Vec3(f_w));
+                self.f_ext[j] += Force::at_point(&p_link, &f_link);
+                let d_spring = -cp.spring_rate * spring;
+                let d_g = -cp.damping_rate * big * g * g;
                 let d_scale_h = -(d_spring * cp.friction) / slip;
                 let d_scale_v = spring * cp.friction / (slip * slip * slip);
                 let (dsx, dsz) = (d_scale_v * vx, d_scale_v * vz);
@@ -391,6 +395,7 @@ impl<'m> StageLinearizer<'m> {
     /// `L(c)`) into `chol`.
     fn mass_matrix(&mut self) {
         let (nv, n) = (self.model.nv, self.model.links.len());
+        self.chol.fill(0.0);
         for c in 0..nv {
             let lc = self.columns[c].0;
             for e in 0..nv {
@@ -415,7 +420,9 @@ impl<'m> StageLinearizer<'m> {
         for i in 0..nv {
             let li = self.columns[i].0;
             let eps = &self.s[i];
-            let (vp, ap) = match m.links[li].parent {
+            let parent = m.links[li].parent;
+            let has_parent = parent.is_some();
+            let (vp, ap) = match parent {
                 Some(p) => (self.vel[p], self.acc[p]),
                 None => ([0.0; 6], a0),
             };
@@ -425,22 +432,23 @@ impl<'m> StageLinearizer<'m> {
             let z: V6 = std::array::from_fn(|r| alpha[r] - wvp[r]);
             let vsum: V6 = std::array::from_fn(|r| self.vel[li][r] + vp[r]);
             let beta = cross_motion(eps, &vsum);
-            // The brackets at L(i), for the columns of its strict ancestors.
-            let (ic, bc, kc) = (
-                &self.inertia[li],
-                &self.coriolis[li],
-                &self.contact[li],
-            );
-            let (iz, bw, ke, be, ib) = (
-                mat_vec(ic, &z),
-                mat_vec(bc, &w),
-                mat_vec(kc, eps),
-                mat_vec(bc, eps),
-                mat_vec(ic, &beta),
-            );
-            let ef = cross_force(eps, &self.force[li]);
-            let y_pos: V6 = std::array::from_fn(|r| ef[r] - iz[r] - bw[r] + ke[r]);
-            let y_vel: V6 = std::array::from_fn(|r| be[r] - ib[r]);
+            // The brackets at L(i), for the columns of its strict ancestors (if any).
+            let (y_pos, y_vel) = if has_parent {
+                let (ic, bc, kc) = (&self.inertia[li], &self.coriolis[li], &self.contact[li]);
+                let (iz, bw, ke, be, ib) = (
+                    mat_vec(ic, &z),
+                    mat_vec(bc, &w),
+                    mat_vec(kc, eps),
+                    mat_vec(bc, eps),
+                    mat_vec(ic, &beta),
+                );
+                let ef = cross_force(eps, &self.force[li]);
+                let y_pos: V6 = std::array::from_fn(|r| ef[r] - iz[r] - bw[r] + ke[r]);
+                let y_vel: V6 = std::array::from_fn(|r| be[r] - ib[r]);
+                (y_pos, y_vel)
+            } else {
+                ([0.0; 6], [0.0; 6])
+            };
             for c in 0..nv {
                 let lc = self.columns[c].0;
                 let row = &mut cols[c * nc..];
@@ -546,13 +554,6 @@ fn inertia_matrix(i: &ArticulatedInertia<f64>) -> M6 {
             (false, false) => i.c.0[r - 3][c - 3],
         })
     })
-}
-
-/// Writes the 3×3 block `b` at row `r0`, column `c0` of `m`.
-fn set_block(m: &mut M6, r0: usize, c0: usize, b: &Mat3<f64>) {
-    for r in 0..3 {
-        m[r0 + r][c0..c0 + 3].copy_from_slice(&b.0[r]);
-    }
 }
 
 /// Adds the 3×3 block `b` at row `r0`, column `c0` of `m`.

@@ -103,6 +103,7 @@ impl Reduced<'_> {
         }
         let mut next = vec![0.0; nx * n_par];
         let mut grad_c = vec![0.0; nx];
+        let mut hermite: Vec<(usize, usize, f64)> = Vec::with_capacity(12 * na);
         let mut observer = Simulator::<DualSVec64<LANES>>::new(m);
         let stages = [(0.0, 0.0, 0), (0.5, 0.5, 1), (0.5, 0.5, 1), (1.0, 1.0, 2)];
         let mut n = self.boundaries[k];
@@ -191,6 +192,16 @@ impl Reduced<'_> {
                 } else {
                     (basis[2].0[2] + 1) * 2 * na
                 };
+                // The Hermite terms G_s·W_s: (sensitivity column, T column, weight), in the
+                // order (stage, actuator, basis function).
+                hermite.clear();
+                for (st, (idx, wts)) in basis.iter().enumerate() {
+                    for a in 0..na {
+                        for (c, wc) in idx.iter().zip(wts) {
+                            hermite.push((self.knot_major(a * block + c), nx + st * na + a, *wc));
+                        }
+                    }
+                }
                 for r in 0..nx {
                     let row = &mut next[r * n_par..r * n_par + live];
                     row.fill(0.0);
@@ -203,13 +214,9 @@ impl Reduced<'_> {
                             }
                         }
                     }
-                    for (st, (idx, wts)) in basis.iter().enumerate() {
-                        for a in 0..na {
-                            let g = step_t[r * ncol + nx + st * na + a];
-                            for (c, wc) in idx.iter().zip(wts) {
-                                row[self.knot_major(a * block + c)] += g * wc;
-                            }
-                        }
+                    let t_row = &step_t[r * ncol..(r + 1) * ncol];
+                    for &(col, g, wc) in &hermite {
+                        row[col] += t_row[g] * wc;
                     }
                 }
                 std::mem::swap(&mut sens, &mut next);
