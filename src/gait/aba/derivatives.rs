@@ -284,7 +284,10 @@ impl<'m> StageLinearizer<'m> {
             self.force[j] = std::array::from_fn(|r| ia[r] + vh[r] - fe[r]);
             // B_j = −T − Tᵀ + H with T = I·crm(v) (so I·(ε × v) = −T·ε and
             // v ×* (I·ε) = crf(v)·I·ε = −Tᵀ·ε) and H·ε = ε ×* h.
-            let (w, vl) = (Vec3([vel[0], vel[1], vel[2]]), Vec3([vel[3], vel[4], vel[5]]));
+            let (w, vl) = (
+                Vec3([vel[0], vel[1], vel[2]]),
+                Vec3([vel[3], vel[4], vel[5]]),
+            );
             let (ia_, ib, ic) = (&blocks.a, &blocks.b, &blocks.c);
             let t00 = ia_.mul_skew(&w) + ib.mul_skew(&vl);
             let t01 = ib.mul_skew(&w);
@@ -455,8 +458,7 @@ impl<'m> StageLinearizer<'m> {
                 if self.below[lc * n + li] {
                     row[i] = dot6(&self.s_inertia[c], &z) + dot6(&self.s_coriolis[c], &w)
                         - dot6(&self.s_contact[c], eps);
-                    row[nv + i] =
-                        dot6(&self.s_inertia[c], &beta) - dot6(&self.s_coriolis[c], eps);
+                    row[nv + i] = dot6(&self.s_inertia[c], &beta) - dot6(&self.s_coriolis[c], eps);
                 } else if self.below[li * n + lc] {
                     row[i] = -dot6(&self.s[c], &y_pos);
                     row[nv + i] = -dot6(&self.s[c], &y_vel);
