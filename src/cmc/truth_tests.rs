@@ -102,8 +102,8 @@ fn sphere_fit_junction_deviation(mesh: &Mesh) -> (f64, f64, usize) {
             let (a, b, d) = (q[0], Vector3::new(q[1], q[2], q[3]), q[4]);
             for &v in &verts {
                 let p = local(&pos[v]);
-                let distance = (a * p.norm_squared() + b.dot(&p) + d).abs()
-                    / (2.0 * a * p + b).norm();
+                let distance =
+                    (a * p.norm_squared() + b.dot(&p) + d).abs() / (2.0 * a * p + b).norm();
                 worst_fit = worst_fit.max(distance);
             }
             (a, b, d)
@@ -300,14 +300,18 @@ fn tetrahedral_octahedron_film_is_flat_with_area_two_root_two() {
 fn double_bubble_junction_angles_converge_to_120_degrees() {
     // problems/cmc/double_bubble.toml (one round of flips) at levels 3, 4, 5: the largest
     // deviation of the sphere-fit junction angles from 120° must shrink with every refinement
-    // and be below 2° at level 5 (the stated tolerance; BENCHMARKS.md lists the figures).
+    // and be below 2° at level 5 (the stated tolerance). Measured (BENCHMARKS.md): 2.16°,
+    // 1.76°, 1.09° at levels 3–5, 0.83° at 6, 0.46° at 8; fits within 1.3e-2 of the size.
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("problems/cmc/double_bubble.toml");
     let mut deviations = Vec::new();
     for level in [3, 4, 5] {
         let outcome = solve(&load(&path).unwrap().with_resolution(level));
         let (deviation, fit, count) = sphere_fit_junction_deviation(&solved_mesh(&outcome));
         assert_eq!(count, 6 * level, "junction circle of 6·level vertices");
-        assert!(fit < 0.02, "level {level}: films off their spheres by {fit}");
+        assert!(
+            fit < 0.02,
+            "level {level}: films off their spheres by {fit}"
+        );
         deviations.push(deviation);
     }
     for w in deviations.windows(2) {
