@@ -319,3 +319,33 @@ fn double_bubble_junction_angles_converge_to_120_degrees() {
     }
     assert!(deviations[2] < 2.0, "{deviations:?}");
 }
+
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "slow without optimizations: run with --release"
+)]
+fn triple_bubble_junction_angles_converge_to_120_degrees() {
+    // problems/cmc/triple_bubble.toml (volumes 1, 1.5, 2 cm³; every film of the standard
+    // triple bubble is spherical) at resolutions 4 and 6; the vertices where four junction
+    // lines meet (the poles) are left out. The stated tolerance: below 1.5° at resolution 6,
+    // and at least 1.5× smaller than at 4. Measured: 2.10° and 0.86° (0.92° at 5, 0.40° at 8);
+    // fits within 1.3e-2 of the size. (Resolution 3 stalls: BENCHMARKS.md.)
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("problems/cmc/triple_bubble.toml");
+    let mut deviations = Vec::new();
+    for level in [4, 6] {
+        let outcome = solve(&load(&path).unwrap().with_resolution(level));
+        let (deviation, fit, count) = sphere_fit_junction_deviation(&solved_mesh(&outcome));
+        assert!(
+            count >= 4 * level,
+            "level {level}: {count} junction vertices"
+        );
+        assert!(
+            fit < 0.02,
+            "level {level}: films off their spheres by {fit}"
+        );
+        deviations.push(deviation);
+    }
+    assert!(deviations[1] < deviations[0] / 1.5, "{deviations:?}");
+    assert!(deviations[1] < 1.5, "{deviations:?}");
+}
