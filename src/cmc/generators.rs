@@ -748,8 +748,16 @@ pub fn u_wires(width: f64, depth: f64, levels: usize) -> Result<Shape, MeshError
     add_grid_patch(&mut b, film, &bottom, &top, &left, &right, None, |_, _| {
         Point::zeros()
     });
+    // The grid patch of two straight wires and two L-shaped legs is the L extruded along x: a
+    // 90° crease between the tips, where the discrete curvature grows like 1/h. The harmonic
+    // interpolation of the wires removes it.
+    let mesh = b.build()?;
+    let mut pos = mesh.positions().to_vec();
+    harmonic(&mesh, &mut pos, &[0, 1, 2]);
+    let mut mesh = mesh;
+    mesh.set_positions(pos)?;
     Ok(Shape {
-        mesh: b.build()?,
+        mesh,
         volumes: Vec::new(),
     })
 }
@@ -817,7 +825,7 @@ pub fn tents(specs: &[TentSpec], levels: usize) -> Result<Shape, MeshError> {
             }
         }
     }
-    harmonic_heights(&mesh, &mut pos);
+    harmonic(&mesh, &mut pos, &[1]);
     mesh.set_positions(pos)?;
     Ok(Shape {
         mesh,
@@ -825,28 +833,30 @@ pub fn tents(specs: &[TentSpec], levels: usize) -> Result<Shape, MeshError> {
     })
 }
 
-/// Sets the heights of the free vertices to the discrete harmonic interpolation (uniform
-/// weights) of the fixed ones, by over-relaxed Gauss–Seidel sweeps: a smooth start close to a
-/// minimal surface, without folds at pole caps.
-fn harmonic_heights(mesh: &Mesh, pos: &mut [Point]) {
+/// Sets the `axes` coordinates (0 = x, 1 = y, 2 = z) of the free vertices to the discrete
+/// harmonic interpolation (uniform weights) of the fixed ones, by over-relaxed Gauss–Seidel
+/// sweeps: a smooth start close to a minimal surface, without folds at pole caps or creases.
+fn harmonic(mesh: &Mesh, pos: &mut [Point], axes: &[usize]) {
     let free: Vec<usize> = (0..mesh.vertex_count())
         .filter(|&v| !mesh.flags()[v].fixed)
         .collect();
-    let (lo, hi) = pos
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(l, h), p| (l.min(p.y), h.max(p.y)));
-    let tolerance = 1e-9 * (hi - lo).max(1e-300);
-    for _ in 0..20_000 {
-        let mut change: f64 = 0.0;
-        for &v in &free {
-            let ring = mesh.neighbours(v);
-            let mean = ring.iter().map(|&w| pos[w].y).sum::<f64>() / ring.len() as f64;
-            let step = 1.8 * (mean - pos[v].y);
-            pos[v].y += step;
-            change = change.max(step.abs());
-        }
-        if change < tolerance {
-            break;
+    for &k in axes {
+        let (lo, hi) = pos
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(l, h), p| (l.min(p[k]), h.max(p[k])));
+        let tolerance = 1e-9 * (hi - lo).max(1e-300);
+        for _ in 0..20_000 {
+            let mut change: f64 = 0.0;
+            for &v in &free {
+                let ring = mesh.neighbours(v);
+                let mean = ring.iter().map(|&w| pos[w][k]).sum::<f64>() / ring.len() as f64;
+                let step = 1.8 * (mean - pos[v][k]);
+                pos[v][k] += step;
+                change = change.max(step.abs());
+            }
+            if change < tolerance {
+                break;
+            }
         }
     }
 }
