@@ -205,7 +205,10 @@ fn cmc_problem_file_starts_from_a_shipped_glb() {
     assert_eq!(imported["status"], "Optimal", "{imported}");
     let area = |v: &serde_json::Value| v["objective"].as_f64().unwrap();
     let (a, b) = (area(&imported), area(&generated));
-    assert!((a / b - 1.0).abs() < 1e-6, "imported {a} m², generated {b} m²");
+    assert!(
+        (a / b - 1.0).abs() < 1e-6,
+        "imported {a} m², generated {b} m²"
+    );
     // Above the exact standard double bubble (11.854293128 cm²) by the coarse mesh's excess.
     assert!(a > 11.854293128e-4 && a < 1.025 * 11.854293128e-4, "{a}");
     let f = &imported["figures"];
