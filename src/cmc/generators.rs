@@ -10,8 +10,8 @@
 //! - [`icosphere`]: sphere, outward normals.
 //! - [`double_bubble`]: the standard double bubble of two given volumes: three spherical caps on
 //!   one junction circle, meeting at 120° (the exact minimizer, so its analytic area is known).
-//! - [`triple_bubble`]: a ball split into three 120° wedges (three lunes and three half-disk
-//!   walls meeting on the axis): the topology of the standard triple bubble.
+//! - [`triple_bubble`]: the symmetric standard triple bubble of the total volume (three lunes
+//!   on spheres and three flat walls meeting on the axis, all at 120°).
 //! - [`cube_frame`]: a wire cube (fixed edges) with a central cubical bubble joined to every wire
 //!   by a trapezoidal film (seed Fig. 5.8).
 //! - octahedral frames: see [`super::octahedron`].
@@ -402,29 +402,47 @@ pub fn double_bubble(volumes: [f64; 2], levels: usize) -> Result<Shape, MeshErro
     })
 }
 
-/// Three bubbles of volumes `volumes` (m³) started as a ball of the total volume split into
-/// three 120° wedges about the y axis. `levels` rows from pole to pole. Surfaces `outer_k`
-/// (lunes, outward) and `wall_k` (normal towards increasing azimuth, i.e. into cell k).
+/// Three bubbles of volumes `volumes` (m³) started as the symmetric standard triple bubble of
+/// their total volume (three equal cells about the y axis, every film meeting the others at
+/// 120°), `levels` rows from pole to pole. Surfaces `outer_k` (outward) and `wall_k` (normal
+/// towards increasing azimuth, i.e. into cell k).
+///
+/// Geometry, for outer radius R: cell k is the ball of radius R about `c_k = (R/√3)·d_k`
+/// (`d_k` the unit direction at azimuth 120°k + 60°) cut by the two wall half-planes at
+/// azimuths 120°k and 120°(k+1). A sphere whose centre is `R sin 60°/√3 = R/2` from a plane
+/// meets it at 90° + asin(½) = 120° inside the cell, mirror cells share each wall's circle,
+/// and the three spheres and the axis meet at the poles `y = ±R√(2/3)` (tetrahedral points).
+/// The walls are flat (equal pressures). Lune vertices are the ball-wedge directions projected
+/// from the origin (inside every cell's ball) onto their cell's sphere; wall vertices
+/// interpolate between the axis and the wall's circle; the mesh is then scaled to the total
+/// volume. Unequal volumes are reached by the optimization.
 pub fn triple_bubble(volumes: [f64; 3], levels: usize) -> Result<Shape, MeshError> {
     let total: f64 = volumes.iter().sum();
-    let r = (3.0 * total / (4.0 * PI)).cbrt();
     let rows = 2 * levels.max(1);
     let cols = levels.max(1);
     let across = levels.max(1);
     let mut b = MeshBuilder::new();
-    let north = b.vertex(Point::new(0.0, r, 0.0));
-    let south = b.vertex(Point::new(0.0, -r, 0.0));
+    let pole = (2.0f64 / 3.0).sqrt();
+    let north = b.vertex(Point::new(0.0, pole, 0.0));
+    let south = b.vertex(Point::new(0.0, -pole, 0.0));
     let theta = |i: usize| PI * i as f64 / rows as f64;
     let dir = |phi: f64| Point::new(phi.cos(), 0.0, phi.sin());
-    let sphere = |i: usize, phi: f64| r * (theta(i).cos() * Point::y() + theta(i).sin() * dir(phi));
+    // Unit sphere about the centre of cell k, reached from the origin along the ball direction.
+    let centre = |k: usize| dir(2.0 * PI * k as f64 / 3.0 + PI / 3.0) / 3f64.sqrt();
+    let sphere = |i: usize, phi: f64, k: usize| {
+        let u = theta(i).cos() * Point::y() + theta(i).sin() * dir(phi);
+        let c = centre(k % 3);
+        let uc = u.dot(&c);
+        (uc + (uc * uc - c.norm_squared() + 1.0).sqrt()) * u
+    };
     // Axis vertices evenly spaced (not at the meridians' heights), so the wall rows slant
     // and the fans at the poles are not slivers.
-    let axis_point = |i: usize| Point::new(0.0, r * (1.0 - 2.0 * i as f64 / rows as f64), 0.0);
+    let axis_point = |i: usize| Point::new(0.0, pole * (1.0 - 2.0 * i as f64 / rows as f64), 0.0);
     let axis: Vec<usize> = (1..rows).map(|i| b.vertex(axis_point(i))).collect();
     let meridians: Vec<Vec<usize>> = (0..3)
         .map(|k| {
             let phi = 2.0 * PI * k as f64 / 3.0;
-            (1..rows).map(|i| b.vertex(sphere(i, phi))).collect()
+            (1..rows).map(|i| b.vertex(sphere(i, phi, k))).collect()
         })
         .collect();
     // Full pole-to-pole column of vertex ids for a row-indexed path.
@@ -443,7 +461,7 @@ pub fn triple_bubble(volumes: [f64; 3], levels: usize) -> Result<Shape, MeshErro
         let mut grid = vec![column(&meridians[k])];
         for j in 1..cols {
             let phi = phi0 + 2.0 * PI / 3.0 * j as f64 / cols as f64;
-            let inner: Vec<usize> = (1..rows).map(|i| b.vertex(sphere(i, phi))).collect();
+            let inner: Vec<usize> = (1..rows).map(|i| b.vertex(sphere(i, phi, k))).collect();
             grid.push(column(&inner));
         }
         grid.push(column(&meridians[(k + 1) % 3]));
@@ -455,7 +473,7 @@ pub fn triple_bubble(volumes: [f64; 3], levels: usize) -> Result<Shape, MeshErro
             let inner: Vec<usize> = (1..rows)
                 .map(|i| {
                     let f = j as f64 / across as f64;
-                    b.vertex(axis_point(i) * (1.0 - f) + sphere(i, phi0) * f)
+                    b.vertex(axis_point(i) * (1.0 - f) + sphere(i, phi0, k) * f)
                 })
                 .collect();
             grid.push(column(&inner));
@@ -468,7 +486,7 @@ pub fn triple_bubble(volumes: [f64; 3], levels: usize) -> Result<Shape, MeshErro
             Point::new(-phi0.sin(), 0.0, phi0.cos()),
         );
     }
-    let mesh = b.build()?;
+    let mut mesh = b.build()?;
     for k in 0..3 {
         regions.push((
             format!("cell_{k}"),
@@ -479,6 +497,10 @@ pub fn triple_bubble(volumes: [f64; 3], levels: usize) -> Result<Shape, MeshErro
             volumes[k],
         ));
     }
+    let unit: f64 = regions.iter().map(|(_, r, _)| r.volume(&mesh)).sum();
+    let scale = (total / unit).cbrt();
+    let scaled = mesh.positions().iter().map(|p| p * scale).collect();
+    mesh.set_positions(scaled)?;
     Ok(Shape {
         mesh,
         volumes: regions,
@@ -726,8 +748,16 @@ pub fn u_wires(width: f64, depth: f64, levels: usize) -> Result<Shape, MeshError
     add_grid_patch(&mut b, film, &bottom, &top, &left, &right, None, |_, _| {
         Point::zeros()
     });
+    // The grid patch of two straight wires and two L-shaped legs is the L extruded along x: a
+    // 90° crease between the tips, where the discrete curvature grows like 1/h. The harmonic
+    // interpolation of the wires removes it.
+    let mesh = b.build()?;
+    let mut pos = mesh.positions().to_vec();
+    harmonic(&mesh, &mut pos, &[0, 1, 2]);
+    let mut mesh = mesh;
+    mesh.set_positions(pos)?;
     Ok(Shape {
-        mesh: b.build()?,
+        mesh,
         volumes: Vec::new(),
     })
 }
@@ -795,7 +825,7 @@ pub fn tents(specs: &[TentSpec], levels: usize) -> Result<Shape, MeshError> {
             }
         }
     }
-    harmonic_heights(&mesh, &mut pos);
+    harmonic(&mesh, &mut pos, &[1]);
     mesh.set_positions(pos)?;
     Ok(Shape {
         mesh,
@@ -803,28 +833,30 @@ pub fn tents(specs: &[TentSpec], levels: usize) -> Result<Shape, MeshError> {
     })
 }
 
-/// Sets the heights of the free vertices to the discrete harmonic interpolation (uniform
-/// weights) of the fixed ones, by over-relaxed Gauss–Seidel sweeps: a smooth start close to a
-/// minimal surface, without folds at pole caps.
-fn harmonic_heights(mesh: &Mesh, pos: &mut [Point]) {
+/// Sets the `axes` coordinates (0 = x, 1 = y, 2 = z) of the free vertices to the discrete
+/// harmonic interpolation (uniform weights) of the fixed ones, by over-relaxed Gauss–Seidel
+/// sweeps: a smooth start close to a minimal surface, without folds at pole caps or creases.
+fn harmonic(mesh: &Mesh, pos: &mut [Point], axes: &[usize]) {
     let free: Vec<usize> = (0..mesh.vertex_count())
         .filter(|&v| !mesh.flags()[v].fixed)
         .collect();
-    let (lo, hi) = pos
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(l, h), p| (l.min(p.y), h.max(p.y)));
-    let tolerance = 1e-9 * (hi - lo).max(1e-300);
-    for _ in 0..20_000 {
-        let mut change: f64 = 0.0;
-        for &v in &free {
-            let ring = mesh.neighbours(v);
-            let mean = ring.iter().map(|&w| pos[w].y).sum::<f64>() / ring.len() as f64;
-            let step = 1.8 * (mean - pos[v].y);
-            pos[v].y += step;
-            change = change.max(step.abs());
-        }
-        if change < tolerance {
-            break;
+    for &k in axes {
+        let (lo, hi) = pos
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(l, h), p| (l.min(p[k]), h.max(p[k])));
+        let tolerance = 1e-9 * (hi - lo).max(1e-300);
+        for _ in 0..20_000 {
+            let mut change: f64 = 0.0;
+            for &v in &free {
+                let ring = mesh.neighbours(v);
+                let mean = ring.iter().map(|&w| pos[w][k]).sum::<f64>() / ring.len() as f64;
+                let step = 1.8 * (mean - pos[v][k]);
+                pos[v][k] += step;
+                change = change.max(step.abs());
+            }
+            if change < tolerance {
+                break;
+            }
         }
     }
 }
@@ -972,22 +1004,47 @@ mod tests {
     }
 
     #[test]
-    fn triple_bubble_cells_share_the_ball() {
-        let shape = triple_bubble([1.0, 1.0, 1.0], 8).unwrap();
-        let sum: f64 = shape
-            .volumes
-            .iter()
-            .map(|(_, r, _)| {
-                let v = r.volume(&shape.mesh);
-                assert!((v - 1.0).abs() < 0.05, "{v}");
-                v
-            })
-            .sum();
+    fn triple_bubble_starts_as_the_symmetric_standard_triple_bubble() {
+        let shape = triple_bubble([1.0, 1.5, 2.0], 8).unwrap();
+        let m = &shape.mesh;
+        // Three equal cells (the mesh is symmetric under the 120° turn) of the total volume.
+        let cells: Vec<f64> = shape.volumes.iter().map(|(_, r, _)| r.volume(m)).collect();
+        for v in &cells {
+            assert!((v - 1.5).abs() < 1e-9, "{cells:?}");
+        }
         let ball = Region {
             boundary: (0..3).map(|k| (k, 1.0)).collect(),
             reference: Point::zeros(),
         };
-        assert!((sum - ball.volume(&shape.mesh)).abs() < 1e-12);
+        assert!((cells.iter().sum::<f64>() - ball.volume(m)).abs() < 1e-12);
+        // Every lune vertex is on its cell's sphere: centre R/√3 from the axis, radius R, and
+        // the poles at ±R√(2/3) (vertex 0 is the north pole).
+        let pole = m.positions()[0].y;
+        let radius = pole / (2.0f64 / 3.0).sqrt();
+        for k in 0..3 {
+            let phi = 2.0 * PI * k as f64 / 3.0 + PI / 3.0;
+            let c = Point::new(phi.cos(), 0.0, phi.sin()) * radius / 3f64.sqrt();
+            for t in m.surface_triangles(m.surface_index(&format!("outer_{k}")).unwrap()) {
+                for p in m.corners(t) {
+                    assert!(((p - c).norm() / radius - 1.0).abs() < 1e-12);
+                }
+            }
+        }
+        // The walls are flat half-disks in the planes through the axis.
+        for k in 0..3 {
+            let phi = 2.0 * PI * k as f64 / 3.0;
+            let normal = Point::new(-phi.sin(), 0.0, phi.cos());
+            for t in m.surface_triangles(m.surface_index(&format!("wall_{k}")).unwrap()) {
+                for p in m.corners(t) {
+                    assert!(p.dot(&normal).abs() < 1e-12 * radius);
+                }
+            }
+        }
+        // The films meet at 120°: the junction-angle estimator reads 115.6°–124.0° on this
+        // exact shape (its own discretization error, largest at the poles); the old start (a
+        // ball cut into wedges) read 90°–180°.
+        let j = crate::cmc::figures::junction_angles(m).unwrap();
+        assert!(j.min_deg > 115.0 && j.max_deg < 125.0, "{j:?}");
     }
 
     #[test]

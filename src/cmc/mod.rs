@@ -300,9 +300,10 @@ mod tests {
     use super::*;
     use std::path::PathBuf;
 
-    const PROBLEMS: [&str; 15] = [
+    const PROBLEMS: [&str; 16] = [
         "u_wires",
         "double_bubble",
+        "double_bubble_gltf",
         "triple_bubble",
         "cube_frame",
         "cube_frame_film",

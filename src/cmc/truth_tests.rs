@@ -2,6 +2,17 @@
 //! standard double bubble (area, 120° junctions, and the cluster identity
 //! area = 1.5·Σ pressure·volume with pressure = 2H for unit tension) and the flat tetrahedral
 //! film on the octahedral frame (area 2√2·edge²). Run with `--release`.
+//!
+//! Junction angles of bubble clusters are measured on the films' own shapes: every film of the
+//! standard double and triple bubble is a piece of a sphere (or plane), so each surface's
+//! vertices are fitted by one (algebraic least squares `a|p|² + b·p + d = 0`, the smallest
+//! right singular vector); at each junction vertex where exactly three films meet, the film
+//! directions leaving the junction are the fitted tangent planes' conormals `n × t` (t along
+//! the junction through the two neighbouring junction vertices, sign towards the film's own
+//! neighbours), and the angles between them are compared with 120°. The fits' largest
+//! distance from a vertex is reported and bounded, so the spherical assumption is checked too.
+//! (`figures::junction_angles`, which sees only the triangles next to each junction edge,
+//! reads 118.4°–121.3° on the exact r8 double bubble start: too coarse to show convergence.)
 
 use std::path::PathBuf;
 
@@ -9,12 +20,13 @@ use super::area::total_area;
 use super::catenoid::exact_catenoid;
 use super::generators::icosphere;
 use super::generators::standard_double_bubble;
-use super::mesh::Point;
+use super::mesh::{Mesh, Point};
 use super::nlp::{CmcNlp, VolumeConstraint};
 use super::volume::Region;
 use super::{Problem, load, run};
 use crate::run::{Outcome, RunOptions};
 use crate::solver::Options;
+use nalgebra::{DMatrix, Vector3};
 
 fn from_text(text: &str, tag: &str) -> Problem {
     let dir = std::env::temp_dir().join(format!("cmc-truth-{}", std::process::id()));
@@ -46,6 +58,97 @@ fn solve(problem: &Problem) -> Outcome {
 
 fn area(outcome: &Outcome) -> f64 {
     outcome.summary.figures["total_area"].as_f64().unwrap()
+}
+
+/// The solved mesh, read back from the run's `model.glb` (f32 positions, welded on import).
+fn solved_mesh(outcome: &Outcome) -> Mesh {
+    let glb = outcome
+        .artifacts
+        .iter()
+        .find(|a| a.name == "model.glb")
+        .unwrap();
+    super::import_gltf::read_gltf_bytes(&glb.bytes).unwrap()
+}
+
+/// Sphere-fit junction angles, see the module header: (largest |angle − 120°| in degrees,
+/// largest fit distance relative to the cluster's size, junction vertices measured).
+fn sphere_fit_junction_deviation(mesh: &Mesh) -> (f64, f64, usize) {
+    let pos = mesh.positions();
+    let centre = pos.iter().sum::<Point>() / pos.len() as f64;
+    let size = pos.iter().map(|p| (p - centre).norm()).fold(0.0, f64::max);
+    let local = |p: &Point| (p - centre) / size;
+    let mut worst_fit: f64 = 0.0;
+    // Per surface: the quadric (a, b, d) and its unit normal at a point (local coordinates).
+    let fits: Vec<(f64, Vector3<f64>, f64)> = (0..mesh.surfaces().len())
+        .map(|s| {
+            let mut verts: Vec<usize> = mesh
+                .surface_triangles(s)
+                .flat_map(|t| mesh.triangles()[t])
+                .collect();
+            verts.sort_unstable();
+            verts.dedup();
+            let rows = DMatrix::from_fn(verts.len(), 5, |r, c| {
+                let p = local(&pos[verts[r]]);
+                match c {
+                    0 => p.norm_squared(),
+                    1..=3 => p[c - 1],
+                    _ => 1.0,
+                }
+            });
+            let svd = rows.svd(false, true);
+            let v_t = svd.v_t.unwrap();
+            let k = svd.singular_values.imin();
+            let q = v_t.row(k);
+            let (a, b, d) = (q[0], Vector3::new(q[1], q[2], q[3]), q[4]);
+            for &v in &verts {
+                let p = local(&pos[v]);
+                let distance =
+                    (a * p.norm_squared() + b.dot(&p) + d).abs() / (2.0 * a * p + b).norm();
+                worst_fit = worst_fit.max(distance);
+            }
+            (a, b, d)
+        })
+        .collect();
+    let junction = |v: usize| mesh.vertex_surfaces(v).len() >= 3;
+    let mut worst: f64 = 0.0;
+    let mut count = 0;
+    for v in 0..pos.len() {
+        let films = mesh.vertex_surfaces(v);
+        let along: Vec<usize> = mesh
+            .neighbours(v)
+            .iter()
+            .copied()
+            .filter(|&u| junction(u) && mesh.vertex_surfaces(u) == films)
+            .collect();
+        if films.len() != 3 || along.len() != 2 {
+            continue;
+        }
+        let t = (pos[along[1]] - pos[along[0]]).normalize();
+        let p = local(&pos[v]);
+        let conormals: Vec<Point> = films
+            .iter()
+            .map(|&s| {
+                let (a, b, _) = fits[s];
+                let n = (2.0 * a * p + b).normalize();
+                let nu = n.cross(&t).normalize();
+                // Towards the film: the mean of v's neighbours in surface s.
+                let own: Point = mesh
+                    .vertex_triangles(v)
+                    .iter()
+                    .filter(|&&tri| mesh.triangle_surface()[tri] == s)
+                    .flat_map(|&tri| mesh.triangles()[tri])
+                    .map(|u| pos[u] - pos[v])
+                    .sum();
+                if own.dot(&nu) >= 0.0 { nu } else { -nu }
+            })
+            .collect();
+        for i in 0..3 {
+            let angle = conormals[i].angle(&conormals[(i + 1) % 3]).to_degrees();
+            worst = worst.max((angle - 120.0).abs());
+        }
+        count += 1;
+    }
+    (worst, worst_fit, count)
 }
 
 /// Error ratios of successive levels (4 for second order when the edges halve).
@@ -187,4 +290,62 @@ fn tetrahedral_octahedron_film_is_flat_with_area_two_root_two() {
         "{}",
         area(&outcome)
     );
+}
+
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "slow without optimizations: run with --release"
+)]
+fn double_bubble_junction_angles_converge_to_120_degrees() {
+    // problems/cmc/double_bubble.toml (one round of flips) at levels 3, 4, 5: the largest
+    // deviation of the sphere-fit junction angles from 120° must shrink with every refinement
+    // and be below 2° at level 5 (the stated tolerance). Measured (BENCHMARKS.md): 2.16°,
+    // 1.76°, 1.09° at levels 3–5, 0.83° at 6, 0.46° at 8; fits within 1.3e-2 of the size.
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("problems/cmc/double_bubble.toml");
+    let mut deviations = Vec::new();
+    for level in [3, 4, 5] {
+        let outcome = solve(&load(&path).unwrap().with_resolution(level));
+        let (deviation, fit, count) = sphere_fit_junction_deviation(&solved_mesh(&outcome));
+        assert_eq!(count, 6 * level, "junction circle of 6·level vertices");
+        assert!(
+            fit < 0.02,
+            "level {level}: films off their spheres by {fit}"
+        );
+        deviations.push(deviation);
+    }
+    for w in deviations.windows(2) {
+        assert!(w[1] < 0.85 * w[0], "{deviations:?}");
+    }
+    assert!(deviations[2] < 2.0, "{deviations:?}");
+}
+
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "slow without optimizations: run with --release"
+)]
+fn triple_bubble_junction_angles_converge_to_120_degrees() {
+    // problems/cmc/triple_bubble.toml (volumes 1, 1.5, 2 cm³; every film of the standard
+    // triple bubble is spherical) at resolutions 4 and 6; the vertices where four junction
+    // lines meet (the poles) are left out. The stated tolerance: below 1.5° at resolution 6,
+    // and at least 1.5× smaller than at 4. Measured: 2.10° and 0.86° (0.92° at 5, 0.40° at 8);
+    // fits within 1.3e-2 of the size. (Resolution 3 stalls: BENCHMARKS.md.)
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("problems/cmc/triple_bubble.toml");
+    let mut deviations = Vec::new();
+    for level in [4, 6] {
+        let outcome = solve(&load(&path).unwrap().with_resolution(level));
+        let (deviation, fit, count) = sphere_fit_junction_deviation(&solved_mesh(&outcome));
+        assert!(
+            count >= 4 * level,
+            "level {level}: {count} junction vertices"
+        );
+        assert!(
+            fit < 0.02,
+            "level {level}: films off their spheres by {fit}"
+        );
+        deviations.push(deviation);
+    }
+    assert!(deviations[1] < deviations[0] / 1.5, "{deviations:?}");
+    assert!(deviations[1] < 1.5, "{deviations:?}");
 }
