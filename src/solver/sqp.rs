@@ -802,34 +802,43 @@ impl<'a> Sqp<'a> {
     }
 
     /// Measures the noise of φ and of the ℓ1 violation along d at `point` from
-    /// [`noise::SAMPLES`] points spaced so that each moves x by about 1e-6·(1 + ‖x‖∞)
-    /// (see `noise`), and widens the tests' allowances to three standard deviations. Returns
-    /// `Err` on a fatal evaluation error; a failed evaluation leaves the tests as they are.
+    /// [`noise::SAMPLES`] points spaced so that each moves x by about 1e-6·(1 + ‖x‖∞) (×100,
+    /// twice, while the samples show no variation at all, as a coarsely quantized φ does; see
+    /// `noise`), and widens the tests' allowances to three standard deviations. Returns `Err`
+    /// on a fatal evaluation error; a failed evaluation leaves the tests as they are.
     fn measure_noise(&mut self, point: &Point, d: &[f64], test: &mut Acceptance) -> Result<(), ()> {
         test.noise_measured = true;
         let dnorm = d.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
         let xnorm = point.x.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
-        let spacing = NOISE_SPACING * xnorm / dnorm;
-        let mut merits = Vec::with_capacity(noise::SAMPLES);
-        let mut violations = Vec::with_capacity(noise::SAMPLES);
-        for k in 0..noise::SAMPLES {
-            let x = self.trial(&point.x, d, k as f64 * spacing);
-            let Some((values, _)) = self.evaluate(x)? else {
+        let mut spacing = NOISE_SPACING * xnorm / dnorm;
+        for _ in 0..3 {
+            let mut merits = Vec::with_capacity(noise::SAMPLES);
+            let mut violations = Vec::with_capacity(noise::SAMPLES);
+            for k in 0..noise::SAMPLES {
+                let x = self.trial(&point.x, d, k as f64 * spacing);
+                let Some((values, _)) = self.evaluate(x)? else {
+                    return Ok(());
+                };
+                merits.push(self.merit(&values));
+                violations.push(merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu));
+            }
+            let (Some(sm), Some(sv)) =
+                (noise::noise_level(&merits), noise::noise_level(&violations))
+            else {
                 return Ok(());
             };
-            merits.push(self.merit(&values));
-            violations.push(merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu));
-        }
-        if let (Some(sm), Some(sv)) = (noise::noise_level(&merits), noise::noise_level(&violations))
-        {
-            test.merit_noise = test.merit_noise.max(NOISE_ALLOWANCE * sm);
-            test.violation_noise = test.violation_noise.max(NOISE_ALLOWANCE * sv);
-            if self.options.verbosity >= 2 {
-                self.say(&format!(
-                    "      noise along d: merit {sm:.2e}, violation {sv:.2e} (slope {:.2e})",
-                    test.slope
-                ));
+            if sm > 0.0 || sv > 0.0 {
+                test.merit_noise = test.merit_noise.max(NOISE_ALLOWANCE * sm);
+                test.violation_noise = test.violation_noise.max(NOISE_ALLOWANCE * sv);
+                if self.options.verbosity >= 2 {
+                    self.say(&format!(
+                        "      noise along d: merit {sm:.2e}, violation {sv:.2e} (slope {:.2e})",
+                        test.slope
+                    ));
+                }
+                return Ok(());
             }
+            spacing *= 100.0;
         }
         Ok(())
     }
@@ -865,9 +874,26 @@ impl<'a> Sqp<'a> {
         if dnorm <= 1e-15 * xnorm {
             return LineSearch::Failed;
         }
-        let mut alpha = (STEP_LIMIT * (1.0 + xnorm) / dnorm).min(1.0);
+        let first_alpha = (STEP_LIMIT * (1.0 + xnorm) / dnorm).min(1.0);
+        let mut alpha = first_alpha;
         let mut soc_tried = false;
-        while alpha >= MIN_STEP {
+        loop {
+            if alpha < MIN_STEP {
+                // Before giving up, find out whether φ is too noisy to resolve the predicted
+                // decrease at all (an objective that cancels to f ≈ 0 has no |φ|-based
+                // resolution); if it is, search again with the relaxed tests.
+                if test.noise_measured {
+                    break;
+                }
+                if self.measure_noise(point, d, &mut test).is_err() {
+                    return LineSearch::Fatal;
+                }
+                if test.merit_noise == 0.0 && test.violation_noise == 0.0 {
+                    break;
+                }
+                alpha = first_alpha;
+                soc_tried = true;
+            }
             let x = self.trial(&point.x, d, alpha);
             let Ok(evaluated) = self.evaluate(x) else {
                 return LineSearch::Fatal;
