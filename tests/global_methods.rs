@@ -11,7 +11,6 @@ use optimize::solver::{Dims, EvalError, Nlp, Options, solve};
 use optimize::spec::{GlobalSpec, Key, Source};
 
 #[path = "common/hs.rs"]
-#[allow(dead_code)]
 mod hs;
 
 /// Two wells along x0 (the left one deeper) inside a disk:
