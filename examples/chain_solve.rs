@@ -3,6 +3,7 @@
 //!
 //! `cargo run --release --example chain_solve -- [links] [auto|dense|sparse] [bfgs|lbfgs|exact]`
 //! (default 100 links: n = 198, m = 100; the QP method `auto`; all three Hessian modes).
+//! `VERBOSITY=N` shows the iteration log, `LBFGS_MEMORY=p` sets the L-BFGS memory.
 
 #[path = "../tests/common/chain.rs"]
 #[allow(dead_code)]
@@ -39,6 +40,10 @@ fn main() {
                 .and_then(|v| v.parse().ok())
                 .unwrap_or(0),
             qp_method,
+            lbfgs_memory: std::env::var("LBFGS_MEMORY")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(Options::default().lbfgs_memory),
             ..Options::default()
         };
         let s = solve(&chain, &options);

@@ -10,6 +10,9 @@ use optimize::solver::global::{
 use optimize::solver::{Dims, EvalError, Nlp, Options, solve};
 use optimize::spec::{GlobalSpec, Key, Source};
 
+#[path = "common/hs.rs"]
+mod hs;
+
 /// Two wells along x0 (the left one deeper) inside a disk:
 /// min (x0² − 1)² + 0.3·x0 + (x1 − 0.5)²  s.t.  x0² + x1² ≤ 4,  −2 ≤ x ≤ 2; start (0.9, 0).
 struct WellsInDisk;
@@ -89,45 +92,6 @@ impl Nlp for Corner {
     }
 }
 
-/// Hock–Schittkowski 71: f* = 17.0140173 at (1, 4.7429994, 3.8211503, 1.3794082).
-/// Its `eval_derivatives` is never called here (finite differences replace it).
-struct Hs071;
-
-impl Nlp for Hs071 {
-    fn dims(&self) -> Dims {
-        Dims {
-            n: 4,
-            m: 2,
-            jac_nnz: 8,
-            hess_nnz: 0,
-        }
-    }
-    fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
-        xl.fill(1.0);
-        xu.fill(5.0);
-        cl.copy_from_slice(&[25.0, 40.0]);
-        cu.copy_from_slice(&[f64::INFINITY, 40.0]);
-    }
-    fn start(&self, x: &mut [f64]) {
-        x.copy_from_slice(&[1.0, 5.0, 5.0, 1.0]);
-    }
-    fn jacobian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
-        for k in 0..8 {
-            rows[k] = k / 4;
-            cols[k] = k % 4;
-        }
-    }
-    fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
-        *f = x[0] * x[3] * (x[0] + x[1] + x[2]) + x[2];
-        c[0] = x.iter().product();
-        c[1] = x.iter().map(|v| v * v).sum();
-        Ok(())
-    }
-    fn eval_derivatives(&self, _: &[f64], _: &mut [f64], _: &mut [f64]) -> Result<(), EvalError> {
-        Err(EvalError::Fatal("no exact derivatives".into()))
-    }
-}
-
 fn quiet() -> Options {
     Options {
         verbosity: 0,
@@ -189,7 +153,14 @@ fn hybrid_with_sqp_solves_a_constrained_problem_from_an_infeasible_start() {
 #[test]
 
 fn finite_difference_fallback_solves_hs071() {
-    let fd = FiniteDifferenceNlp::new(&Hs071, FiniteDifferenceOptions::default());
+    // Hock–Schittkowski 71 of the HS set: f* = 17.0140173 at (1, 4.7429994, 3.8211503,
+    // 1.3794082); its exact derivatives are replaced by finite differences.
+    let problem = hs::all()
+        .into_iter()
+        .find(|p| p.name == "HS71")
+        .expect("HS71 is in the set");
+    let nlp = problem.nlp(false);
+    let fd = FiniteDifferenceNlp::new(&nlp, FiniteDifferenceOptions::default());
     let options = quiet();
     let s = solve_forward_then_central(&fd, |p| solve(p, &options));
     assert!(s.status.is_success(), "{:?}", s.status);

@@ -69,6 +69,7 @@ mod log;
 mod merit;
 mod multipliers;
 mod nlp;
+mod noise;
 mod options;
 pub mod qp;
 mod solution;

@@ -224,14 +224,10 @@ impl NewtonSystem {
     /// Factors the assembled K₀ and, for a low-rank Hessian, prepares the Woodbury correction.
     pub fn factor(&mut self, qp: &QpProblem<'_>, layout: &Layout) -> Result<Inertia, KktError> {
         self.factorizations += 1;
-        // The low-rank form's K₀ has the diagonal δI + Σ as its Hessian block, already well
-        // scaled; equilibrating it changed the L-BFGS path's iterates for the worse
-        // (tests/large_problem.rs at n = 3000 ended Acceptable instead of Optimal).
-        let reg = Regularization {
-            equilibrate: !matches!(qp.h, QpHessian::LowRank { .. }),
-            ..Regularization::default()
-        };
-        let inertia = self.kkt.factor(reg)?;
+        // K₀ of the low-rank form is equilibrated too: without it the chain's QPs (Schur
+        // complement eigenvalues below the absolute dual regularization) were reported
+        // infeasible and L-BFGS stalled on the sparse path.
+        let inertia = self.kkt.factor(Regularization::default())?;
         if let QpHessian::LowRank { w, m, .. } = qp.h {
             let (n, dim, p) = (self.n, self.dim(), w.ncols());
             // U = W with the rows of fixed variables zeroed, then V = K₀⁻¹U in one
