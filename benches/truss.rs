@@ -33,7 +33,7 @@ fn runs(c: &mut Criterion) {
 }
 
 fn layout(c: &mut Criterion) {
-    for name in ["warren_bridge", "michell", "cooling_tower"] {
+    for name in ["warren_bridge", "michell"] {
         let problem = load(&path(name)).expect("loads");
         let model = problem.model();
         c.bench_function(&format!("truss layout LP {name}"), |b| {
