@@ -8,9 +8,10 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use optimize::run::RunOptions;
 use optimize::truss::{load, start};
 
-/// Examples timed as whole runs: warren_bridge (the sub-second target) and the largest
-/// ground structure, cooling_tower.
-const RUNS: [&str; 3] = ["warren_bridge", "roof_fink", "cooling_tower"];
+/// Examples timed as whole runs: warren_bridge (the sub-second target) and michell (a
+/// sphere obstacle). The larger examples take minutes per run (BENCHMARKS.md, truss), too long
+/// for ten criterion samples; their single CLI runs are tabulated instead.
+const RUNS: [&str; 2] = ["warren_bridge", "michell"];
 
 fn path(name: &str) -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -32,7 +33,7 @@ fn runs(c: &mut Criterion) {
 }
 
 fn layout(c: &mut Criterion) {
-    for name in ["warren_bridge", "michell", "cooling_tower"] {
+    for name in ["warren_bridge", "michell"] {
         let problem = load(&path(name)).expect("loads");
         let model = problem.model();
         c.bench_function(&format!("truss layout LP {name}"), |b| {

@@ -222,3 +222,26 @@ fn no_force_balance_row_vanishes_identically() {
         assert!(zero.is_empty(), "{name}: {zero:?}");
     }
 }
+
+#[test]
+fn the_layout_start_keeps_the_mirror_images_of_kept_joints() {
+    // eiffel_tower: two mirror planes, and a k-nearest-neighbour lattice whose beams are not
+    // mirror symmetric. Its layout start must keep every free joint's images so that the
+    // symmetry rows can be built (else the run falls back to the random start).
+    let p = problem("eiffel_tower");
+    let (nlp, report) = p.staged_nlp(p.model(), 0).unwrap();
+    assert_eq!(report["method"], "layout", "{report}");
+    let joints = &nlp.structure().joints;
+    let symmetry = &p.model().settings.symmetry;
+    assert_eq!(symmetry.len(), 2);
+    for mirror in symmetry {
+        for joint in joints.iter().filter(|j| j.is_free()) {
+            let image = mirror.reflect(&joint.position);
+            assert!(
+                joints.iter().any(|k| (k.position - image).norm() < 1e-6),
+                "no image of {:?}",
+                joint.position
+            );
+        }
+    }
+}

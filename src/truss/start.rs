@@ -35,7 +35,8 @@
 //!
 //! Symmetry: the LP is solved on the whole ground structure; with mirror planes the forces are
 //! averaged with their mirror images plane by plane (the average of two balanced force sets is
-//! balanced when the loads are symmetric), so that pruning keeps mirror pairs together.
+//! balanced when the loads are symmetric), so that pruning keeps mirror pairs together; the
+//! mirror images of kept joints are kept in any case.
 //! Obstacles: beams that cut a sphere obstacle, and joints inside one, are left out of the LP when
 //! the rest can carry the loads.
 
@@ -177,7 +178,38 @@ fn solve_on(
             }
         }
     }
-    Ok(prune(structure, forces, cost))
+    Ok(prune(structure, forces, cost, &settings.symmetry))
+}
+
+/// Marks the mirror images (under every plane, repeatedly) of the kept joints as kept. A ground
+/// structure of k nearest neighbours breaks distance ties in one order, so its beams need not be
+/// mirror symmetric when its joints are (the forces are then not averaged), and a kept free
+/// joint could lose the image its symmetry rows pair it with. An image kept without beams is
+/// placed by those rows.
+fn keep_mirror_images(structure: &Structure, mirrors: &[Mirror], keep: &mut [bool]) {
+    let joints = &structure.joints;
+    let scale = (joints.iter())
+        .map(|j| j.position.norm())
+        .fold(1.0, f64::max);
+    let mut changed = true;
+    while changed {
+        changed = false;
+        for mirror in mirrors {
+            for i in 0..joints.len() {
+                if !keep[i] {
+                    continue;
+                }
+                let p = mirror.reflect(&joints[i].position);
+                if let Some(k) =
+                    (0..joints.len()).find(|&k| (joints[k].position - p).norm() <= 1e-6 * scale)
+                    && !keep[k]
+                {
+                    keep[k] = true;
+                    changed = true;
+                }
+            }
+        }
+    }
 }
 
 /// The mirror image of every beam, if the ground structure is mirror symmetric.
@@ -204,8 +236,14 @@ fn mirror_beams(structure: &Structure, mirror: &Mirror) -> Option<Vec<usize>> {
         .collect()
 }
 
-/// Drops idle beams and the free joints they leave without beams (module header).
-fn prune(structure: &Structure, forces: Vec<Vec<f64>>, cost: Vec<f64>) -> LayoutStart {
+/// Drops idle beams and the free joints they leave without beams (module header), keeping the
+/// mirror images of kept joints (the symmetry rows pair them).
+fn prune(
+    structure: &Structure,
+    forces: Vec<Vec<f64>>,
+    cost: Vec<f64>,
+    mirrors: &[Mirror],
+) -> LayoutStart {
     let largest = (forces.iter().flatten())
         .map(|f| f.abs())
         .fold(0.0, f64::max);
@@ -218,9 +256,10 @@ fn prune(structure: &Structure, forces: Vec<Vec<f64>>, cost: Vec<f64>) -> Layout
             used[e] = true;
         }
     }
-    let keep: Vec<bool> = (structure.joints.iter().zip(&used))
+    let mut keep: Vec<bool> = (structure.joints.iter().zip(&used))
         .map(|(joint, &u)| u || !joint.is_free())
         .collect();
+    keep_mirror_images(structure, mirrors, &mut keep);
     let mut renumber = vec![usize::MAX; structure.joints.len()];
     let mut joints = Vec::new();
     for (i, joint) in structure.joints.iter().enumerate() {
