@@ -11,8 +11,10 @@
 pub mod aba;
 pub mod character;
 pub mod collocation;
+pub mod continuation;
 pub mod contact;
 pub mod export;
+pub mod feasibility;
 pub mod formulation;
 pub mod reduced;
 pub mod sim;
