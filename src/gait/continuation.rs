@@ -78,8 +78,11 @@ pub fn stage_problems(problem: &Problem, params: &[f64], stages: usize) -> Vec<P
                         let start = history[*best][i];
                         let lower = start + w * (c.lower - start);
                         PoseConstraint {
-                            name: format!("{} (stage {s}: t={:.3}, ≥ {lower:.3})", c.name,
-                                step as f64 * problem.dt),
+                            name: format!(
+                                "{} (stage {s}: t={:.3}, ≥ {lower:.3})",
+                                c.name,
+                                step as f64 * problem.dt
+                            ),
                             time: step as f64 * problem.dt,
                             step,
                             lower,
@@ -143,7 +146,11 @@ mod tests {
         assert_eq!(stages.len(), 4);
         let first = &stages[0].constraints;
         assert_eq!(first.len(), 2);
-        assert!(first[0].time > 0.05 && first[0].time < 0.3, "{}", first[0].time);
+        assert!(
+            first[0].time > 0.05 && first[0].time < 0.3,
+            "{}",
+            first[0].time
+        );
         for c in first {
             assert!(c.lower > 0.01 && c.lower < 0.3, "{}", c.lower);
         }

@@ -192,8 +192,14 @@ pub fn restore<N: Nlp>(nlp: &N, z0: &[f64], settings: &FeasibilitySettings) -> F
                     .map(|(a, b)| (a + b) * (a + b))
                     .sum::<f64>();
             if predicted <= 1e-14 * before {
-                // Stationary for the violation within the box: damping cannot help.
-                break;
+                if norm2(&step) <= 1e-28 * (1.0 + norm2(&z)) {
+                    // Stationary for the violation within the box: damping cannot help.
+                    break;
+                }
+                // Clamping into the box spoiled the step: shorten it.
+                lambda *= nu;
+                nu *= 2.0;
+                continue;
             }
             let trial: Vec<f64> = z.iter().zip(&step).map(|(a, b)| a + b).collect();
             let rho = match evaluate(&trial, &mut evaluations) {
@@ -232,8 +238,15 @@ pub fn restore<N: Nlp>(nlp: &N, z0: &[f64], settings: &FeasibilitySettings) -> F
         }
     }
     if settings.verbose {
-        for (i, v) in r.iter().enumerate().filter(|(_, v)| v.abs() > settings.target) {
-            eprintln!("feasibility: {} violated by {v:+.3e}", nlp.constraint_name(i));
+        for (i, v) in r
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| v.abs() > settings.target)
+        {
+            eprintln!(
+                "feasibility: {} violated by {v:+.3e}",
+                nlp.constraint_name(i)
+            );
         }
     }
     done(z, &r, iterations, evaluations)

@@ -11,8 +11,8 @@
 pub mod aba;
 pub mod character;
 pub mod collocation;
-pub mod continuation;
 pub mod contact;
+pub mod continuation;
 pub mod export;
 pub mod feasibility;
 pub mod formulation;
