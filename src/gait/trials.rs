@@ -242,7 +242,10 @@ pub fn solve_trial(
             iterations += phase.iterations;
             evaluations.functions += phase.evaluations.functions;
             evaluations.derivatives += phase.evaluations.derivatives;
+            // Spline parameters only: the stages' shooting segments end at different steps,
+            // so their start states are rolled out afresh.
             current = staged.physical(&phase.z);
+            current.truncate(params.len());
         }
         nlp = f.starting_at(&current);
         let mut z0 = vec![0.0; nlp.dims().n];
