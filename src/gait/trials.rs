@@ -515,6 +515,27 @@ mod tests {
         assert_eq!(one.len(), 2);
     }
 
+    /// With the feasibility phase (and continuation) first, the short pogo jump raised to
+    /// 0.5 m, which the hand-made start misses, ends a Success.
+    #[test]
+    fn feasibility_phase_then_sqp_solves_a_raised_short_pogo_jump() {
+        let mut p = golden("pogo_jump_short");
+        for c in &mut p.constraints {
+            c.lower = 0.5;
+        }
+        p.trials.feasibility_first = true;
+        p.trials.continuation_stages = 3;
+        let options = Options {
+            max_iterations: 40,
+            verbosity: 0,
+            ..Options::default()
+        };
+        let r = &run_trials(&p, 8, Some(1), &options)[0];
+        let start = r.start.as_ref().unwrap();
+        assert!(start.max() > 10.0 * p.trials.tolerance, "{}", start.max());
+        assert_eq!(r.status, TrialStatus::Success, "{:?}", r.end);
+    }
+
     /// Meeting the tolerance beats not meeting it; then lower cost, else lower violation sum.
     #[test]
     fn improvement_prefers_feasible_then_cheap_then_less_violated() {
