@@ -6,13 +6,18 @@
 //! - [`contact`]: the seed's ground spring and friction; [`sim`]: RK4 rollouts;
 //! - [`spline`]: Hermite force splines and the closed-form objective; [`task`]: pose
 //!   constraints; [`reduced`]: the reduced-gradient NLP with exact dual-number derivatives;
+//! - [`feasibility`]: a Levenberg–Marquardt phase on the constraint violations, and
+//!   [`continuation`]: key-time continuation of unmet lower bounds, both run before the SQP
+//!   solve of a trial when the file asks ([`trials`]);
 //! - [`spec`]: the problem file.
 
 pub mod aba;
 pub mod character;
 pub mod collocation;
 pub mod contact;
+pub mod continuation;
 pub mod export;
+pub mod feasibility;
 pub mod formulation;
 pub mod reduced;
 pub mod sim;

@@ -95,6 +95,12 @@ pub struct TrialsSpec {
     pub slope_margin: Option<f64>,
     /// Re-solves of a trial that stopped short of success (not by a budget); default 1.
     pub restarts: Option<usize>,
+    /// Run the Levenberg–Marquardt feasibility phase ([`crate::gait::feasibility`]) before
+    /// each SQP solve; default false.
+    pub feasibility_first: Option<bool>,
+    /// Key-time continuation stages before the feasibility phase
+    /// ([`crate::gait::continuation`]); default 0 (none), at most 50.
+    pub continuation_stages: Option<usize>,
 }
 
 /// Validated `[trials]` settings.
@@ -110,6 +116,10 @@ pub struct TrialSettings {
     pub slope_margin: f64,
     /// Re-solves from the end point of a trial that stopped short of success.
     pub restarts: usize,
+    /// Levenberg–Marquardt feasibility phase before the SQP solve.
+    pub feasibility_first: bool,
+    /// Key-time continuation stages run by the feasibility phase (0: none).
+    pub continuation_stages: usize,
 }
 
 fn default_gravity() -> [f64; 3] {
@@ -773,12 +783,21 @@ fn build_trials(source: &Source, t: &TrialsSpec) -> Result<TrialSettings, InputE
             format!("`restarts` must be in 0..=10, got {restarts}"),
         ));
     }
+    let continuation_stages = t.continuation_stages.unwrap_or(0);
+    if continuation_stages > 50 {
+        return Err(at(
+            "continuation_stages",
+            format!("`continuation_stages` must be in 0..=50, got {continuation_stages}"),
+        ));
+    }
     Ok(TrialSettings {
         count,
         tolerance,
         spread,
         slope_margin,
         restarts,
+        feasibility_first: t.feasibility_first.unwrap_or(false),
+        continuation_stages,
     })
 }
 

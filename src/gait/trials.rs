@@ -8,10 +8,16 @@
 //! with the run's seed, and trials are solved in parallel (rayon): results do not depend on the
 //! number of threads.
 //!
-//! A trial that ends short of Success with its solver stopped early (Stalled, Infeasible,
+//! With `[trials] feasibility_first`, a Levenberg–Marquardt phase on the constraint violations
+//! ([`crate::gait::feasibility`]) runs first (after the key-time continuation stages of
+//! [`crate::gait::continuation`], if any) and the SQP solve starts from its end point; if the
+//! phase ends at a stationary point of the violation short of its target, the SQP solve is
+//! skipped and the trial ends there (solver status Stalled, or IterationLimit). A trial
+//! that ends short of Success with its solver stopped early (Stalled, Infeasible,
 //! Acceptable, ...) is re-solved from its end point up to `[trials] restarts` times (a fresh
-//! quasi-Newton model); the better end point (lower violation sum, or lower cost when feasible)
-//! is kept.
+//! quasi-Newton model); the better end point is kept: one meeting every constraint within the
+//! tolerance over one that does not, then the lower cost among such points, else the lower
+//! violation sum. The phase's point is replaced only by a better one.
 //!
 //! Classification, with `tol` = `[trials] tolerance` in each constraint's unit and the violation
 //! of row `r` = `max(lower − c, c − upper, 0)`:
@@ -29,9 +35,14 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::continuation::stage_problems;
+use super::feasibility::{FeasibilitySettings, restore};
 use super::formulation::Formulation;
 use super::spec::Problem;
-use crate::solver::{Evaluations, Nlp, Options, Solution, Status, solve};
+use crate::solver::{Evaluations, IterationRecord, Nlp, Options, Solution, Status, solve};
+
+/// The feasibility phase stops once every violation is within this fraction of the tolerance.
+pub const FEASIBILITY_TARGET: f64 = 0.1;
 
 /// How a trial's final motion meets the pose constraints (module header).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -184,7 +195,23 @@ pub fn starts(problem: &Problem, f: &Formulation<'_>, seed: u64) -> Vec<Vec<f64>
         .collect()
 }
 
-/// Solves one trial from physical start `x0`.
+/// Whether assessment `b` is better than `a`: meeting every constraint within `tol` first, then
+/// the lower cost among such points, else the lower violation sum.
+fn improves(a: Option<&Assessment>, b: Option<&Assessment>, tol: f64) -> bool {
+    match (a, b) {
+        (_, None) => false,
+        (None, Some(_)) => true,
+        (Some(a), Some(b)) => match (a.max() <= tol, b.max() <= tol) {
+            (true, true) => b.cost < a.cost,
+            (false, false) => b.sum() < a.sum(),
+            (a_met, _) => !a_met,
+        },
+    }
+}
+
+/// Solves one trial from physical start `x0`: the feasibility phase first when the problem asks
+/// for it ([`crate::gait::feasibility`]), then the SQP solve (and restarts) from its end point;
+/// the best point met (by [`improves`]) is the trial's result.
 pub fn solve_trial(
     problem: &Problem,
     f: &Formulation<'_>,
@@ -196,51 +223,125 @@ pub fn solve_trial(
     let tol = problem.trials.tolerance;
     let mut nlp = f.starting_at(x0);
     let start = assess(f, nlp.hand_made_start());
-    let mut solution = solve(&nlp, options);
-    let mut x = nlp.physical(&solution.x);
-    let mut end = assess(f, &x);
-    let mut status = classify(start.as_ref(), end.as_ref(), tol);
-    let (mut iterations, mut evaluations) = (solution.iterations, solution.evaluations);
-    let mut log = solution.log.clone();
-    for _ in 0..problem.trials.restarts {
+    let (mut x, mut end) = (nlp.hand_made_start().to_vec(), start.clone());
+    let (mut iterations, mut evaluations) = (0, Evaluations::default());
+    if problem.trials.feasibility_first {
+        let settings = FeasibilitySettings {
+            target: FEASIBILITY_TARGET * tol,
+            max_iterations: options.max_iterations,
+            max_time: options.max_time.unwrap_or(f64::INFINITY),
+            verbose: options.verbosity >= 1,
+        };
+        let params = &nlp.hand_made_start()[..f.reduced().parameters()];
+        let mut current = params.to_vec();
+        for stage in stage_problems(problem, params, problem.trials.continuation_stages) {
+            let staged = Formulation::new(&stage).starting_at(&current);
+            let mut z0 = vec![0.0; staged.dims().n];
+            staged.start(&mut z0);
+            let phase = restore(&staged, &z0, &settings);
+            iterations += phase.iterations;
+            evaluations.functions += phase.evaluations.functions;
+            evaluations.derivatives += phase.evaluations.derivatives;
+            // Spline parameters only: the stages' shooting segments end at different steps,
+            // so their start states are rolled out afresh.
+            current = staged.physical(&phase.z);
+            current.truncate(params.len());
+        }
+        nlp = f.starting_at(&current);
+        let mut z0 = vec![0.0; nlp.dims().n];
+        nlp.start(&mut z0);
+        let phase = restore(&nlp, &z0, &settings);
+        iterations += phase.iterations;
+        evaluations.functions += phase.evaluations.functions;
+        evaluations.derivatives += phase.evaluations.derivatives;
+        let x_phase = nlp.physical(&phase.z);
+        let end_phase = assess(f, &x_phase);
+        if improves(end.as_ref(), end_phase.as_ref(), tol) {
+            (x, end) = (x_phase, end_phase);
+        }
+        nlp = f.starting_at(&x);
+        if !phase.reached {
+            // The SQP solve lowers the effort from a feasible point; from a stationary point
+            // of the violation it stalls as before (BENCHMARKS.md).
+            let solver_status = if phase.iterations >= options.max_iterations {
+                Status::IterationLimit
+            } else {
+                Status::Stalled
+            };
+            let solution = Solution {
+                status: solver_status,
+                x: nlp.scaled(&x),
+                lambda: Vec::new(),
+                z: Vec::new(),
+                objective: end.as_ref().map_or(f64::NAN, |a| a.cost),
+                constraints: Vec::new(),
+                max_violation: phase.max_violation,
+                optimality: f64::NAN,
+                iterations: phase.iterations,
+                evaluations,
+                seconds: clock.elapsed().as_secs_f64(),
+                log: Vec::new(),
+            };
+            x.truncate(f.reduced().parameters());
+            return TrialResult {
+                trial,
+                origin: if trial == 1 { "hand-made" } else { "random" },
+                x,
+                status: classify(start.as_ref(), end.as_ref(), tol),
+                start,
+                end,
+                solver_status,
+                iterations,
+                seconds: clock.elapsed().as_secs_f64(),
+                evaluations,
+                solution,
+            };
+        }
+    }
+    let mut remaining = options.clone();
+    let mut log: Vec<IterationRecord> = Vec::new();
+    let mut last: Option<Solution> = None;
+    for attempt in 0..=problem.trials.restarts {
+        if let Some(limit) = options.max_time {
+            remaining.max_time = Some((limit - clock.elapsed().as_secs_f64()).max(0.0));
+        }
+        let solution = solve(&nlp, &remaining);
+        iterations += solution.iterations;
+        evaluations.functions += solution.evaluations.functions;
+        evaluations.derivatives += solution.evaluations.derivatives;
+        evaluations.hessians += solution.evaluations.hessians;
+        let offset = log.last().map_or(0, |r| r.iter + 1);
+        let elapsed = log.last().map_or(0.0, |r| r.elapsed);
+        log.extend(solution.log.iter().cloned().map(|mut r| {
+            r.iter += offset;
+            r.elapsed += elapsed;
+            r
+        }));
+        let x_solved = nlp.physical(&solution.x);
+        let end_solved = assess(f, &x_solved);
+        // Without a feasibility phase the first solve's end point is the trial's result even
+        // if it is worse than the start (classified Unimproved); later points must improve.
+        let first = attempt == 0 && !problem.trials.feasibility_first;
+        if first || improves(end.as_ref(), end_solved.as_ref(), tol) {
+            (x, end) = (x_solved, end_solved);
+        }
         // A restart drops the quasi-Newton model, which stalls on the kinks of the contact
         // dynamics; a solve stopped by a budget is not restarted.
         let budget = matches!(
             solution.status,
             Status::IterationLimit | Status::TimeLimit | Status::Interrupted
         );
-        if status == TrialStatus::Success || budget {
+        last = Some(solution);
+        if budget || end.as_ref().is_some_and(|a| a.max() <= tol) {
             break;
         }
         nlp = f.starting_at(&x);
-        let again = solve(&nlp, options);
-        iterations += again.iterations;
-        evaluations.functions += again.evaluations.functions;
-        evaluations.derivatives += again.evaluations.derivatives;
-        evaluations.hessians += again.evaluations.hessians;
-        let offset = log.last().map_or(0, |r| r.iter + 1);
-        let elapsed = log.last().map_or(0.0, |r| r.elapsed);
-        log.extend(again.log.iter().cloned().map(|mut r| {
-            r.iter += offset;
-            r.elapsed += elapsed;
-            r
-        }));
-        let x_again = nlp.physical(&again.x);
-        let end_again = assess(f, &x_again);
-        let better = match (&end, &end_again) {
-            (_, None) => false,
-            (None, Some(_)) => true,
-            (Some(a), Some(b)) => b.sum() < a.sum() || (b.max() <= tol && b.cost < a.cost),
-        };
-        solution = again;
-        if better {
-            x = x_again;
-            end = end_again;
-            status = classify(start.as_ref(), end.as_ref(), tol);
-        }
     }
-    solution.log = log;
+    let status = classify(start.as_ref(), end.as_ref(), tol);
     x.truncate(f.reduced().parameters());
+    let mut solution = last.expect("at least one solve");
+    solution.log = log;
+    let solver_status = solution.status;
     TrialResult {
         trial,
         origin: if trial == 1 { "hand-made" } else { "random" },
@@ -248,7 +349,7 @@ pub fn solve_trial(
         start,
         end,
         status,
-        solver_status: solution.status,
+        solver_status,
         iterations,
         seconds: clock.elapsed().as_secs_f64(),
         evaluations,
@@ -412,6 +513,49 @@ mod tests {
             assert_eq!(a.status, b.status);
         }
         assert_eq!(one.len(), 2);
+    }
+
+    /// With the feasibility phase (and continuation) first, the short pogo jump raised to
+    /// 0.5 m, which the hand-made start misses, ends a Success.
+    #[test]
+    fn feasibility_phase_then_sqp_solves_a_raised_short_pogo_jump() {
+        let mut p = golden("pogo_jump_short");
+        for c in &mut p.constraints {
+            c.lower = 0.5;
+        }
+        p.trials.feasibility_first = true;
+        p.trials.continuation_stages = 3;
+        let options = Options {
+            max_iterations: 40,
+            verbosity: 0,
+            ..Options::default()
+        };
+        let r = &run_trials(&p, 8, Some(1), &options)[0];
+        let start = r.start.as_ref().unwrap();
+        assert!(start.max() > 10.0 * p.trials.tolerance, "{}", start.max());
+        assert_eq!(r.status, TrialStatus::Success, "{:?}", r.end);
+    }
+
+    /// Meeting the tolerance beats not meeting it; then lower cost, else lower violation sum.
+    #[test]
+    fn improvement_prefers_feasible_then_cheap_then_less_violated() {
+        let tol = 1e-3;
+        let with = |cost: f64, v: &[f64]| Assessment {
+            cost,
+            violations: v.to_vec(),
+        };
+        let met = with(5.0, &[5e-4, 0.0]);
+        let cheaper = with(4.0, &[9e-4, 1e-4]);
+        let unmet = with(1.0, &[2e-3, 0.0]);
+        let less = with(9.0, &[1.5e-3, 0.0]);
+        assert!(improves(Some(&unmet), Some(&met), tol));
+        assert!(!improves(Some(&met), Some(&unmet), tol));
+        assert!(improves(Some(&met), Some(&cheaper), tol));
+        assert!(!improves(Some(&cheaper), Some(&met), tol));
+        assert!(improves(Some(&unmet), Some(&less), tol));
+        assert!(!improves(Some(&less), Some(&unmet), tol));
+        assert!(improves(None, Some(&unmet), tol));
+        assert!(!improves(Some(&unmet), None, tol));
     }
 
     #[test]
