@@ -19,7 +19,7 @@
 //!
 //! `eval` simulates only to the last constraint time. `eval_derivatives` differentiates each
 //! segment exactly by forward sensitivities of the RK4 map with analytical ABA derivatives,
-//! seeded with the identity for the segment's start state (`reduced/sensitivity.rs`; ≈ 6× one
+//! seeded with the identity for the segment's start state (`reduced/sensitivity.rs`; about 4× one
 //! simulation on the Luxo leap). The reference oracle, and the fallback for floating bases, is
 //! forward dual numbers (`DualSVec64<8>`): the columns are split into chunks of 8 directions,
 //! ordered by knot. A knot's basis vanishes outside `(t_{k−1}, t_{k+1})`, so a row whose segment
