@@ -8,7 +8,9 @@
 //! `cargo run --release --example cmc_start_glb -- FILE.toml OUT.glb [RESOLUTION]`; it made
 //! `problems/cmc/double_bubble_start.glb` from `problems/cmc/double_bubble.toml` at resolution 3.
 
-use std::path::PathBuf;
+#[path = "common/cmc_start.rs"]
+mod cmc_start;
+
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
@@ -17,27 +19,9 @@ fn main() -> ExitCode {
         eprintln!("usage: cmc_start_glb FILE.toml OUT.glb [RESOLUTION]");
         return ExitCode::from(2);
     }
-    let problem = match optimize::cmc::load(&PathBuf::from(&args[0])) {
-        Ok(p) => p,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::from(2);
-        }
-    };
-    let problem = match args.get(2).map(|r| r.parse::<usize>()) {
-        Some(Ok(r)) => problem.with_resolution(r),
-        Some(Err(e)) => {
-            eprintln!("resolution: {e}");
-            return ExitCode::from(2);
-        }
-        None => problem,
-    };
-    let nlp = match problem.build() {
+    let nlp = match cmc_start::build_start(&args[0], args.get(2)) {
         Ok(nlp) => nlp,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::from(1);
-        }
+        Err(code) => return code,
     };
     let bytes = match optimize::cmc::export::glb(nlp.mesh()) {
         Ok(b) => b,

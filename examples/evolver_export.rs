@@ -5,7 +5,9 @@
 //! RESOLUTION overrides the file's refinement level; SCALE multiplies every length (default
 //! 100: metres to centimetres, so areas print in cm²).
 
-use std::path::PathBuf;
+#[path = "common/cmc_start.rs"]
+mod cmc_start;
+
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
@@ -14,21 +16,6 @@ fn main() -> ExitCode {
         eprintln!("usage: evolver_export FILE.toml OUT.fe [RESOLUTION [SCALE]]");
         return ExitCode::from(2);
     }
-    let problem = match optimize::cmc::load(&PathBuf::from(&args[0])) {
-        Ok(p) => p,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::from(2);
-        }
-    };
-    let problem = match args.get(2).map(|r| r.parse::<usize>()) {
-        Some(Ok(r)) => problem.with_resolution(r),
-        Some(Err(e)) => {
-            eprintln!("resolution: {e}");
-            return ExitCode::from(2);
-        }
-        None => problem,
-    };
     let scale = match args.get(3).map(|s| s.parse::<f64>()) {
         Some(Ok(s)) if s > 0.0 => s,
         Some(_) => {
@@ -37,12 +24,9 @@ fn main() -> ExitCode {
         }
         None => 100.0,
     };
-    let nlp = match problem.build() {
+    let nlp = match cmc_start::build_start(&args[0], args.get(2)) {
         Ok(nlp) => nlp,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::from(1);
-        }
+        Err(code) => return code,
     };
     let text = match optimize::cmc::evolver::datafile(nlp.mesh(), nlp.volumes(), scale) {
         Ok(t) => t,
