@@ -32,6 +32,19 @@ use super::operators::dot;
 use crate::solver::kkt::{Inertia, KktError, KktSolver, Regularization};
 use crate::solver::qp::{QpHessian, QpProblem};
 
+/// Dual regularization δ_d (relative to the equilibrated matrix) when H is given explicitly
+/// (sparse or dense): it may be indefinite, and then the unpivoted LDLᵀ is stable only if
+/// the dual pivots dominate. Eliminating a row with pivot −δ_d adds `aᵢaᵢᵀ/δ_d` to the primal
+/// block, so the factored matrix is congruent to `[H + AᵀA/δ_d, 0; 0, −δ_d I]` (Sylvester):
+/// its inertia is (n, m) only if H is positive definite on the null space of A (Debreu's
+/// lemma), a sound test for the inertia correction whatever the elimination order. With the
+/// default 1e-9 the `1/δ_d` terms swamp H in rounding: a double bubble KKT matrix whose reduced
+/// Hessian is positive definite (smallest eigenvalue 1e-6 of the largest) reported 27 extra
+/// negative pivots and refinement diverged, so every QP was convexified by a shift making H
+/// itself definite. 1e-5 gave the right inertia and converged in ≤ 3 refinement steps (1e-7
+/// needed 10); the refinement against the unregularized K removes δ_d from the answer.
+const EXPLICIT_DUAL_REGULARIZATION: f64 = 1e-5;
+
 /// Refinement steps allowed per KKT solve.
 const REFINEMENT_STEPS: usize = 4;
 /// Relative residual at which refinement stops.
@@ -227,8 +240,14 @@ impl NewtonSystem {
         // The low-rank form's K₀ has the diagonal δI + Σ as its Hessian block, already well
         // scaled; equilibrating it changed the L-BFGS path's iterates for the worse
         // (tests/large_problem.rs at n = 3000 ended Acceptable instead of Optimal).
+        let low_rank = matches!(qp.h, QpHessian::LowRank { .. });
         let reg = Regularization {
-            equilibrate: !matches!(qp.h, QpHessian::LowRank { .. }),
+            equilibrate: !low_rank,
+            dual: if low_rank {
+                Regularization::default().dual
+            } else {
+                EXPLICIT_DUAL_REGULARIZATION
+            },
             ..Regularization::default()
         };
         let inertia = self.kkt.factor(reg)?;

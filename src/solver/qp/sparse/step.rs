@@ -63,7 +63,7 @@ pub(super) fn iterate(
     complementarity_targets(qp, layout, ws, 0.0, false);
     direction(qp, layout, ws, system)?;
     std::mem::swap(&mut ws.aff, &mut ws.dir);
-    let alpha_aff = max_step(qp, layout, &ws.x, &ws.aff);
+    let alpha_aff = max_step(qp, layout, &ws.x, &ws.aff).min(1.0);
     let sigma = if layout.pairs > 0 && mu > 0.0 {
         let mu_aff =
             complementarity_after(qp, layout, &ws.x, &ws.aff, alpha_aff) / layout.pairs as f64;
@@ -213,7 +213,10 @@ fn slack_rho(qp: &QpProblem<'_>, layout: &Layout, ws: &Workspace, i: usize) -> f
     rho
 }
 
-/// Largest α ≤ ∞ keeping every slack and multiplier nonnegative along `dir`.
+/// Largest α (∞ when nothing limits it) keeping every slack and multiplier nonnegative along
+/// `dir`. The step taken is `min(1, 0.995 α)`: a full Newton step whenever the boundary is
+/// beyond it (always for a QP without bounds or inequality rows, which is then solved by one
+/// step; capping α at 1 before the 0.995 left a residual of 0.5 % after every step).
 fn max_step(qp: &QpProblem<'_>, layout: &Layout, x: &Point, dir: &Point) -> f64 {
     let mut alpha = f64::INFINITY;
     let mut limit = |value: f64, change: f64| {
@@ -241,7 +244,7 @@ fn max_step(qp: &QpProblem<'_>, layout: &Layout, x: &Point, dir: &Point) -> f64 
             limit(x.wu[i], dir.wu[i]);
         }
     }
-    alpha.min(1.0)
+    alpha
 }
 
 /// tᵀz after a step α along `dir`.
