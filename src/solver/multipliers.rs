@@ -7,11 +7,12 @@
 //! All quantities are those of the scaled problem.
 //!
 //! Small problems form the normal equations `J Jᵀ λ = −J ∇f` densely; when `rows × n` exceeds
-//! [`DENSE_ENTRIES`] they are formed and factored sparse (J stays sparse, no rows×n matrix).
+//! [`DENSE_ENTRIES`] the equivalent augmented system is factored sparse instead (J stays
+//! sparse; no rows×n matrix and no J Jᵀ).
 
 use nalgebra::{DMatrix, DVector};
-use nalgebra_sparse::factorization::CscCholesky;
-use nalgebra_sparse::{CooMatrix, CscMatrix, CsrMatrix};
+
+use super::kkt::{KktSolver, Regularization};
 
 /// Largest initial least-squares multiplier kept (IPOPT's `constr_mult_init_max`).
 pub const MAX_INITIAL_MULTIPLIER: f64 = 1e3;
@@ -90,33 +91,41 @@ fn dense_estimate(p: &LinearizedPoint, position: &[usize], count: usize) -> Opti
     Some(normal.cholesky()?.solve(&(-(&j * g))))
 }
 
-/// As [`dense_estimate`] with sparse J and a sparse Cholesky factorization of J Jᵀ.
+/// As [`dense_estimate`] with sparse J, through the augmented system
+/// ```text
+///     [ I   Jᵀ ] [r]   [−∇f]
+///     [ J  −εI ] [λ] = [ 0 ]       (r = −∇f − Jᵀλ, J r = 0 ⇔ J Jᵀ λ = −J ∇f)
+/// ```
+/// which is quasi-definite, so the fill-reducing (AMD) LDLᵀ of [`KktSolver`] is stable and
+/// J Jᵀ is never formed: dense rows of J (a mean over all vertices, a volume) would fill it,
+/// and a Cholesky factorization of it without ordering took minutes at 10⁴ rows.
 fn sparse_estimate(p: &LinearizedPoint, position: &[usize], count: usize) -> Option<DVector<f64>> {
     let n = p.grad.len();
-    let mut coo = CooMatrix::new(count, n);
+    let (mut rows, mut cols, mut values) = (Vec::new(), Vec::new(), Vec::new());
     for (k, (&r, &c)) in p.jac_rows.iter().zip(p.jac_cols).enumerate() {
         if position[r] != usize::MAX {
-            coo.push(position[r], c, p.jac[k]);
+            rows.push(n + position[r]);
+            cols.push(c);
+            values.push(p.jac[k]);
         }
     }
-    let j = CsrMatrix::from(&coo);
-    let normal = &j * &j.transpose();
-    let scale = normal
-        .diagonal_as_csr()
-        .values()
-        .iter()
-        .fold(1e-300_f64, |a, v| a.max(v.abs()));
-    let mut regularized = CooMatrix::new(count, count);
-    for (r, c, &v) in normal.triplet_iter() {
-        regularized.push(r, c, v);
+    let (mut kkt, positions) = KktSolver::from_lower_triplets(n, count, &rows, &cols).ok()?;
+    for (&at, &v) in positions.iter().zip(&values) {
+        kkt.values_mut()[at] += v;
     }
-    for k in 0..count {
-        regularized.push(k, k, 1e-12 * scale);
+    for j in 0..n {
+        let at = kkt.diagonal_position(j);
+        kkt.values_mut()[at] = 1.0;
     }
-    let chol = CscCholesky::factor(&CscMatrix::from(&regularized)).ok()?;
-    let jg = &j * &DVector::from_column_slice(p.grad);
-    Some(chol.solve(&(-jg)).column(0).into_owned())
+    kkt.factor(Regularization::default()).ok()?;
+    let mut rhs: Vec<f64> = p.grad.iter().map(|g| -g).collect();
+    rhs.resize(n + count, 0.0);
+    kkt.solve_refined(&mut rhs, REFINEMENT_STEPS, 1e-14).ok()?;
+    Some(DVector::from_column_slice(&rhs[n..]))
 }
+
+/// Refinement steps of the augmented-system solve.
+const REFINEMENT_STEPS: usize = 10;
 
 #[cfg(test)]
 mod tests {

@@ -102,6 +102,10 @@ const MAX_RETREATS: usize = 3;
 const RETREAT_STIFFNESS: f64 = 10.0;
 /// Elastic-penalty increases per iteration.
 const MAX_STEERING: usize = 8;
+/// Decay of the exact-Hessian step damping after a full step (see `damp_exact_steps`).
+const DAMPING_DECAY: f64 = 3.0;
+/// Damping below which it is dropped (absolute, on the scaled problem).
+const DAMPING_MIN: f64 = 1e-8;
 /// Consecutive iterations within 100× the tolerances before `Acceptable`.
 const ACCEPTABLE_ITERATIONS: usize = 15;
 
@@ -423,6 +427,9 @@ impl<'a> Sqp<'a> {
             match self.line_search(&point, &jac, d, slope, violation_slope) {
                 LineSearch::Accepted { point: next, alpha } => {
                     reset_done = false;
+                    if !self.model.is_quasi_newton() && self.sparse_qp() && !step.elastic {
+                        self.damp_exact_steps(alpha, dhd, d);
+                    }
                     self.lambda = lambda_qp;
                     if let Err(e) = self.update_model(&point, &next) {
                         let status = self.eval_status(&e);
@@ -471,6 +478,26 @@ impl<'a> Sqp<'a> {
             }
             iteration += 1;
         }
+    }
+
+    /// Shift floor of the next sparse QPs with the exact Hessian, from the step length α the
+    /// line search accepted: a Newton step that had to be cut to α < 1 is dominated by
+    /// directions of small curvature μ (the Rayleigh quotient `dᵀ(H + δI)d / dᵀd`) along which
+    /// the functions are far from quadratic (tangential sliding of a mesh: the linearized
+    /// constraints hold, the true ones change at second order). The shift δ = μ(1/α − 1) would
+    /// have made the step along such a direction the accepted one, while directions of large
+    /// curvature keep their full Newton step, instead of all being cut to α. After a full step
+    /// the floor decays ×1/[`DAMPING_DECAY`] (to 0 below `DAMPING_MIN` of the Hessian scale),
+    /// like a trust region that grows back.
+    fn damp_exact_steps(&mut self, alpha: f64, dhd: f64, d: &[f64]) {
+        let dd: f64 = d.iter().map(|v| v * v).sum();
+        let floor = if alpha < 1.0 && dd > 0.0 && dhd > 0.0 {
+            self.warm.shift_floor().max(dhd / dd * (1.0 / alpha - 1.0))
+        } else {
+            self.warm.shift_floor() / DAMPING_DECAY
+        };
+        let floor = if floor < DAMPING_MIN { 0.0 } else { floor };
+        self.warm.set_shift_floor(floor);
     }
 
     /// Before `Infeasible` is declared at a stationary point of the violation that is clearly

@@ -85,6 +85,8 @@ pub struct WarmStart {
     shift_memory: f64,
     /// The next sparse solve repeats the last shift (see [`WarmStart::snapshot`]).
     repeat_shift: bool,
+    /// Smallest shift of the sparse solves (absolute; see [`WarmStart::set_shift_floor`]).
+    shift_floor: f64,
 }
 
 impl fmt::Debug for WarmStart {
@@ -132,6 +134,18 @@ impl WarmStart {
         self.convexification
     }
 
+    /// Sets the smallest convexification shift δ (absolute) of later sparse solves of a
+    /// `SparseLower` Hessian: the SQP's damping of Newton steps that its line search had to cut
+    /// (a Levenberg–Marquardt-like regularization; 0 switches it off).
+    pub fn set_shift_floor(&mut self, floor: f64) {
+        self.shift_floor = floor.max(0.0);
+    }
+
+    /// The current shift floor (see [`WarmStart::set_shift_floor`]).
+    pub fn shift_floor(&self) -> f64 {
+        self.shift_floor
+    }
+
     /// Puts back the state taken by [`WarmStart::snapshot`].
     pub fn restore(&mut self, saved: Snapshot) {
         self.working_set = saved.working_set;
@@ -165,6 +179,11 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
                 (SHIFT_DECREASE * warm.shift_memory).max(SHIFT_MIN),
                 SHIFT_GROWTH,
             )
+        };
+        solver.min_shift = if matches!(problem.h, QpHessian::SparseLower(_)) {
+            warm.shift_floor
+        } else {
+            0.0
         };
         let (mut solution, info) = solver.solve(problem, tolerance);
         warm.convexification = info.convexification;

@@ -135,6 +135,9 @@ pub struct SparseQp {
     /// When set, the absolute shift δ_c used without an inertia search (the caller knows it
     /// suffices, e.g. the QP has more equality rows than one already convexified with it).
     pub fixed_shift: Option<f64>,
+    /// Smallest shift δ_c tried (absolute, default 0): an SQP damps its steps with it when
+    /// the exact Hessian's Newton steps were much longer than its line search could accept.
+    pub min_shift: f64,
     system: Option<NewtonSystem>,
     layout: Layout,
     ws: Workspace,
@@ -258,6 +261,7 @@ impl SparseQp {
             first_shift: DEFAULT_FIRST_SHIFT,
             shift_growth: DEFAULT_SHIFT_GROWTH,
             fixed_shift: None,
+            min_shift: 0.0,
             system: None,
             layout: Layout::default(),
             ws: Workspace::default(),
@@ -315,6 +319,7 @@ impl SparseQp {
             None => match system.convexify(
                 qp,
                 layout,
+                self.min_shift,
                 self.first_shift,
                 self.shift_growth,
                 &mut ws.sig_d,

@@ -32,6 +32,25 @@ use super::operators::dot;
 use crate::solver::kkt::{Inertia, KktError, KktSolver, Regularization};
 use crate::solver::qp::{QpHessian, QpProblem};
 
+/// Dual regularization δ_d (relative to the equilibrated matrix) of the inertia test when H is
+/// given explicitly (sparse or dense), and of the Newton solves once the default 1e-9 proved
+/// unstable. H may be indefinite, and then the unpivoted LDLᵀ is stable only if the dual pivots
+/// dominate. Eliminating a row with pivot −δ_d adds `aᵢaᵢᵀ/δ_d` to the primal block, so the
+/// factored matrix is congruent to `[H + AᵀA/δ_d, 0; 0, −δ_d I]` (Sylvester): its inertia is
+/// (n, m) only if H is positive definite on the null space of A (Debreu's lemma), a sound test
+/// whatever the elimination order. With 1e-9 the `1/δ_d` terms swamp H in rounding: a double
+/// bubble KKT matrix whose reduced Hessian is positive definite (smallest eigenvalue 1e-6 of
+/// the largest) reported 27 extra negative pivots and refinement diverged, so every QP was
+/// convexified by a shift making H itself definite. 1e-5 gave the right inertia and converged
+/// in ≤ 3 refinement steps (1e-7 needed 10). The Newton solves keep 1e-9 while it is accurate:
+/// with dependent equality rows (gait collocation) the larger δ_d selects another solution
+/// that refinement cannot remove, and the SQP took other steps.
+const STRONG_DUAL_REGULARIZATION: f64 = 1e-5;
+
+/// Relative residual `‖b − Kx‖∞ / (1 + ‖b‖∞)` above which a refined Newton solve counts as
+/// unstable and is repeated with [`STRONG_DUAL_REGULARIZATION`].
+const UNSTABLE_RESIDUAL: f64 = 1e-8;
+
 /// Refinement steps allowed per KKT solve.
 const REFINEMENT_STEPS: usize = 4;
 /// Relative residual at which refinement stops.
@@ -72,6 +91,9 @@ pub struct NewtonSystem {
     small: Vec<f64>,
     /// Factorizations performed since creation.
     pub factorizations: usize,
+    /// The Newton solves use [`STRONG_DUAL_REGULARIZATION`] (set once the default was unstable;
+    /// kept for the later QPs of the same pattern).
+    strong_dual: bool,
 }
 
 impl NewtonSystem {
@@ -128,6 +150,7 @@ impl NewtonSystem {
             small: vec![0.0; 2 * p],
             kkt,
             factorizations: 0,
+            strong_dual: false,
         })
     }
 
@@ -223,15 +246,20 @@ impl NewtonSystem {
 
     /// Factors the assembled K₀ and, for a low-rank Hessian, prepares the Woodbury correction.
     pub fn factor(&mut self, qp: &QpProblem<'_>, layout: &Layout) -> Result<Inertia, KktError> {
+        let strong = self.strong_dual;
+        self.factor_with(qp, layout, strong)
+    }
+
+    /// [`NewtonSystem::factor`] with the dual regularization chosen: `strong` takes
+    /// [`STRONG_DUAL_REGULARIZATION`] for an explicit H.
+    fn factor_with(
+        &mut self,
+        qp: &QpProblem<'_>,
+        layout: &Layout,
+        strong: bool,
+    ) -> Result<Inertia, KktError> {
         self.factorizations += 1;
-        // The low-rank form's K₀ has the diagonal δI + Σ as its Hessian block, already well
-        // scaled; equilibrating it changed the L-BFGS path's iterates for the worse
-        // (tests/large_problem.rs at n = 3000 ended Acceptable instead of Optimal).
-        let reg = Regularization {
-            equilibrate: !matches!(qp.h, QpHessian::LowRank { .. }),
-            ..Regularization::default()
-        };
-        let inertia = self.kkt.factor(reg)?;
+        let inertia = self.kkt.factor(regularization(qp, strong))?;
         if let QpHessian::LowRank { w, m, .. } = qp.h {
             let (n, dim, p) = (self.n, self.dim(), w.ncols());
             // U = W with the rows of fixed variables zeroed, then V = K₀⁻¹U in one
@@ -262,8 +290,20 @@ impl NewtonSystem {
     /// Solves the Newton system in place (`rhs` of length n + m).
     pub fn solve(&mut self, qp: &QpProblem<'_>, rhs: &mut [f64]) -> Result<(), KktError> {
         if !matches!(qp.h, QpHessian::LowRank { .. }) {
-            self.kkt
+            let b_norm = rhs.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            self.work_rhs.copy_from_slice(rhs);
+            let report = self
+                .kkt
                 .solve_refined(rhs, REFINEMENT_STEPS, REFINEMENT_TOL)?;
+            if !self.strong_dual && report.residual > UNSTABLE_RESIDUAL * (1.0 + b_norm) {
+                // The factors of the same values with the dominant dual pivots.
+                self.strong_dual = true;
+                self.factorizations += 1;
+                self.kkt.factor(regularization(qp, true))?;
+                rhs.copy_from_slice(&self.work_rhs);
+                self.kkt
+                    .solve_refined(rhs, REFINEMENT_STEPS, REFINEMENT_TOL)?;
+            }
             return Ok(());
         }
         let mut b = std::mem::take(&mut self.work_rhs);
@@ -346,13 +386,16 @@ impl NewtonSystem {
         norm
     }
 
-    /// Finds the convexification shift δ_c ≥ 0 (see the module header): trials 0, then
-    /// `first_shift` relative to `max(1, maxⱼ|Hⱼⱼ|)` growing by `growth`. `scratch_n` and
-    /// `scratch_m` are length-n and length-m buffers. `None` when no shift up to 1e20 works.
+    /// Finds the convexification shift δ_c ≥ `floor` (see the module header): trials `floor`
+    /// (absolute, usually 0), then `first_shift` relative to `max(1, maxⱼ|Hⱼⱼ|)` (or `floor`
+    /// when larger) growing by `growth`. `scratch_n` and `scratch_m` are length-n and length-m
+    /// buffers. `None` when no shift up to 1e20 works.
+    #[allow(clippy::too_many_arguments)]
     pub fn convexify(
         &mut self,
         qp: &QpProblem<'_>,
         layout: &Layout,
+        floor: f64,
         first_shift: f64,
         growth: f64,
         scratch_n: &mut [f64],
@@ -371,7 +414,7 @@ impl NewtonSystem {
         let diag_scale = (0..self.n)
             .map(|j| self.diagonal_of_h(qp, j).abs())
             .fold(1.0f64, f64::max);
-        let mut shift = 0.0;
+        let mut shift = floor.max(0.0);
         while shift <= 1e20 * diag_scale {
             scratch_n.fill(shift);
             self.assemble(
@@ -381,14 +424,14 @@ impl NewtonSystem {
                 |i| layout.row[i] == RowKind::Equality,
                 scratch_m,
             );
-            let inertia = self.factor(qp, layout)?;
+            let inertia = self.factor_with(qp, layout, true)?;
             if inertia.is_quasi_definite_like(self.n, self.m) {
                 return Ok(Some(shift));
             }
             shift = if shift == 0.0 {
                 first_shift * diag_scale
             } else {
-                growth * shift
+                (growth * shift).max(first_shift * diag_scale)
             };
         }
         Ok(None)
@@ -403,6 +446,24 @@ impl NewtonSystem {
             }
             QpHessian::LowRank { delta, .. } => delta,
         }
+    }
+}
+
+/// The static regularization of a factorization of K₀; `strong` takes
+/// [`STRONG_DUAL_REGULARIZATION`] for an explicit H.
+fn regularization(qp: &QpProblem<'_>, strong: bool) -> Regularization {
+    // The low-rank form's K₀ has the diagonal δI + Σ as its Hessian block, already well
+    // scaled; equilibrating it changed the L-BFGS path's iterates for the worse
+    // (tests/large_problem.rs at n = 3000 ended Acceptable instead of Optimal).
+    let low_rank = matches!(qp.h, QpHessian::LowRank { .. });
+    Regularization {
+        equilibrate: !low_rank,
+        dual: if strong && !low_rank {
+            STRONG_DUAL_REGULARIZATION
+        } else {
+            Regularization::default().dual
+        },
+        ..Regularization::default()
     }
 }
 

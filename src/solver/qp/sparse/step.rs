@@ -3,7 +3,7 @@
 //! ```text
 //!     predictor:  complementarity target 0            → Δ_aff, α_aff, μ_aff
 //!     centring:   σ = (μ_aff / μ)³
-//!     corrector:  target σμ − Δt_aff ∘ Δz_aff          → Δ, α = min(1, 0.995 α_max)
+//!     corrector:  target σμ − Δt_aff ∘ Δz_aff          → Δ, α = 0.995 min(1, α_max) (1 without pairs)
 //! ```
 //! Both solves reuse one factorization of the Newton matrix (`newton.rs`); primal and dual
 //! variables take the common step α. Slacks t of the bounds are recomputed from d and s
@@ -63,7 +63,7 @@ pub(super) fn iterate(
     complementarity_targets(qp, layout, ws, 0.0, false);
     direction(qp, layout, ws, system)?;
     std::mem::swap(&mut ws.aff, &mut ws.dir);
-    let alpha_aff = max_step(qp, layout, &ws.x, &ws.aff);
+    let alpha_aff = max_step(qp, layout, &ws.x, &ws.aff).min(1.0);
     let sigma = if layout.pairs > 0 && mu > 0.0 {
         let mu_aff =
             complementarity_after(qp, layout, &ws.x, &ws.aff, alpha_aff) / layout.pairs as f64;
@@ -74,7 +74,13 @@ pub(super) fn iterate(
     // Corrector: centring plus the second-order term of the predictor.
     complementarity_targets(qp, layout, ws, sigma * mu, true);
     direction(qp, layout, ws, system)?;
-    let alpha = (STEP_TO_BOUNDARY * max_step(qp, layout, &ws.x, &ws.dir)).min(1.0);
+    let alpha = if layout.pairs == 0 {
+        // Nothing limits the step: the full Newton step solves a QP without bounds or
+        // inequality rows.
+        1.0
+    } else {
+        STEP_TO_BOUNDARY * max_step(qp, layout, &ws.x, &ws.dir).min(1.0)
+    };
     let (x, dir) = (&mut ws.x, &ws.dir);
     for (a, b) in [
         (&mut x.d, &dir.d),
@@ -213,7 +219,10 @@ fn slack_rho(qp: &QpProblem<'_>, layout: &Layout, ws: &Workspace, i: usize) -> f
     rho
 }
 
-/// Largest α ≤ ∞ keeping every slack and multiplier nonnegative along `dir`.
+/// Largest α (∞ when nothing limits it) keeping every slack and multiplier nonnegative along
+/// `dir`. The step taken is `0.995 min(1, α)`, or 1 for a QP without bounds or inequality
+/// rows (no complementarity pairs), which one step then solves: 0.995 left 0.5 % of the
+/// residual after every step, four iterations per QP.
 fn max_step(qp: &QpProblem<'_>, layout: &Layout, x: &Point, dir: &Point) -> f64 {
     let mut alpha = f64::INFINITY;
     let mut limit = |value: f64, change: f64| {
@@ -241,7 +250,7 @@ fn max_step(qp: &QpProblem<'_>, layout: &Layout, x: &Point, dir: &Point) -> f64 
             limit(x.wu[i], dir.wu[i]);
         }
     }
-    alpha.min(1.0)
+    alpha
 }
 
 /// tᵀz after a step α along `dir`.
