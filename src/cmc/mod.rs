@@ -5,9 +5,10 @@
 //! Flow: problem file ([`spec`]) → start mesh ([`generators`] or [`import`]) → [`nlp::CmcNlp`]
 //! (geometry in [`area`], [`curvature`], [`volume`]) → `solver::solve`, then rounds of edge
 //! flips ([`remesh`]) and re-solves (also after a feasible stalled solve: such a stall here is
-//! usually a triangle folded flat, whose opposite edge a flip removes) → result figures ([`figures`]) and an SVG preview
-//! ([`preview`]). `result.json` lists each flip round's areas (before flips, after flips, after
-//! the re-solve): the effect of the mesh-quality mechanism on the area.
+//! usually a triangle folded flat, whose opposite edge a flip removes) → result figures
+//! ([`figures`]) and an SVG preview ([`preview`]). `result.json` lists each flip round's
+//! areas (before flips, after flips, after the re-solve): the effect of the mesh-quality
+//! mechanism on the area.
 //! The final mesh is also written as `model.glb` ([`export`]).
 
 pub mod area;
