@@ -4,9 +4,11 @@
 //!
 //! Flow: problem file ([`spec`]) → start mesh ([`generators`] or [`import`]) → [`nlp::CmcNlp`]
 //! (geometry in [`area`], [`curvature`], [`volume`]) → `solver::solve`, then rounds of edge
-//! flips ([`remesh`]) and re-solves → result figures ([`figures`]) and an SVG preview
-//! ([`preview`]). `result.json` lists each flip round's areas (before flips, after flips, after
-//! the re-solve): the effect of the mesh-quality mechanism on the area.
+//! flips ([`remesh`]) and re-solves (also after a feasible stalled solve: such a stall here is
+//! usually a triangle folded flat, whose opposite edge a flip removes) → result figures
+//! ([`figures`]) and an SVG preview ([`preview`]). `result.json` lists each flip round's
+//! areas (before flips, after flips, after the re-solve): the effect of the mesh-quality
+//! mechanism on the area.
 //! The final mesh is also written as `model.glb` ([`export`]).
 
 pub mod area;
@@ -37,10 +39,10 @@ use std::time::Instant;
 
 use crate::error::{Error, InputError};
 use crate::run::{Artifact, Outcome, ResultSummary, RunOptions};
-use crate::solver::Nlp;
 use crate::solver::derivatives::{
     CheckOptions, FiniteDifferenceOptions, check_derivatives, jittered_start, spread_columns,
 };
+use crate::solver::{Nlp, Status};
 use crate::spec::Source;
 
 use nlp::{CmcNlp, VolumeConstraint};
@@ -140,7 +142,9 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let mut rounds = Vec::new();
     // Equiangulate and re-solve (cmc::remesh); each round's areas show the flips' effect.
     for _ in 0..problem.spec.file.quality.flip_rounds {
-        if !solution.status.is_success() {
+        let feasible_stall = solution.status == Status::Stalled
+            && solution.max_violation <= options.constraint_tolerance;
+        if !(solution.status.is_success() || feasible_stall) {
             break;
         }
         let mesh = nlp

@@ -20,8 +20,10 @@
 
 use std::collections::BTreeMap;
 
+use super::area::area_vector;
 use super::generators::{Shape, add_path, add_triangle_patch};
-use super::mesh::{MeshBuilder, MeshError, Point};
+use super::mesh::{Mesh, MeshBuilder, MeshError, Point};
+use super::remesh::equiangulate;
 
 /// Film topologies on the octahedral frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
@@ -193,6 +195,51 @@ fn cone(edge: f64, levels: usize) -> Result<Shape, MeshError> {
 /// The weighted window partition's film on a wire octahedron of edge `edge` (m) with window
 /// weights `weights`; wires fixed, one surface `films`, `levels` segments per wall edge.
 pub fn partition_film(edge: f64, weights: &[f64; 8], levels: usize) -> Result<Shape, MeshError> {
+    // The fans of walls with short edges are slivers (`levels` segments on every edge, however
+    // short, so every sub-triangle is similar to its thin fan triangle), which the tangential
+    // regularization cannot repair during the solve (the films' triangles collapse). Smoothing
+    // within each planar wall alternated with Delaunay flips grades them; the area stays exact.
+    let mut mesh = partition_fans(edge, weights, levels)?;
+    for _ in 0..START_SMOOTHING_ROUNDS {
+        smooth_within_walls(&mut mesh)?;
+        mesh = equiangulate(&mesh, 1)?.0;
+    }
+    Ok(Shape {
+        mesh,
+        volumes: Vec::new(),
+    })
+}
+
+/// Rounds of smoothing and flipping applied to a partition start.
+const START_SMOOTHING_ROUNDS: usize = 30;
+
+/// One Gauss–Seidel sweep of Laplacian smoothing over the free vertices inside a wall (closed
+/// disk stars, hence all in one plane): each moves to its ring's centroid unless that would turn
+/// one of its triangles over. Wires, junction lines and the area are unchanged.
+fn smooth_within_walls(mesh: &mut Mesh) -> Result<(), MeshError> {
+    let mut pos = mesh.positions().to_vec();
+    for v in 0..mesh.vertex_count() {
+        if mesh.flags()[v].fixed || !mesh.is_interior_manifold(v) {
+            continue;
+        }
+        let ring = mesh.neighbours(v);
+        let target = ring.iter().map(|&w| pos[w]).sum::<Point>() / ring.len() as f64;
+        let keeps_orientation = mesh.vertex_triangles(v).iter().all(|&t| {
+            let tri = mesh.triangles()[t];
+            let corners = |at: Point| tri.map(|u| if u == v { at } else { pos[u] });
+            let before = area_vector(&corners(pos[v]));
+            let after = area_vector(&corners(target));
+            after.dot(&before) > 0.05 * before.norm_squared()
+        });
+        if keeps_orientation {
+            pos[v] = target;
+        }
+    }
+    mesh.set_positions(pos)
+}
+
+/// The partition's walls, each meshed as a fan of triangle patches around its centroid.
+fn partition_fans(edge: f64, weights: &[f64; 8], levels: usize) -> Result<Mesh, MeshError> {
     let n = levels.max(1);
     let half = edge / 2f64.sqrt();
     let walls = partition_walls(half, weights);
@@ -248,16 +295,14 @@ pub fn partition_film(edge: f64, weights: &[f64; 8], levels: usize) -> Result<Sh
             add_triangle_patch(&mut b, films, &spokes[i], &spokes[j], &base);
         }
     }
-    Ok(Shape {
-        mesh: b.build()?,
-        volumes: Vec::new(),
-    })
+    b.build()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::cmc::area::total_area;
+    use crate::cmc::figures::quality;
 
     const STABLE: [OctahedronTopology; 5] = [
         OctahedronTopology::Tetrahedral,
@@ -316,6 +361,22 @@ mod tests {
             .map(|(_, _, p)| polygon_area(p))
             .sum();
         assert!((area - 2.0 * 2f64.sqrt()).abs() < 1e-9, "{area}");
+    }
+
+    #[test]
+    fn flipped_starts_are_better_shaped() {
+        for topology in STABLE {
+            let (walls, levels) = (window_weights(topology).unwrap(), 6);
+            let flipped = octahedron_frame(1.0, topology, levels).unwrap().mesh;
+            let fans = partition_fans(1.0, &walls, levels).unwrap();
+            let (before, after) = (
+                quality(&fans).min_angle_deg,
+                quality(&flipped).min_angle_deg,
+            );
+            eprintln!("{topology:?}: {before:.3}° -> {after:.3}°");
+            assert!(after > 1.5 * before, "{topology:?}: {before} -> {after}");
+            assert!((total_area(&flipped) - total_area(&fans)).abs() < 1e-12);
+        }
     }
 
     #[test]
