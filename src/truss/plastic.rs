@@ -19,6 +19,7 @@
 //!   P/2). With both supports pinned the optimum is lower (horizontal thrust is free).
 
 use nalgebra::DMatrix;
+use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
 use super::lp::{self, LpError};
 use super::model::Structure;
@@ -41,8 +42,18 @@ pub struct PlasticLayout {
     pub dual_infeasibility: f64,
 }
 
-/// Solves the plastic layout LP (module header) for load case `case`; `planar` restricts
-/// balance to x and y.
+/// How the layout LP is solved ([`super::lp`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LpMethod {
+    /// The dense two-phase simplex method: a vertex solution, for small reference problems.
+    Simplex,
+    /// The sparse interior-point method: a point of the optimal face, for whole ground
+    /// structures.
+    InteriorPoint,
+}
+
+/// Solves the plastic layout LP (module header) for load case `case` by the dense simplex
+/// method (the reference); `planar` restricts balance to x and y.
 pub fn layout(
     structure: &Structure,
     case: usize,
@@ -56,17 +67,19 @@ pub fn layout(
             (length / sigma_t, length / sigma_c)
         })
         .collect();
-    layout_with_costs(structure, case, if planar { 2 } else { 3 }, &costs)
+    let axes = if planar { 2 } else { 3 };
+    layout_with_costs(structure, case, axes, &costs, LpMethod::Simplex)
 }
 
 /// The layout LP with general per-beam costs: `costs[j] = (cost per newton of tension, cost per
 /// newton of compression)` of beam j (any unit; `volume` is in that unit times N), balance in
-/// the first `axes` coordinate directions.
+/// the first `axes` coordinate directions, solved by `method`.
 pub fn layout_with_costs(
     structure: &Structure,
     case: usize,
     axes: usize,
     costs: &[(f64, f64)],
+    method: LpMethod,
 ) -> Result<PlasticLayout, LpError> {
     let beams = structure.beams.len();
     let mut rows: Vec<(usize, nalgebra::Vector3<f64>)> = Vec::new();
@@ -78,7 +91,7 @@ pub fn layout_with_costs(
         }
     }
     first_row.push(rows.len());
-    let mut a = DMatrix::<f64>::zeros(rows.len(), 2 * beams);
+    let mut a = CooMatrix::new(rows.len(), 2 * beams);
     let mut cost = vec![0.0; 2 * beams];
     for (j, beam) in structure.beams.iter().enumerate() {
         let length = structure.length(j);
@@ -88,8 +101,9 @@ pub fn layout_with_costs(
             for row in first_row[end]..first_row[end + 1] {
                 let v = sign * rows[row].1.dot(&e);
                 // Column j: compression c_j (λ = +c); column beams + j: tension t_j (λ = −t).
-                a[(row, j)] += v;
-                a[(row, beams + j)] -= v;
+                // Duplicate entries (a beam joining a joint to itself cannot occur) would sum.
+                a.push(row, j, v);
+                a.push(row, beams + j, -v);
             }
         }
         cost[j] = costs[j].1;
@@ -99,7 +113,10 @@ pub fn layout_with_costs(
         .iter()
         .map(|(i, r)| -r.dot(&structure.joints[*i].loads[case]))
         .collect();
-    let s = lp::solve(&a, &b, &cost)?;
+    let s = match method {
+        LpMethod::Simplex => lp::solve(&DMatrix::from(&a), &b, &cost)?,
+        LpMethod::InteriorPoint => lp::solve_sparse(&CsrMatrix::from(&a), &b, &cost)?,
+    };
     let forces = (0..beams).map(|j| s.x[j] - s.x[beams + j]).collect();
     let dual_volume = s.y.iter().zip(&b).map(|(y, b)| y * b).sum();
     Ok(PlasticLayout {
