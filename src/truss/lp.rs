@@ -410,6 +410,29 @@ mod tests {
     }
 
     #[test]
+    fn sparse_solver_finds_the_same_vertex_and_certificate() {
+        // The LP above, plus a tied column x3 (a copy of x1): the crossover returns a vertex.
+        let dense =
+            DMatrix::from_row_slice(2, 5, &[1.0, 1.0, 1.0, 0.0, 1.0, 1.0, 3.0, 0.0, 1.0, 1.0]);
+        let a = CsrMatrix::from(&dense);
+        let (b, c) = ([4.0, 6.0], [-1.0, -2.0, 0.0, 0.0, -1.0]);
+        let s = solve_sparse(&a, &b, &c).unwrap();
+        let reference = solve(&dense, &b, &c).unwrap();
+        assert!((s.objective - reference.objective).abs() < 1e-9);
+        assert!((s.x[0] + s.x[4] - 3.0).abs() < 1e-9 && (s.x[1] - 1.0).abs() < 1e-9);
+        assert!(s.x[0].min(s.x[4]) == 0.0, "not a vertex: {:?}", s.x);
+        assert!(s.primal_residual < 1e-9 && s.dual_infeasibility < 1e-9);
+        let dual: f64 = s.y.iter().zip(&b).map(|(y, b)| y * b).sum();
+        assert!((dual - s.objective).abs() < 1e-8);
+        // x1 + x2 = −1 has no x ≥ 0.
+        let a = CsrMatrix::from(&DMatrix::from_row_slice(1, 2, &[1.0, 1.0]));
+        assert_eq!(
+            solve_sparse(&a, &[-1.0], &[1.0, 1.0]),
+            Err(LpError::Infeasible)
+        );
+    }
+
+    #[test]
     fn negative_right_hand_sides_redundant_rows_and_failures() {
         // −x1 − x2 = −2 (twice: redundant), min x1 + 2x2 → x = (2, 0), f = 2.
         let a = DMatrix::from_row_slice(2, 2, &[-1.0, -1.0, -1.0, -1.0]);

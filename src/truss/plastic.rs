@@ -244,6 +244,54 @@ mod tests {
     }
 
     #[test]
+    fn interior_point_with_crossover_matches_the_simplex() {
+        // The half-wheel ground structure of the test above, both solvers; unequal strengths so
+        // that tension and compression columns differ.
+        let points = grid(9, 5, 0.25, -1.0);
+        let joints: Vec<Joint> = points
+            .iter()
+            .map(|q| {
+                let kind = if q.y == 0.0 && q.x.abs() == 1.0 {
+                    JointKind::Anchor(Support::Pinned)
+                } else if q.norm() == 0.0 {
+                    JointKind::Load
+                } else {
+                    JointKind::Free
+                };
+                let load = if q.norm() == 0.0 {
+                    Vec3::new(0.3, -1.0, 0.0)
+                } else {
+                    Vec3::zeros()
+                };
+                joint(q.x, q.y, kind, load)
+            })
+            .collect();
+        let beams = crate::truss::ground::connect(
+            &joints,
+            joints.len(),
+            &Default::default(),
+            &[],
+            &[],
+            1e-9,
+        );
+        let s = Structure { joints, beams };
+        let costs: Vec<(f64, f64)> = (0..s.beams.len())
+            .map(|j| (s.length(j) / 2.0, s.length(j)))
+            .collect();
+        let simplex = layout_with_costs(&s, 0, 2, &costs, LpMethod::Simplex).unwrap();
+        let interior = layout_with_costs(&s, 0, 2, &costs, LpMethod::InteriorPoint).unwrap();
+        let gap = (interior.volume - simplex.volume).abs() / simplex.volume;
+        assert!(gap < 1e-6, "{} vs {}", interior.volume, simplex.volume);
+        assert!(interior.primal_residual < 1e-9, "{interior:?}");
+        assert!(interior.dual_infeasibility < 1e-9, "{interior:?}");
+        assert!((interior.dual_volume - interior.volume).abs() < 1e-6 * simplex.volume);
+        // A vertex: at most one member per balance row carries force.
+        let rows = 2 * (s.joints.len() - 2);
+        let active = interior.forces.iter().filter(|f| f.abs() > 1e-9).count();
+        assert!(active <= rows, "{active} members on {rows} rows");
+    }
+
+    #[test]
     fn closed_forms() {
         assert!(
             (michell_half_wheel_volume(2.0, 3.0, 4.0) - 1.5 * std::f64::consts::PI).abs() < 1e-15
