@@ -98,8 +98,13 @@ pub fn layout_with_costs(
         let [p, q] = beam.ends;
         let e = (structure.joints[q].position - structure.joints[p].position) / length;
         for (end, sign) in [(p, -1.0), (q, 1.0)] {
-            for row in first_row[end]..first_row[end + 1] {
-                let v = sign * rows[row].1.dot(&e);
+            for (row, (_, direction)) in rows
+                .iter()
+                .enumerate()
+                .take(first_row[end + 1])
+                .skip(first_row[end])
+            {
+                let v = sign * direction.dot(&e);
                 // Column j: compression c_j (λ = +c); column beams + j: tension t_j (λ = −t).
                 // Duplicate entries (a beam joining a joint to itself cannot occur) would sum.
                 a.push(row, j, v);
