@@ -1,5 +1,11 @@
-//! A small dense linear-program solver used to certify truss results: the two-phase primal
-//! simplex method on a tableau. The entering column is the most negative reduced cost (Dantzig);
+//! Linear programs of the truss module, two ways:
+//! - [`solve`]: a small dense solver used to certify truss results, the two-phase primal
+//!   simplex method on a tableau (a vertex solution);
+//! - [`solve_sparse`]: large sparse LPs (layout LPs of whole ground structures) by the crate's
+//!   sparse interior-point QP (`solver::qp::sparse`, Mehrotra predictor–corrector) with a zero
+//!   Hessian, then a crossover to a vertex.
+//!
+//! Simplex details: The entering column is the most negative reduced cost (Dantzig);
 //! after a run of degenerate pivots it switches to Bland's rule, which cannot cycle, until a pivot
 //! makes progress again.
 //!
@@ -9,9 +15,23 @@
 //! reduced costs of the artificial columns, so a result can be certified independently:
 //! primal feasibility, dual feasibility and a zero duality gap.
 //!
-//! Dense: meant for ground structures of up to a few thousand bars.
+//! The dense simplex is meant for ground structures of up to a few hundred bars.
+//!
+//! Interior point: the solution is a point of the optimal face, not necessarily a vertex (where
+//! the optimum is not unique the interior-point limit lies near the face's analytic centre and
+//! spreads x over tied columns). Crossover: the columns with x_j above `SUPPORT_FRACTION` of the
+//! largest (the others are O(tolerance)) and the rows they touch form a small LP, which the
+//! dense simplex solves to a vertex; that vertex is optimal for the whole LP when its objective
+//! matches the interior-point one (to `CROSSOVER_GAP`), otherwise the interior-point x is kept.
+//! The interior-point duals are kept either way: a dual optimum is complementary to every
+//! primal optimum, so the pair stays certified. The QP multipliers λ of `A x = b` follow `c + Aᵀλ + z = 0` with z ≤ 0 at
+//! x = 0, so the LP duals are y = −λ (`Aᵀy = c + z ≤ c`). Both solvers report the same
+//! residuals recomputed from the input, so their results are certified the same way.
 
 use nalgebra::DMatrix;
+use nalgebra_sparse::{CscMatrix, CsrMatrix};
+
+use crate::solver::qp::{QpHessian, QpProblem, QpStatus, sparse};
 
 /// Why an LP has no optimal solution.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -25,6 +45,10 @@ pub enum LpError {
     /// The pivot limit was reached.
     #[error("the simplex method reached its pivot limit")]
     PivotLimit,
+    /// The interior-point method stopped short of its tolerance (iteration limit or a
+    /// numerical failure).
+    #[error("the interior-point method did not converge")]
+    IterationLimit,
 }
 
 /// An optimal primal–dual pair.
@@ -36,8 +60,8 @@ pub struct LpSolution {
     pub y: Vec<f64>,
     /// cᵀx.
     pub objective: f64,
-    /// Pivots taken (both phases).
-    pub pivots: usize,
+    /// Simplex pivots taken (both phases), or interior-point iterations.
+    pub iterations: usize,
     /// max |A x − b| recomputed from the input.
     pub primal_residual: f64,
     /// max(0, max_j (Aᵀy − c)_j) recomputed from the input.
@@ -254,10 +278,114 @@ pub fn solve(a: &DMatrix<f64>, b: &[f64], c: &[f64]) -> Result<LpSolution, LpErr
         x,
         y: yv.as_slice().to_vec(),
         objective,
-        pivots,
+        iterations: pivots,
         primal_residual,
         dual_infeasibility,
     })
+}
+
+/// Relative KKT tolerance of the interior-point solve (the `sparse` module header).
+const INTERIOR_TOLERANCE: f64 = 1e-10;
+
+/// Columns with x_j above this fraction of the largest enter the crossover LP.
+const SUPPORT_FRACTION: f64 = 1e-7;
+
+/// Largest relative objective increase accepted from the crossover vertex.
+const CROSSOVER_GAP: f64 = 1e-8;
+
+/// Solves `min cᵀx s.t. A x = b, x ≥ 0` by the sparse interior-point method and a crossover to
+/// a vertex (module header). Components of x below zero by rounding are set to zero.
+pub fn solve_sparse(a: &CsrMatrix<f64>, b: &[f64], c: &[f64]) -> Result<LpSolution, LpError> {
+    let (m, n) = (a.nrows(), a.ncols());
+    assert_eq!(b.len(), m);
+    assert_eq!(c.len(), n);
+    let zero_hessian = CscMatrix::zeros(n, n);
+    let lower = vec![0.0; n];
+    let upper = vec![f64::INFINITY; n];
+    let problem = QpProblem {
+        h: QpHessian::SparseLower(&zero_hessian),
+        g: c,
+        a,
+        dl: &lower,
+        du: &upper,
+        bl: b,
+        bu: b,
+    };
+    let sol = sparse::solve(&problem, INTERIOR_TOLERANCE);
+    match sol.status {
+        QpStatus::Optimal => {}
+        QpStatus::Infeasible => return Err(LpError::Infeasible),
+        QpStatus::Unbounded => return Err(LpError::Unbounded),
+        QpStatus::IterationLimit | QpStatus::Numerical => return Err(LpError::IterationLimit),
+    }
+    let mut x: Vec<f64> = sol.d.iter().map(|v| v.max(0.0)).collect();
+    let y: Vec<f64> = sol.lambda.iter().map(|l| -l).collect();
+    let mut objective: f64 = x.iter().zip(c).map(|(x, c)| x * c).sum();
+    if let Some((vertex, value)) = crossover(a, b, c, &x)
+        && value <= objective + CROSSOVER_GAP * objective.abs().max(f64::MIN_POSITIVE)
+    {
+        x = vertex;
+        objective = value;
+    }
+    let mut ax = vec![0.0; m];
+    let mut aty = vec![0.0; n];
+    for (r, row) in a.row_iter().enumerate() {
+        for (&j, &v) in row.col_indices().iter().zip(row.values()) {
+            ax[r] += v * x[j];
+            aty[j] += v * y[r];
+        }
+    }
+    let primal_residual = (0..m).map(|r| (ax[r] - b[r]).abs()).fold(0.0, f64::max);
+    let dual_infeasibility = (0..n).map(|j| aty[j] - c[j]).fold(0.0, f64::max);
+    Ok(LpSolution {
+        x,
+        y,
+        objective,
+        iterations: sol.iterations,
+        primal_residual,
+        dual_infeasibility,
+    })
+}
+
+/// The vertex of the LP restricted to the support of `x` and the rows it touches, scattered to
+/// full length, and its objective (module header); None when that LP fails or a row it leaves
+/// out has a nonzero right-hand side.
+fn crossover(a: &CsrMatrix<f64>, b: &[f64], c: &[f64], x: &[f64]) -> Option<(Vec<f64>, f64)> {
+    let largest = x.iter().copied().fold(0.0, f64::max);
+    let mut column = vec![usize::MAX; x.len()];
+    let mut support = Vec::new();
+    for (j, &v) in x.iter().enumerate() {
+        if v > SUPPORT_FRACTION * largest {
+            column[j] = support.len();
+            support.push(j);
+        }
+    }
+    let touches = |r: usize| (a.row(r).col_indices().iter()).any(|&j| column[j] != usize::MAX);
+    let mut rows = Vec::new();
+    for (r, &rhs) in b.iter().enumerate() {
+        if touches(r) {
+            rows.push(r);
+        } else if rhs != 0.0 {
+            return None;
+        }
+    }
+    let mut dense = DMatrix::<f64>::zeros(rows.len(), support.len());
+    for (k, &r) in rows.iter().enumerate() {
+        let row = a.row(r);
+        for (&j, &v) in row.col_indices().iter().zip(row.values()) {
+            if column[j] != usize::MAX {
+                dense[(k, column[j])] += v;
+            }
+        }
+    }
+    let sub_b: Vec<f64> = rows.iter().map(|&r| b[r]).collect();
+    let sub_c: Vec<f64> = support.iter().map(|&j| c[j]).collect();
+    let vertex = solve(&dense, &sub_b, &sub_c).ok()?;
+    let mut full = vec![0.0; x.len()];
+    for (k, &j) in support.iter().enumerate() {
+        full[j] = vertex.x[k];
+    }
+    Some((full, vertex.objective))
 }
 
 #[cfg(test)]
@@ -279,6 +407,29 @@ mod tests {
             let aty: f64 = (0..2).map(|r| a[(r, j)] * s.y[r]).sum();
             assert!(aty <= c[j] + 1e-12);
         }
+    }
+
+    #[test]
+    fn sparse_solver_finds_the_same_vertex_and_certificate() {
+        // The LP above, plus a tied column x3 (a copy of x1): the crossover returns a vertex.
+        let dense =
+            DMatrix::from_row_slice(2, 5, &[1.0, 1.0, 1.0, 0.0, 1.0, 1.0, 3.0, 0.0, 1.0, 1.0]);
+        let a = CsrMatrix::from(&dense);
+        let (b, c) = ([4.0, 6.0], [-1.0, -2.0, 0.0, 0.0, -1.0]);
+        let s = solve_sparse(&a, &b, &c).unwrap();
+        let reference = solve(&dense, &b, &c).unwrap();
+        assert!((s.objective - reference.objective).abs() < 1e-9);
+        assert!((s.x[0] + s.x[4] - 3.0).abs() < 1e-9 && (s.x[1] - 1.0).abs() < 1e-9);
+        assert!(s.x[0].min(s.x[4]) == 0.0, "not a vertex: {:?}", s.x);
+        assert!(s.primal_residual < 1e-9 && s.dual_infeasibility < 1e-9);
+        let dual: f64 = s.y.iter().zip(&b).map(|(y, b)| y * b).sum();
+        assert!((dual - s.objective).abs() < 1e-8);
+        // x1 + x2 = −1 has no x ≥ 0.
+        let a = CsrMatrix::from(&DMatrix::from_row_slice(1, 2, &[1.0, 1.0]));
+        assert_eq!(
+            solve_sparse(&a, &[-1.0], &[1.0, 1.0]),
+            Err(LpError::Infeasible)
+        );
     }
 
     #[test]

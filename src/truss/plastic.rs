@@ -19,6 +19,7 @@
 //!   P/2). With both supports pinned the optimum is lower (horizontal thrust is free).
 
 use nalgebra::DMatrix;
+use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
 use super::lp::{self, LpError};
 use super::model::Structure;
@@ -41,8 +42,18 @@ pub struct PlasticLayout {
     pub dual_infeasibility: f64,
 }
 
-/// Solves the plastic layout LP (module header) for load case `case`; `planar` restricts
-/// balance to x and y.
+/// How the layout LP is solved ([`super::lp`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LpMethod {
+    /// The dense two-phase simplex method: a vertex solution, for small reference problems.
+    Simplex,
+    /// The sparse interior-point method: a point of the optimal face, for whole ground
+    /// structures.
+    InteriorPoint,
+}
+
+/// Solves the plastic layout LP (module header) for load case `case` by the dense simplex
+/// method (the reference); `planar` restricts balance to x and y.
 pub fn layout(
     structure: &Structure,
     case: usize,
@@ -56,17 +67,19 @@ pub fn layout(
             (length / sigma_t, length / sigma_c)
         })
         .collect();
-    layout_with_costs(structure, case, if planar { 2 } else { 3 }, &costs)
+    let axes = if planar { 2 } else { 3 };
+    layout_with_costs(structure, case, axes, &costs, LpMethod::Simplex)
 }
 
 /// The layout LP with general per-beam costs: `costs[j] = (cost per newton of tension, cost per
 /// newton of compression)` of beam j (any unit; `volume` is in that unit times N), balance in
-/// the first `axes` coordinate directions.
+/// the first `axes` coordinate directions, solved by `method`.
 pub fn layout_with_costs(
     structure: &Structure,
     case: usize,
     axes: usize,
     costs: &[(f64, f64)],
+    method: LpMethod,
 ) -> Result<PlasticLayout, LpError> {
     let beams = structure.beams.len();
     let mut rows: Vec<(usize, nalgebra::Vector3<f64>)> = Vec::new();
@@ -78,18 +91,24 @@ pub fn layout_with_costs(
         }
     }
     first_row.push(rows.len());
-    let mut a = DMatrix::<f64>::zeros(rows.len(), 2 * beams);
+    let mut a = CooMatrix::new(rows.len(), 2 * beams);
     let mut cost = vec![0.0; 2 * beams];
     for (j, beam) in structure.beams.iter().enumerate() {
         let length = structure.length(j);
         let [p, q] = beam.ends;
         let e = (structure.joints[q].position - structure.joints[p].position) / length;
         for (end, sign) in [(p, -1.0), (q, 1.0)] {
-            for row in first_row[end]..first_row[end + 1] {
-                let v = sign * rows[row].1.dot(&e);
+            for (row, (_, direction)) in rows
+                .iter()
+                .enumerate()
+                .take(first_row[end + 1])
+                .skip(first_row[end])
+            {
+                let v = sign * direction.dot(&e);
                 // Column j: compression c_j (λ = +c); column beams + j: tension t_j (λ = −t).
-                a[(row, j)] += v;
-                a[(row, beams + j)] -= v;
+                // Duplicate entries (a beam joining a joint to itself cannot occur) would sum.
+                a.push(row, j, v);
+                a.push(row, beams + j, -v);
             }
         }
         cost[j] = costs[j].1;
@@ -99,7 +118,10 @@ pub fn layout_with_costs(
         .iter()
         .map(|(i, r)| -r.dot(&structure.joints[*i].loads[case]))
         .collect();
-    let s = lp::solve(&a, &b, &cost)?;
+    let s = match method {
+        LpMethod::Simplex => lp::solve(&DMatrix::from(&a), &b, &cost)?,
+        LpMethod::InteriorPoint => lp::solve_sparse(&CsrMatrix::from(&a), &b, &cost)?,
+    };
     let forces = (0..beams).map(|j| s.x[j] - s.x[beams + j]).collect();
     let dual_volume = s.y.iter().zip(&b).map(|(y, b)| y * b).sum();
     Ok(PlasticLayout {
@@ -224,6 +246,54 @@ mod tests {
             sol.volume
         );
         assert!(sol.volume <= 1.03 * exact, "{} vs {exact}", sol.volume);
+    }
+
+    #[test]
+    fn interior_point_with_crossover_matches_the_simplex() {
+        // The half-wheel ground structure of the test above, both solvers; unequal strengths so
+        // that tension and compression columns differ.
+        let points = grid(9, 5, 0.25, -1.0);
+        let joints: Vec<Joint> = points
+            .iter()
+            .map(|q| {
+                let kind = if q.y == 0.0 && q.x.abs() == 1.0 {
+                    JointKind::Anchor(Support::Pinned)
+                } else if q.norm() == 0.0 {
+                    JointKind::Load
+                } else {
+                    JointKind::Free
+                };
+                let load = if q.norm() == 0.0 {
+                    Vec3::new(0.3, -1.0, 0.0)
+                } else {
+                    Vec3::zeros()
+                };
+                joint(q.x, q.y, kind, load)
+            })
+            .collect();
+        let beams = crate::truss::ground::connect(
+            &joints,
+            joints.len(),
+            &Default::default(),
+            &[],
+            &[],
+            1e-9,
+        );
+        let s = Structure { joints, beams };
+        let costs: Vec<(f64, f64)> = (0..s.beams.len())
+            .map(|j| (s.length(j) / 2.0, s.length(j)))
+            .collect();
+        let simplex = layout_with_costs(&s, 0, 2, &costs, LpMethod::Simplex).unwrap();
+        let interior = layout_with_costs(&s, 0, 2, &costs, LpMethod::InteriorPoint).unwrap();
+        let gap = (interior.volume - simplex.volume).abs() / simplex.volume;
+        assert!(gap < 1e-6, "{} vs {}", interior.volume, simplex.volume);
+        assert!(interior.primal_residual < 1e-9, "{interior:?}");
+        assert!(interior.dual_infeasibility < 1e-9, "{interior:?}");
+        assert!((interior.dual_volume - interior.volume).abs() < 1e-6 * simplex.volume);
+        // A vertex: at most one member per balance row carries force.
+        let rows = 2 * (s.joints.len() - 2);
+        let active = interior.forces.iter().filter(|f| f.abs() > 1e-9).count();
+        assert!(active <= rows, "{active} members on {rows} rows");
     }
 
     #[test]

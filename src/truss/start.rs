@@ -1,7 +1,8 @@
 //! Staged start: a plastic layout LP on the fixed ground structure gives the geometry solve
 //! forces that balance the loads, and the beams it leaves idle are dropped before that solve.
 //!
-//! Stage 1 (sizing at fixed geometry, a linear program solved by [`super::lp`]): per load case
+//! Stage 1 (sizing at fixed geometry, a linear program solved by the sparse interior-point
+//! method of [`super::lp::solve_sparse`]): per load case
 //! ```text
 //!     min Σ_j (a_j·t_j + b_j·c_j)   s.t. force balance (the NLP's rows, self-weight left out),
 //!                                        t, c ≥ 0,  λ = c − t   (N, + compression)
@@ -27,11 +28,13 @@
 //! geometry problem: their mass and balance terms vanish, so their joints' positions do not
 //! enter any active constraint and the reduced Hessian is singular along them.
 //!
-//! Degeneracy: most balance rows have a zero right-hand side (unloaded joints), so the simplex
-//! method takes long runs of degenerate pivots. Every balanced joint gets a seeded load of at
-//! most `PERTURBATION`·F per component (the classical perturbation remedy); the forces it causes
-//! are of that size, far below the idle threshold, and the start's imbalance stays below 1e-8·F
-//! (stage 2 removes it).
+//! Interior point, not simplex: the LP has thousands of columns on the larger ground structures
+//! and is highly degenerate (most balance rows have a zero right-hand side), which made the
+//! dense simplex take minutes. The interior-point solution lies on the optimal face but need
+//! not be a vertex; where the optimum is not unique it spreads the force over the tied members.
+//! No crossover is needed: the start uses only each member's sign and whether it is idle, and
+//! members off the optimal face end with forces of the order of the solver tolerance (1e-10
+//! relative), far below `IDLE_FRACTION`.
 //!
 //! Symmetry: the LP is solved on the whole ground structure; with mirror planes the forces are
 //! averaged with their mirror images plane by plane (the average of two balanced force sets is
@@ -40,20 +43,14 @@
 //! Obstacles: beams that cut a sphere obstacle, and joints inside one, are left out of the LP when
 //! the rest can carry the loads.
 
-use rand::{RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-
 use super::lp::LpError;
 use super::mass::Compression;
 use super::model::{Beam, Mirror, Objective, Obstacle, Settings, Structure};
 use super::nlp::ForceParts;
-use super::plastic;
+use super::plastic::{self, LpMethod};
 
 /// Beams carrying at most this fraction of the largest |λ| in every case are idle.
 pub const IDLE_FRACTION: f64 = 1e-6;
-
-/// Size of the load perturbation that breaks the LP's degeneracy, relative to the largest load.
-const PERTURBATION: f64 = 1e-9;
 
 /// The result of stage 1.
 #[derive(Debug, Clone, PartialEq)]
@@ -132,17 +129,13 @@ fn solve_on(
         .map(|f| f.norm())
         .fold(0.0, f64::max)
         .max(f64::MIN_POSITIVE);
-    // Loads scaled to O(1) for the simplex tolerances, and perturbed (module header).
-    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    // Loads scaled to O(1) for the solver's tolerances.
     let sub = Structure {
         joints: (structure.joints.iter())
             .map(|j| {
                 let mut j = j.clone();
                 for f in j.loads.iter_mut() {
                     *f /= force_scale;
-                    for k in 0..3 {
-                        f[k] += PERTURBATION * (2.0 * rng.random::<f64>() - 1.0);
-                    }
                 }
                 j
             })
@@ -162,7 +155,13 @@ fn solve_on(
     let mut forces = vec![vec![0.0; structure.beams.len()]; cases];
     let mut cost = Vec::with_capacity(cases);
     for (c, case_forces) in forces.iter_mut().enumerate() {
-        let sol = plastic::layout_with_costs(&sub, c, settings.balance_axes(), &scaled)?;
+        let sol = plastic::layout_with_costs(
+            &sub,
+            c,
+            settings.balance_axes(),
+            &scaled,
+            LpMethod::InteriorPoint,
+        )?;
         for (k, &j) in kept.iter().enumerate() {
             case_forces[j] = sol.forces[k] * force_scale;
         }
