@@ -188,30 +188,24 @@ mod tests {
         points
     }
 
-    #[test]
-    fn half_wheel_lp_approaches_michell_from_above() {
-        // Simple supports at (±1, 0), P at (0, 0), nodes in y ≥ 0 on a 0.25 grid; all pairs
-        // connected except overlapping collinear ones.
-        let (p, a, sigma) = (1.0, 1.0, 1.0);
-        let points = grid(9, 5, 0.25, -1.0);
-        let joints: Vec<Joint> = points
+    /// The half-wheel ground structure: supports at (±1, 0) (west pinned, east `east`), the
+    /// load `load` at (0, 0), nodes in y ≥ 0 on a 0.25 grid, all pairs connected except
+    /// overlapping collinear ones.
+    fn half_wheel_ground(east: Support, load: Vec3) -> Structure {
+        let joints: Vec<Joint> = grid(9, 5, 0.25, -1.0)
             .iter()
             .map(|q| {
                 let kind = if q.y == 0.0 && q.x == -1.0 {
                     JointKind::Anchor(Support::Pinned)
                 } else if q.y == 0.0 && q.x == 1.0 {
-                    JointKind::Anchor(Support::Roller(vec![Vec3::y()]))
+                    JointKind::Anchor(east.clone())
                 } else if q.norm() == 0.0 {
                     JointKind::Load
                 } else {
                     JointKind::Free
                 };
-                let load = if q.norm() == 0.0 {
-                    Vec3::new(0.0, -p, 0.0)
-                } else {
-                    Vec3::zeros()
-                };
-                joint(q.x, q.y, kind, load)
+                let at = if q.norm() == 0.0 { load } else { Vec3::zeros() };
+                joint(q.x, q.y, kind, at)
             })
             .collect();
         let beams = crate::truss::ground::connect(
@@ -222,7 +216,15 @@ mod tests {
             &[],
             1e-9,
         );
-        let s = Structure { joints, beams };
+        Structure { joints, beams }
+    }
+
+    #[test]
+    fn half_wheel_lp_approaches_michell_from_above() {
+        // Simple supports at (±1, 0), P at (0, 0), nodes in y ≥ 0 on a 0.25 grid; all pairs
+        // connected except overlapping collinear ones.
+        let (p, a, sigma) = (1.0, 1.0, 1.0);
+        let s = half_wheel_ground(Support::Roller(vec![Vec3::y()]), Vec3::new(0.0, -p, 0.0));
         let sol = layout(&s, 0, true, sigma, sigma).unwrap();
         let exact = michell_half_wheel_volume(p, a, sigma);
         println!(
@@ -252,34 +254,7 @@ mod tests {
     fn interior_point_with_crossover_matches_the_simplex() {
         // The half-wheel ground structure of the test above, both solvers; unequal strengths so
         // that tension and compression columns differ.
-        let points = grid(9, 5, 0.25, -1.0);
-        let joints: Vec<Joint> = points
-            .iter()
-            .map(|q| {
-                let kind = if q.y == 0.0 && q.x.abs() == 1.0 {
-                    JointKind::Anchor(Support::Pinned)
-                } else if q.norm() == 0.0 {
-                    JointKind::Load
-                } else {
-                    JointKind::Free
-                };
-                let load = if q.norm() == 0.0 {
-                    Vec3::new(0.3, -1.0, 0.0)
-                } else {
-                    Vec3::zeros()
-                };
-                joint(q.x, q.y, kind, load)
-            })
-            .collect();
-        let beams = crate::truss::ground::connect(
-            &joints,
-            joints.len(),
-            &Default::default(),
-            &[],
-            &[],
-            1e-9,
-        );
-        let s = Structure { joints, beams };
+        let s = half_wheel_ground(Support::Pinned, Vec3::new(0.3, -1.0, 0.0));
         let costs: Vec<(f64, f64)> = (0..s.beams.len())
             .map(|j| (s.length(j) / 2.0, s.length(j)))
             .collect();
