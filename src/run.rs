@@ -145,13 +145,7 @@ impl ResultSummary {
         let d = nlp.dims();
         let (mut f, mut c) = (0.0, vec![0.0; d.m]);
         nlp.eval(x, &mut f, &mut c)?;
-        let (mut xl, mut xu, mut cl, mut cu) = (
-            vec![0.0; d.n],
-            vec![0.0; d.n],
-            vec![0.0; d.m],
-            vec![0.0; d.m],
-        );
-        nlp.bounds(&mut xl, &mut xu, &mut cl, &mut cu);
+        let crate::solver::Bounds { xl, xu, cl, cu } = crate::solver::Bounds::of(nlp);
         let max_violation = x
             .iter()
             .zip(xl.iter().zip(&xu))

@@ -121,13 +121,7 @@ fn damped_step(
 pub fn restore<N: Nlp>(nlp: &N, z0: &[f64], settings: &FeasibilitySettings) -> Feasibility {
     let clock = Instant::now();
     let d = nlp.dims();
-    let (mut xl, mut xu, mut cl, mut cu) = (
-        vec![0.0; d.n],
-        vec![0.0; d.n],
-        vec![0.0; d.m],
-        vec![0.0; d.m],
-    );
-    nlp.bounds(&mut xl, &mut xu, &mut cl, &mut cu);
+    let crate::solver::Bounds { xl, xu, cl, cu } = crate::solver::Bounds::of(nlp);
     let (mut rows, mut cols) = (vec![0; d.jac_nnz], vec![0; d.jac_nnz]);
     nlp.jacobian_structure(&mut rows, &mut cols);
     let mut evaluations = Evaluations::default();

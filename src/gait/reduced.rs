@@ -618,13 +618,7 @@ mod tests {
             let mut rng = ChaCha8Rng::seed_from_u64(3);
             let mut x = vec![0.0; d.n];
             nlp.start(&mut x);
-            let (mut xl, mut xu, mut cl, mut cu) = (
-                vec![0.0; d.n],
-                vec![0.0; d.n],
-                vec![0.0; d.m],
-                vec![0.0; d.m],
-            );
-            nlp.bounds(&mut xl, &mut xu, &mut cl, &mut cu);
+            let crate::solver::Bounds { xl, xu, .. } = crate::solver::Bounds::of(&nlp);
             for j in 0..d.n {
                 // Random forces within a third of the bounds; random slopes.
                 let span = if xl[j].is_finite() {

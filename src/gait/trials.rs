@@ -91,13 +91,7 @@ pub fn assess(f: &Formulation<'_>, x: &[f64]) -> Option<Assessment> {
     let x = &x[..d.n];
     let (mut cost, mut c) = (0.0, vec![0.0; d.m]);
     nlp.eval(x, &mut cost, &mut c).ok()?;
-    let (mut xl, mut xu, mut cl, mut cu) = (
-        vec![0.0; d.n],
-        vec![0.0; d.n],
-        vec![0.0; d.m],
-        vec![0.0; d.m],
-    );
-    nlp.bounds(&mut xl, &mut xu, &mut cl, &mut cu);
+    let crate::solver::Bounds { cl, cu, .. } = crate::solver::Bounds::of(nlp);
     let violations = c
         .iter()
         .zip(cl.iter().zip(&cu))

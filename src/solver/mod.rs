@@ -77,7 +77,7 @@ mod sqp;
 mod status;
 mod termination;
 
-pub use nlp::{Dims, EvalError, Nlp};
+pub use nlp::{Bounds, Dims, EvalError, Nlp};
 pub use options::{HessianMode, Options};
 pub use solution::{Evaluations, IterationRecord, Solution};
 pub use sqp::solve;

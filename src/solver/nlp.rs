@@ -33,6 +33,34 @@ pub enum EvalError {
     Fatal(String),
 }
 
+/// The bounds of an [`Nlp`] as owned vectors: `xl ≤ x ≤ xu` (length n), `cl ≤ c(x) ≤ cu`
+/// (length m), ±∞ where a side is absent, in the problem's own units.
+pub struct Bounds {
+    /// Lower variable bounds.
+    pub xl: Vec<f64>,
+    /// Upper variable bounds.
+    pub xu: Vec<f64>,
+    /// Lower constraint bounds.
+    pub cl: Vec<f64>,
+    /// Upper constraint bounds.
+    pub cu: Vec<f64>,
+}
+
+impl Bounds {
+    /// Reads the bounds of `nlp`.
+    pub fn of<N: Nlp + ?Sized>(nlp: &N) -> Bounds {
+        let d = nlp.dims();
+        let mut b = Bounds {
+            xl: vec![0.0; d.n],
+            xu: vec![0.0; d.n],
+            cl: vec![0.0; d.m],
+            cu: vec![0.0; d.m],
+        };
+        nlp.bounds(&mut b.xl, &mut b.xu, &mut b.cl, &mut b.cu);
+        b
+    }
+}
+
 /// A smooth nonlinear program. Implementations must be deterministic: the same `x` gives the same
 /// bits. `Sync` lets the global methods evaluate starts in parallel.
 pub trait Nlp: Sync {

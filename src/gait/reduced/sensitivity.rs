@@ -309,13 +309,7 @@ mod tests {
             let nlp = Reduced::new(&p);
             let d = nlp.dims();
             let mut rng = ChaCha8Rng::seed_from_u64(5);
-            let (mut xl, mut xu, mut cl, mut cu) = (
-                vec![0.0; d.n],
-                vec![0.0; d.n],
-                vec![0.0; d.m],
-                vec![0.0; d.m],
-            );
-            nlp.bounds(&mut xl, &mut xu, &mut cl, &mut cu);
+            let crate::solver::Bounds { xl, xu, .. } = crate::solver::Bounds::of(&nlp);
             let x: Vec<f64> = (0..d.n)
                 .map(|j| {
                     let span = if xl[j].is_finite() {

@@ -13,14 +13,7 @@ use rand_chacha::ChaCha8Rng;
 
 /// Random spline parameters within a third of the force bounds; slopes up to ±20.
 fn random_parameters(nlp: &Reduced<'_>, seed: u64) -> Vec<f64> {
-    let d = nlp.dims();
-    let (mut xl, mut xu, mut cl, mut cu) = (
-        vec![0.0; d.n],
-        vec![0.0; d.n],
-        vec![0.0; d.m],
-        vec![0.0; d.m],
-    );
-    nlp.bounds(&mut xl, &mut xu, &mut cl, &mut cu);
+    let crate::solver::Bounds { xl, xu, .. } = crate::solver::Bounds::of(nlp);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     (0..nlp.parameters())
         .map(|j| {

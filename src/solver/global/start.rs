@@ -76,17 +76,17 @@ pub(crate) struct Bounds {
 
 impl Bounds {
     pub(crate) fn of(nlp: &dyn Nlp) -> Self {
-        let d = nlp.dims();
+        let crate::solver::Bounds { xl, xu, cl, cu } = crate::solver::Bounds::of(nlp);
+        let mut start = vec![0.0; xl.len()];
+        nlp.start(&mut start);
         let mut b = Bounds {
-            xl: vec![0.0; d.n],
-            xu: vec![0.0; d.n],
-            cl: vec![0.0; d.m],
-            cu: vec![0.0; d.m],
-            x0: vec![0.0; d.n],
+            xl,
+            xu,
+            cl,
+            cu,
+            x0: Vec::new(),
         };
-        nlp.bounds(&mut b.xl, &mut b.xu, &mut b.cl, &mut b.cu);
-        nlp.start(&mut b.x0);
-        b.x0 = b.project(&b.x0);
+        b.x0 = b.project(&start);
         b
     }
 
