@@ -196,7 +196,7 @@ pub fn junction_angles(mesh: &Mesh) -> Option<JunctionAngles> {
 /// tangent by half the turning angle over its length (first order); a quadratic through the
 /// edge midpoint, `c` and the neighbour of `c` in the same surface farthest from the edge and
 /// nearly in line (all projected onto that plane) gives the tangent to second order. Falls
-/// back to the chord.
+/// back to the chord, also when `c` is itself on a junction.
 fn film_tangent(mesh: &Mesh, edge: [usize; 2], t: usize, e: Point) -> Point {
     let pos = mesh.positions();
     let flat = |p: Point| p - e * e.dot(&p);
@@ -206,6 +206,18 @@ fn film_tangent(mesh: &Mesh, edge: [usize; 2], t: usize, e: Point) -> Point {
     };
     let p1 = flat(pos[c]) - m;
     let s1 = p1.norm();
+    // Beyond a junction at c the neighbours belong to other films (which may share the
+    // surface: the octahedral frame's films are one surface), so keep the chord there.
+    let star = mesh.vertex_triangles(c);
+    let on_junction = mesh.neighbours(c).iter().any(|&w| {
+        star.iter()
+            .filter(|&&u| mesh.triangles()[u].contains(&w))
+            .count()
+            >= 3
+    });
+    if on_junction {
+        return p1;
+    }
     let surface = mesh.triangle_surface()[t];
     // The neighbour of c in the same surface farthest from the edge, nearly in line.
     let far = mesh

@@ -8,7 +8,8 @@
 //! usually a triangle folded flat, whose opposite edge a flip removes) → result figures
 //! ([`figures`]) and an SVG preview ([`preview`]). `result.json` lists each flip round's
 //! areas (before flips, after flips, after the re-solve): the effect of the mesh-quality
-//! mechanism on the area.
+//! mechanism on the area. With `[quality] coarse_resolution` the start is a coarse solution
+//! refined level by level ([`multilevel`], [`subdivide`]).
 //! The final mesh is also written as `model.glb` ([`export`]).
 
 pub mod area;
@@ -22,11 +23,13 @@ pub mod generators;
 pub mod import;
 pub mod import_gltf;
 pub mod mesh;
+pub mod multilevel;
 pub mod nlp;
 pub mod octahedron;
 pub mod preview;
 pub mod remesh;
 pub mod spec;
+pub mod subdivide;
 pub mod volume;
 
 #[cfg(test)]
@@ -42,7 +45,7 @@ use crate::run::{Artifact, Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::{
     CheckOptions, FiniteDifferenceOptions, check_derivatives, jittered_start, spread_columns,
 };
-use crate::solver::{Nlp, Status};
+use crate::solver::{Evaluations, Nlp, Status};
 use crate::spec::Source;
 
 use nlp::{CmcNlp, VolumeConstraint};
@@ -135,10 +138,25 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let options = opts.solver_options(&problem.spec.file.solver);
     let solve_started = Instant::now();
     let mut nlp = nlp;
+    // Coarse-to-fine start (cmc::multilevel): the coarse levels' work counts in the totals.
+    let staged = multilevel::coarse_to_fine(problem, &options)?;
+    let coarse_seconds = solve_started.elapsed().as_secs_f64();
+    let mut coarse_stages = Vec::new();
+    let (mut iterations, mut evaluations, mut log) = (0, Evaluations::default(), Vec::new());
+    if let Some(staged) = staged {
+        nlp = staged.nlp;
+        coarse_stages = staged.stages;
+        iterations = staged.iterations;
+        evaluations = staged.evaluations;
+        log = staged.log;
+    }
     let mut solution = crate::solver::solve(&nlp, &options);
-    let (mut iterations, mut evaluations) = (solution.iterations, solution.evaluations);
+    iterations += solution.iterations;
+    evaluations.functions += solution.evaluations.functions;
+    evaluations.derivatives += solution.evaluations.derivatives;
+    evaluations.hessians += solution.evaluations.hessians;
     // The iteration log of every solve, one after the other (iteration numbers restart).
-    let mut log = solution.log.clone();
+    log.extend_from_slice(&solution.log);
     let mut rounds = Vec::new();
     // Equiangulate and re-solve (cmc::remesh); each round's areas show the flips' effect.
     for _ in 0..problem.spec.file.quality.flip_rounds {
@@ -187,9 +205,17 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     summary.figures = figures_json(&nlp, &mesh, &solution.x)?;
     if let Some(obj) = summary.figures.as_object_mut() {
         obj.insert("flip_rounds".into(), rounds.into());
+        if !coarse_stages.is_empty() {
+            let stages = serde_json::to_value(&coarse_stages)
+                .map_err(|e| Error::Runtime(format!("coarse stages: {e}")))?;
+            obj.insert("coarse_stages".into(), stages);
+        }
     }
     summary.timings.insert("build".into(), build_seconds);
     summary.timings.insert("solve".into(), solve_seconds);
+    if !coarse_stages.is_empty() {
+        summary.timings.insert("coarse".into(), coarse_seconds);
+    }
     let caption = format!(
         "{}: area {:.6e} m², {}",
         problem.name,

@@ -10,6 +10,7 @@
 //! [quality]
 //! tangential_weight = 0.01      # w of the tangential regularization (cmc::nlp), ≥ 0
 //! flip_rounds = 1               # edge-flip + re-solve rounds after the first solve (cmc::remesh)
+//! coarse_resolution = 1         # optional: solve coarse first, then refine (cmc::multilevel)
 //! [[chord]]                     # optional chord-length constraints between vertex indices
 //! a = 0
 //! b = 12
@@ -65,6 +66,10 @@ pub struct QualitySpec {
     /// Rounds of equiangulation (edge flips) and re-solving after the first solve; default 1.
     #[serde(default = "default_flip_rounds")]
     pub flip_rounds: usize,
+    /// Resolution of the first solve of a coarse-to-fine start ([`super::multilevel`]);
+    /// default none (solve the resolution's start directly).
+    #[serde(default)]
+    pub coarse_resolution: Option<usize>,
 }
 
 fn default_weight() -> f64 {
@@ -80,6 +85,7 @@ impl Default for QualitySpec {
         QualitySpec {
             tangential_weight: default_weight(),
             flip_rounds: default_flip_rounds(),
+            coarse_resolution: None,
         }
     }
 }
@@ -330,6 +336,12 @@ impl CmcSpec {
                     "`flip_rounds` must be at most 10, got {}",
                     f.quality.flip_rounds
                 ),
+            ));
+        }
+        if f.quality.coarse_resolution == Some(0) {
+            return Err(self.err(
+                &["quality".into(), "coarse_resolution".into()],
+                "`coarse_resolution` must be at least 1",
             ));
         }
         if !(f.quality.tangential_weight >= 0.0 && f.quality.tangential_weight.is_finite()) {

@@ -1,0 +1,178 @@
+//! Coarse-to-fine starts (`[quality] coarse_resolution`): the problem is first solved at a
+//! coarse resolution, and its solution, uniformly subdivided ([`super::subdivide`]), is the
+//! start of the next finer solve, up to the problem's resolution.
+//!
+//! Why: on a fine start far from the film's shape (the octahedral frame's flat partition walls
+//! meet at 75°–160° instead of 120°), the junction lines must travel across many rows of
+//! triangles; the triangles next to them flatten long before the lines arrive (min angle 9° →
+//! 2° within ten iterations on `octahedron_square` at resolution 6) and the solve stalls on a
+//! collapsed triangle. At the coarse level the same travel is a fraction of one triangle, and
+//! each refinement starts with the junction lines within a fraction of a coarse triangle of
+//! their place.
+//!
+//! Levels: with resolution `r` and `coarse_resolution = c`, the first solve is at `d`, the
+//! largest divisor of `r` not above `c`; then `r / d` is split into its prime factors in
+//! increasing order (6 → 2, 3), each one subdivision. Every intermediate level is solved and
+//! equiangulated ([`super::remesh::equiangulate`], then re-solved if anything flipped); the
+//! last subdivision is the start of the main solve. This applies to shapes whose resolution
+//! counts segments per edge (frames, wires), so that `k`-fold subdivision of level `d` has the
+//! connectivity counts of level `k·d`.
+
+use crate::error::Error;
+use crate::solver::{Evaluations, IterationRecord, Options, Status};
+
+use super::Problem;
+use super::area::total_area;
+use super::nlp::CmcNlp;
+use super::remesh::equiangulate;
+use super::subdivide::subdivide;
+
+/// One coarse level's solve.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Stage {
+    /// Resolution of the level (the coarse resolution times the factors so far).
+    pub resolution: usize,
+    /// Vertices of the level's mesh.
+    pub vertices: usize,
+    /// Solver status of the level's last solve.
+    pub status: String,
+    /// Major iterations of the level (solve plus re-solve after flips).
+    pub iterations: usize,
+    /// Total area after the level's solves, m².
+    pub area: f64,
+}
+
+/// The NLP whose start is the subdivided coarse solution, with the coarse levels' records.
+#[derive(Debug)]
+pub struct Staged {
+    /// The problem at its full resolution, started from the refined coarse solution.
+    pub nlp: CmcNlp,
+    /// The coarse levels, coarsest first.
+    pub stages: Vec<Stage>,
+    /// Iteration logs of every coarse solve, one after the other.
+    pub log: Vec<IterationRecord>,
+    /// Iterations summed over the coarse solves.
+    pub iterations: usize,
+    /// Evaluations summed over the coarse solves.
+    pub evaluations: Evaluations,
+}
+
+/// The first level `d` (largest divisor of `resolution` not above `coarse`) and the
+/// subdivision factors (prime factors of `resolution / d`, increasing).
+pub fn levels(resolution: usize, coarse: usize) -> (usize, Vec<usize>) {
+    let resolution = resolution.max(1);
+    let d = (1..=coarse.clamp(1, resolution))
+        .rev()
+        .find(|d| resolution.is_multiple_of(*d))
+        .unwrap_or(1);
+    let mut rest = resolution / d;
+    let mut factors = Vec::new();
+    let mut p = 2;
+    while rest > 1 {
+        while rest.is_multiple_of(p) {
+            factors.push(p);
+            rest /= p;
+        }
+        p += 1;
+    }
+    (d, factors)
+}
+
+/// Solves `problem` at its coarse level and the intermediate levels and returns the full
+/// resolution's NLP started from the last subdivision; `None` when there is nothing to do
+/// (no `coarse_resolution`, or it is not below the resolution).
+pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Staged>, Error> {
+    let Some(coarse) = problem.spec.file.quality.coarse_resolution else {
+        return Ok(None);
+    };
+    if coarse >= problem.resolution {
+        return Ok(None);
+    }
+    let (first, factors) = levels(problem.resolution, coarse);
+    let runtime = |what: &str, e: &dyn std::fmt::Display| {
+        Error::Runtime(format!("{}: {what}: {e}", problem.name))
+    };
+    let mut nlp = problem.with_resolution(first).build()?;
+    let (mut stages, mut log, mut evaluations) = (Vec::new(), Vec::new(), Evaluations::default());
+    let mut resolution = first;
+    for (level, &factor) in factors.iter().enumerate() {
+        let mut iterations = 0;
+        let mut solution = crate::solver::solve(&nlp, options);
+        iterations += solution.iterations;
+        log.extend_from_slice(&solution.log);
+        add(&mut evaluations, &solution.evaluations);
+        let solved = usable(solution.status, solution.max_violation, options);
+        if solved {
+            let mesh = nlp
+                .mesh_at(&solution.x)
+                .map_err(|e| runtime("coarse mesh", &e))?;
+            let (flipped, flips) =
+                equiangulate(&mesh, 10).map_err(|e| runtime("edge flips", &e))?;
+            if flips > 0 {
+                nlp = nlp
+                    .remeshed(flipped)
+                    .map_err(|e| runtime("flipped mesh", &e))?;
+                solution = crate::solver::solve(&nlp, options);
+                iterations += solution.iterations;
+                log.extend_from_slice(&solution.log);
+                add(&mut evaluations, &solution.evaluations);
+            }
+        }
+        let mesh = nlp
+            .mesh_at(&solution.x)
+            .map_err(|e| runtime("coarse mesh", &e))?;
+        stages.push(Stage {
+            resolution,
+            vertices: mesh.vertex_count(),
+            status: format!("{:?}", solution.status),
+            iterations,
+            area: total_area(&mesh),
+        });
+        if !usable(solution.status, solution.max_violation, options) {
+            return Err(Error::Runtime(format!(
+                "{}: coarse level {level} (resolution {resolution}) ended {:?}",
+                problem.name, solution.status
+            )));
+        }
+        let finer = subdivide(&mesh, factor).map_err(|e| runtime("subdivision", &e))?;
+        nlp = nlp
+            .remeshed(finer)
+            .map_err(|e| runtime("subdivided mesh", &e))?;
+        resolution *= factor;
+    }
+    Ok(Some(Staged {
+        nlp,
+        iterations: stages.iter().map(|s: &Stage| s.iterations).sum(),
+        stages,
+        log,
+        evaluations,
+    }))
+}
+
+/// A level's solution is refined when it succeeded or stalled feasible (a stall here is
+/// usually a triangle folded flat, which the next level's flips and solve repair).
+fn usable(status: Status, max_violation: f64, options: &Options) -> bool {
+    status.is_success()
+        || (status == Status::Stalled && max_violation <= options.constraint_tolerance)
+}
+
+fn add(total: &mut Evaluations, more: &Evaluations) {
+    total.functions += more.functions;
+    total.derivatives += more.derivatives;
+    total.hessians += more.hessians;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn levels_split_the_refinement_into_prime_factors() {
+        assert_eq!(levels(6, 1), (1, vec![2, 3]));
+        assert_eq!(levels(6, 2), (2, vec![3]));
+        assert_eq!(levels(6, 4), (3, vec![2]));
+        assert_eq!(levels(8, 1), (1, vec![2, 2, 2]));
+        assert_eq!(levels(5, 2), (1, vec![5]));
+        assert_eq!(levels(3, 3), (3, vec![]));
+    }
+}
