@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use optimize::cmc::nlp::CmcNlp;
 
 /// Loads `file`, applies `resolution` (the example's optional argument) and builds the start
-/// mesh; prints a one-line error and returns the exit code on failure.
+/// mesh (`Problem::start`: after the coarse levels of a coarse-to-fine start); prints a one-line error and returns the exit code on failure.
 pub fn build_start(file: &str, resolution: Option<&String>) -> Result<CmcNlp, ExitCode> {
     let problem = optimize::cmc::load(Path::new(file)).map_err(|e| {
         eprintln!("{e}");
@@ -21,7 +21,7 @@ pub fn build_start(file: &str, resolution: Option<&String>) -> Result<CmcNlp, Ex
         }
         None => problem,
     };
-    problem.build().map_err(|e| {
+    problem.start().map_err(|e| {
         eprintln!("{e}");
         ExitCode::from(1)
     })

@@ -127,6 +127,21 @@ impl Problem {
     }
 }
 
+impl Problem {
+    /// The NLP the main solve starts from: [`Problem::build`], or with `[quality]
+    /// coarse_resolution` the refined coarse solution ([`multilevel`], the coarse levels solved
+    /// silently with the file's `[solver]` options). Used to hand the same start to other
+    /// programs (Surface Evolver).
+    pub fn start(&self) -> Result<CmcNlp, Error> {
+        let mut options = self.spec.file.solver.options();
+        options.verbosity = 0;
+        match multilevel::coarse_to_fine(self, &options)? {
+            Some(staged) => Ok(staged.nlp),
+            None => self.build(),
+        }
+    }
+}
+
 /// Builds the problem and either checks its derivatives (`opts.check`) or solves it.
 pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let started = Instant::now();
