@@ -175,4 +175,34 @@ mod tests {
         assert_eq!(levels(5, 2), (1, vec![5]));
         assert_eq!(levels(3, 3), (3, vec![]));
     }
+
+    #[test]
+    fn octahedral_film_refines_to_the_generators_counts() {
+        // Quadrilateral film at resolution 2 from resolution 1: one coarse level, then the ×2
+        // subdivision has the vertex, triangle, wire and junction counts of the generator's
+        // resolution-2 start, with the coarse solution's (smaller) area.
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("problems/cmc/octahedron_quadrilateral.toml");
+        let problem = crate::cmc::load(&path).unwrap().with_resolution(2);
+        let mut options = problem.spec.file.solver.options();
+        options.verbosity = 0;
+        let staged = coarse_to_fine(&problem, &options).unwrap().unwrap();
+        assert_eq!(staged.stages.len(), 1);
+        assert_eq!(staged.stages[0].resolution, 1);
+        assert_eq!(staged.stages[0].status, "Optimal");
+        let direct = problem.build().unwrap();
+        let (refined, generated) = (staged.nlp.mesh(), direct.mesh());
+        assert_eq!(refined.vertex_count(), generated.vertex_count());
+        assert_eq!(refined.triangles().len(), generated.triangles().len());
+        let fixed = |m: &crate::cmc::mesh::Mesh| m.flags().iter().filter(|f| f.fixed).count();
+        assert_eq!(fixed(refined), fixed(generated));
+        assert_eq!(
+            refined.junction_vertices().len(),
+            generated.junction_vertices().len()
+        );
+        assert_eq!(staged.nlp.curvature_rows(), direct.curvature_rows());
+        let coarse_area = staged.stages[0].area;
+        assert!((total_area(refined) - coarse_area).abs() < 1e-15);
+        assert!(coarse_area < total_area(generated));
+    }
 }

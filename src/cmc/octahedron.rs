@@ -17,6 +17,10 @@
 //! of the wanted topology with the longest shortest wall edge) to give each stable topology.
 //! Each wall is meshed as a fan of triangle patches around its centroid, `levels` segments on
 //! every wall edge and spoke; walls share their edge vertices.
+//!
+//! The partitions' flat walls meet at 75°–160° rather than the films' 120°, so at fine
+//! resolutions the junction lines would have to cross many rows of triangles during the solve;
+//! the problem files therefore start from resolution 1 and refine ([`super::multilevel`]).
 
 use std::collections::BTreeMap;
 
