@@ -368,6 +368,26 @@ mod tests {
     }
 
     #[test]
+    fn flat_film_junction_angles_measure_120_degrees() {
+        // The exact tetrahedral film (weights 5/3 : 1): every triple edge at 120°, also where
+        // the third vertex of a triangle lies on another junction line (all the films are one
+        // surface, so a tangent fit must not reach across a junction into another film).
+        let mut w = [1.0; 8];
+        for (k, wk) in w.iter_mut().enumerate() {
+            if (k.count_ones() % 2) == 0 {
+                *wk = 5.0 / 3.0;
+            }
+        }
+        let mesh = partition_film(1.0, &w, 4).unwrap().mesh;
+        let angles = crate::cmc::figures::junction_angles(&mesh).unwrap();
+        assert!(angles.edges > 0);
+        assert!(
+            (angles.min_deg - 120.0).abs() < 1e-6 && (angles.max_deg - 120.0).abs() < 1e-6,
+            "{angles:?}"
+        );
+    }
+
+    #[test]
     fn flipped_starts_are_better_shaped() {
         for topology in STABLE {
             let (walls, levels) = (window_weights(topology).unwrap(), 6);
