@@ -46,13 +46,15 @@ impl<const N: usize> Hyper<N> {
 
     /// The full symmetric Hessian.
     pub fn hessian(&self) -> [[f64; N]; N] {
-        let mut h = self.lower;
-        for i in 0..N {
-            for j in 0..i {
-                h[j][i] = h[i][j];
-            }
-        }
-        h
+        std::array::from_fn(|i| {
+            std::array::from_fn(|j| {
+                if j <= i {
+                    self.lower[i][j]
+                } else {
+                    self.lower[j][i]
+                }
+            })
+        })
     }
 
     /// √self (self.re > 0 for finite derivatives).
