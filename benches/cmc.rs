@@ -1,4 +1,4 @@
-//! CMC cost: objective + constraints, and gradient + Jacobian, of the double bubble NLP at about
+//! CMC cost: objective + constraints, gradient + Jacobian, and the Lagrangian Hessian of the double bubble NLP at about
 //! 3,000 and 11,000 vertices; and a whole solve of the ≥ 10,000-vertex double bubble (the scale
 //! target: under 20 s on one core) with the sparse QP path and the exact Hessian.
 //!
@@ -44,6 +44,18 @@ fn evaluation(c: &mut Criterion) {
             |b| {
                 b.iter(|| {
                     nlp.eval_derivatives(&x, &mut g, &mut jac)
+                        .expect("evaluates")
+                })
+            },
+        );
+        // The Lagrangian Hessian with every multiplier nonzero (all curvature stars).
+        let lambda: Vec<f64> = (0..d.m).map(|i| 1.0 + (i % 7) as f64).collect();
+        let mut hess = vec![0.0; d.hess_nnz];
+        c.bench_function(
+            &format!("cmc double bubble Hessian, {vertices} vertices"),
+            |b| {
+                b.iter(|| {
+                    nlp.eval_hessian(&x, 1.0, &lambda, &mut hess)
                         .expect("evaluates")
                 })
             },

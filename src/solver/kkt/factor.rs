@@ -20,6 +20,12 @@ use faer::sparse::linalg::cholesky::{SymbolicCholeskyRaw, supernodal};
 
 use super::{KktError, KktSolver};
 
+/// The matrix values and regularization of the factorization currently held.
+pub(super) struct FactoredValues {
+    regularization: Regularization,
+    values: Vec<f64>,
+}
+
 /// Maximum number of Ruiz equilibration passes.
 const RUIZ_PASSES: usize = 20;
 /// Equilibration stops when every nonzero row ∞-norm is within this of 1.
@@ -75,9 +81,24 @@ impl Inertia {
 
 impl KktSolver {
     /// Factors `S K S + diag(δ_p W_p, −δ_d W_d)` numerically (no allocation; S from
-    /// equilibration) and returns its inertia.
+    /// equilibration) and returns its inertia. When the values and `reg` are exactly those of
+    /// the last successful factorization, its factors are kept (the result is the same bit for
+    /// bit): an inertia test followed by the step's factorization of the same matrix, or a
+    /// second-order correction of the same QP, costs one comparison of the values.
     pub fn factor(&mut self, reg: Regularization) -> Result<Inertia, KktError> {
+        if self
+            .last
+            .as_ref()
+            .is_some_and(|last| last.regularization == reg && last.values == self.values)
+        {
+            self.factored = true;
+            return Ok(self.inertia);
+        }
         self.factored = false;
+        let mut last = self.last.take().unwrap_or_else(|| FactoredValues {
+            regularization: reg,
+            values: Vec::with_capacity(self.values.len()),
+        });
         if reg.equilibrate {
             self.equilibrate();
         } else {
@@ -153,6 +174,11 @@ impl KktSolver {
         }
         self.inertia = inertia;
         self.factored = true;
+        self.numeric_factorizations += 1;
+        last.regularization = reg;
+        last.values.clear();
+        last.values.extend_from_slice(&self.values);
+        self.last = Some(last);
         Ok(inertia)
     }
 

@@ -87,6 +87,11 @@ pub struct KktSolver {
     rhs_copy: Vec<f64>,
     factored: bool,
     inertia: Inertia,
+    /// What the factors in `l_values` are the factorization of (None before the first
+    /// successful [`KktSolver::factor`] and after a failed one).
+    last: Option<factor::FactoredValues>,
+    /// Successful numeric factorizations (kept factors not counted).
+    numeric_factorizations: usize,
 }
 
 impl KktSolver {
@@ -134,6 +139,8 @@ impl KktSolver {
             rhs_copy: vec![0.0; dim],
             factored: false,
             inertia: Inertia::default(),
+            last: None,
+            numeric_factorizations: 0,
         })
     }
 
@@ -206,6 +213,12 @@ impl KktSolver {
     /// The matrix values (lower triangle, pattern order).
     pub fn values(&self) -> &[f64] {
         &self.values
+    }
+
+    /// Successful numeric factorizations so far; a [`KktSolver::factor`] of the values and
+    /// regularization already factored keeps the factors and does not count.
+    pub fn numeric_factorizations(&self) -> usize {
+        self.numeric_factorizations
     }
 
     /// Number of nonzeros in the factor L (a measure of fill-in).

@@ -108,6 +108,40 @@ fn random_quasi_definite_systems_match_dense_solves() {
 }
 
 #[test]
+fn refactoring_the_same_values_keeps_the_factors() {
+    let mut rng = ChaCha8Rng::seed_from_u64(13);
+    let (rows, cols, vals, dense) = random_quasi_definite(&mut rng, 25, 10, 0.2);
+    let mut kkt = build(25, 10, &rows, &cols, &vals);
+    let strong = Regularization {
+        dual: 1e-5,
+        ..Regularization::default()
+    };
+    kkt.factor(strong).unwrap();
+    assert_eq!(kkt.numeric_factorizations(), 1);
+    // Same values (rewritten in place) and regularization: the factors are kept.
+    let copy = kkt.values().to_vec();
+    kkt.values_mut().copy_from_slice(&copy);
+    kkt.factor(strong).unwrap();
+    assert_eq!(kkt.numeric_factorizations(), 1);
+    // Another regularization, then other values: each is a new factorization.
+    kkt.factor(Regularization::default()).unwrap();
+    assert_eq!(kkt.numeric_factorizations(), 2);
+    let p = kkt.diagonal_position(0);
+    kkt.values_mut()[p] += 1.0;
+    kkt.factor(Regularization::default()).unwrap();
+    assert_eq!(kkt.numeric_factorizations(), 3);
+    let mut shifted = dense;
+    shifted[(0, 0)] += 1.0;
+    let b = DVector::from_fn(35, |i, _| (i as f64).cos());
+    let expected = shifted.lu().solve(&b).unwrap();
+    let mut x = b.as_slice().to_vec();
+    kkt.solve_refined(&mut x, 5, 1e-14).unwrap();
+    for (a, e) in x.iter().zip(expected.iter()) {
+        assert!((a - e).abs() <= 1e-10 * (1.0 + e.abs()));
+    }
+}
+
+#[test]
 fn values_can_be_updated_in_place_and_refactored() {
     let mut rng = ChaCha8Rng::seed_from_u64(11);
     let (rows, cols, vals, dense) = random_quasi_definite(&mut rng, 30, 12, 0.15);

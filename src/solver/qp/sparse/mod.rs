@@ -306,7 +306,7 @@ impl SparseQp {
         let Some(system) = self.system.as_mut() else {
             return (fail(QpStatus::Numerical), info);
         };
-        let factorizations_before = system.factorizations;
+        let factorizations_before = system.factorizations();
         let p = match qp.h {
             QpHessian::LowRank { w, .. } => w.ncols(),
             _ => 0,
@@ -330,6 +330,12 @@ impl SparseQp {
             },
         };
         info.convexification = shift;
+        // Without complementarity pairs the Newton matrix is the one whose inertia was just
+        // tested (H + δI with the equality rows): its factors, with the inertia test's dual
+        // regularization, serve the step, refined against the same unregularized matrix.
+        system.strong_step = self.fixed_shift.is_none()
+            && layout.pairs == 0
+            && !matches!(qp.h, QpHessian::LowRank { .. });
         initial_point(qp, layout, ws);
         let mut status = QpStatus::IterationLimit;
         let mut iterations = 0;
@@ -384,7 +390,7 @@ impl SparseQp {
                 break;
             }
         }
-        info.factorizations = system.factorizations - factorizations_before;
+        info.factorizations = system.factorizations() - factorizations_before;
         (solution(qp, layout, ws, status, iterations), info)
     }
 }

@@ -89,11 +89,15 @@ pub struct NewtonSystem {
     work: Vec<f64>,
     work_rhs: Vec<f64>,
     small: Vec<f64>,
-    /// Factorizations performed since creation.
-    pub factorizations: usize,
     /// The Newton solves use [`STRONG_DUAL_REGULARIZATION`] (set once the default was unstable;
     /// kept for the later QPs of the same pattern).
     strong_dual: bool,
+    /// The Newton solves of the current QP use [`STRONG_DUAL_REGULARIZATION`] from the start:
+    /// set for a QP whose Newton matrix is the matrix of its successful inertia test (no
+    /// complementarity pairs), so that the test's factors serve every step.
+    pub strong_step: bool,
+    /// The current factors were computed with [`STRONG_DUAL_REGULARIZATION`].
+    factored_strong: bool,
 }
 
 impl NewtonSystem {
@@ -149,8 +153,9 @@ impl NewtonSystem {
             work_rhs: vec![0.0; n + m],
             small: vec![0.0; 2 * p],
             kkt,
-            factorizations: 0,
             strong_dual: false,
+            strong_step: false,
+            factored_strong: false,
         })
     }
 
@@ -244,9 +249,15 @@ impl NewtonSystem {
         }
     }
 
+    /// Numeric factorizations performed since creation (a refactorization of the values
+    /// already factored is not one: [`KktSolver::factor`] keeps the factors).
+    pub fn factorizations(&self) -> usize {
+        self.kkt.numeric_factorizations()
+    }
+
     /// Factors the assembled K₀ and, for a low-rank Hessian, prepares the Woodbury correction.
     pub fn factor(&mut self, qp: &QpProblem<'_>, layout: &Layout) -> Result<Inertia, KktError> {
-        let strong = self.strong_dual;
+        let strong = self.strong_dual || self.strong_step;
         self.factor_with(qp, layout, strong)
     }
 
@@ -258,7 +269,7 @@ impl NewtonSystem {
         layout: &Layout,
         strong: bool,
     ) -> Result<Inertia, KktError> {
-        self.factorizations += 1;
+        self.factored_strong = strong;
         // K₀ of the low-rank form is equilibrated too: without it the chain's QPs (Schur
         // complement eigenvalues below the absolute dual regularization) were reported
         // infeasible and L-BFGS stalled on the sparse path.
@@ -298,10 +309,10 @@ impl NewtonSystem {
             let report = self
                 .kkt
                 .solve_refined(rhs, REFINEMENT_STEPS, REFINEMENT_TOL)?;
-            if !self.strong_dual && report.residual > UNSTABLE_RESIDUAL * (1.0 + b_norm) {
+            if !self.factored_strong && report.residual > UNSTABLE_RESIDUAL * (1.0 + b_norm) {
                 // The factors of the same values with the dominant dual pivots.
                 self.strong_dual = true;
-                self.factorizations += 1;
+                self.factored_strong = true;
                 self.kkt.factor(regularization(qp, true))?;
                 rhs.copy_from_slice(&self.work_rhs);
                 self.kkt

@@ -71,14 +71,16 @@ pub(super) fn iterate(
     } else {
         0.0
     };
-    // Corrector: centring plus the second-order term of the predictor.
-    complementarity_targets(qp, layout, ws, sigma * mu, true);
-    direction(qp, layout, ws, system)?;
     let alpha = if layout.pairs == 0 {
-        // Nothing limits the step: the full Newton step solves a QP without bounds or
+        // Without complementarity pairs the corrector's right-hand side is the predictor's,
+        // and nothing limits the step: the full Newton step solves a QP without bounds or
         // inequality rows.
+        std::mem::swap(&mut ws.aff, &mut ws.dir);
         1.0
     } else {
+        // Corrector: centring plus the second-order term of the predictor.
+        complementarity_targets(qp, layout, ws, sigma * mu, true);
+        direction(qp, layout, ws, system)?;
         STEP_TO_BOUNDARY * max_step(qp, layout, &ws.x, &ws.dir).min(1.0)
     };
     let (x, dir) = (&mut ws.x, &ws.dir);

@@ -235,6 +235,36 @@ fn symbolic_analysis_is_reused_for_the_same_pattern() {
 }
 
 #[test]
+fn an_equality_qp_steps_with_the_factors_of_its_inertia_test() {
+    // H = diag(1, −1, ½) is convex on the null space of d₁ + d₂ = 1 only after a shift
+    // (δ > ¼); no bounds, so the Newton matrix of the step is the one whose inertia was
+    // tested last.
+    let h = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![1.0, -1.0, 0.5]));
+    let data = small_qp(
+        h,
+        vec![-1.0, 0.5, 0.0],
+        &[(vec![0.0, 1.0, 1.0], 1.0, 1.0)],
+        vec![-INF; 3],
+        vec![INF; 3],
+    );
+    let mut solver = SparseQp::new();
+    solver.first_shift = 1.0;
+    let (sol, info) = solver.solve(&data.problem(), 1e-10);
+    assert_eq!(sol.status, QpStatus::Optimal);
+    assert!(info.convexification > 0.0, "{info:?}");
+    // Trials 0 and 1: nothing more for the step.
+    assert_eq!(info.factorizations, 2, "{info:?}");
+    assert_kkt(&data.problem(), info.convexification, &sol, 1e-8);
+    // The same QP again with a shift known to suffice (no inertia test): one factorization.
+    solver.fixed_shift = Some(info.convexification);
+    let (again, info) = solver.solve(&data.problem(), 1e-10);
+    assert_eq!(info.factorizations, 1, "{info:?}");
+    for (a, b) in again.d.iter().zip(&sol.d) {
+        assert!((a - b).abs() < 1e-9, "{a} vs {b}");
+    }
+}
+
+#[test]
 fn dense_sparse_and_low_rank_hessians_agree() {
     let mut rng = ChaCha8Rng::seed_from_u64(9);
     let (n, p) = (30, 4);
