@@ -113,7 +113,7 @@ fn rollout_values(
         params: params.to_vec(),
     };
     let mut sim = Simulator::<f64>::new(&problem.model);
-    let mut state = problem.initial.clone();
+    let mut state = problem.initial_of(params);
     let steps: Vec<usize> = (0..=last).collect();
     let mut out = Vec::with_capacity(last + 1);
     sim.rollout(&mut state, problem.dt, &steps, &controls, |_, x, sim| {

@@ -44,7 +44,8 @@ pub struct Sampled {
     pub forces: Vec<Vec<f64>>,
 }
 
-/// Simulates `problem` with spline parameters `x` over the control horizon and samples it every
+/// Simulates `problem` with motion parameters `x` (spline parameters, then the initial state
+/// when it is a variable) over the control horizon and samples it every
 /// `interval` seconds (rounded to whole steps).
 pub fn sample(problem: &Problem, x: &[f64], interval: f64) -> Result<Sampled, String> {
     let grid = KnotGrid {
@@ -62,7 +63,7 @@ pub fn sample(problem: &Problem, x: &[f64], interval: f64) -> Result<Sampled, St
         .collect();
     steps.dedup();
     let mut sim = Simulator::<f64>::new(&problem.model);
-    let mut state = problem.initial.clone();
+    let mut state = problem.initial_of(x);
     let mut out = Sampled {
         times: Vec::new(),
         states: Vec::new(),

@@ -71,6 +71,11 @@ impl<'p> Formulation<'p> {
                 }
             }
         }
+        // State variables (initial and segment start states): the inner box, unscaled.
+        let crate::solver::Bounds { xl, xu, .. } = crate::solver::Bounds::of(&inner);
+        let spline = problem.spline_parameters();
+        lower[spline..].copy_from_slice(&xl[spline..]);
+        upper[spline..].copy_from_slice(&xu[spline..]);
         let (mut rows, mut columns) = (vec![0; d.jac_nnz], vec![0; d.jac_nnz]);
         inner.jacobian_structure(&mut rows, &mut columns);
         let mut start = vec![0.0; d.n];

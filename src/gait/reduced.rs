@@ -8,10 +8,15 @@
 //! ```
 //! where `p` are the Hermite spline parameters of the actuator forces ([`crate::gait::spline`]).
 //! The interval `[0, t_last]` up to the last constraint time is split into `S` segments at the
-//! RK4 steps `b_k = round(k·N/S)` (`N` = steps to `t_last`; `[controls] shooting_segments`).
+//! RK4 steps `b_k = round(k·N/S)` (`N` = steps to `t_last`; `[controls] shooting_segments`) or
+//! at given times (`[controls] shooting_times`, `b_k = t_k/dt`).
 //! Segment `k` is simulated by RK4 from its start state `s_k = (q, v)` at `b_k` under the same
 //! force splines (absolute time); `s₀` is the problem's initial state, `s₁…s_{S−1}` are
-//! variables, ordered after `p`, `nq + nv` each. A pose constraint at step `n` reads the segment
+//! variables, ordered after `p`, `nq + nv` each. With `[controls] initial_state` (seed §3.7:
+//! the seed optimized the initial configuration too) `s₀` is a variable as well, right after
+//! `p` and before `s₁`, boxed around the file's initial state; its Jacobian columns come from
+//! the same forward sensitivities, seeded with the identity. The motion parameters
+//! ([`Reduced::parameters`]) are `p` and, when free, `s₀`: one rollout of them is the motion. A pose constraint at step `n` reads the segment
 //! with `b_k < n ≤ b_{k+1}` (segment 0 also owns `n = 0`). `S = 1` is single shooting: the
 //! variables are `p` alone and the arithmetic is that of one rollout. Multiple shooting keeps
 //! each segment short, so the constraints depend less violently on the variables across
@@ -51,6 +56,9 @@ pub struct Reduced<'p> {
     grid: KnotGrid,
     /// Spline parameters (the first variables).
     n_par: usize,
+    /// The first segment whose start state is a variable: 0 when the initial state is one
+    /// (`[controls] initial_state`), else 1.
+    first_state: usize,
     /// State size `nq + nv`.
     nx: usize,
     /// Segment boundaries in RK4 steps, `0 = b₀ < b₁ < … < b_S`.
@@ -68,24 +76,44 @@ pub struct Reduced<'p> {
 }
 
 impl<'p> Reduced<'p> {
-    /// Builds the NLP with the problem's `segments`; the problem's constraints must be sorted by
-    /// time (the loader does this).
+    /// Builds the NLP with the problem's segments (`shooting_times`, else `segments` equal
+    /// ones); the problem's constraints must be sorted by time (the loader does this).
     pub fn new(problem: &'p Problem) -> Self {
-        Self::with_segments(problem, problem.segments)
+        if problem.shooting_steps.is_empty() {
+            Self::with_segments(problem, problem.segments)
+        } else {
+            Self::with_boundaries(problem, &problem.shooting_steps)
+        }
     }
 
-    /// Builds the NLP with `segments` shooting segments (clamped to `1..=` the steps to the last
-    /// constraint, so every segment has at least one step).
+    /// Builds the NLP with `segments` equal shooting segments (clamped to `1..=` the steps to
+    /// the last constraint, so every segment has at least one step).
     pub fn with_segments(problem: &'p Problem, segments: usize) -> Self {
+        let last = problem.constraints.last().map_or(0, |c| c.step);
+        let s = segments.clamp(1, last.max(1));
+        let interior: Vec<usize> = (1..s)
+            .map(|k| ((k * last) as f64 / s as f64).round() as usize)
+            .collect();
+        Self::with_boundaries(problem, &interior)
+    }
+
+    /// Builds the NLP with segments split at the RK4 steps `interior` (ascending; steps not
+    /// strictly between 0 and the last constraint's step are dropped, as are repeats).
+    pub fn with_boundaries(problem: &'p Problem, interior: &[usize]) -> Self {
         let grid = KnotGrid {
             knots: problem.knots,
             horizon: problem.horizon,
         };
         let last = problem.constraints.last().map_or(0, |c| c.step);
-        let s = segments.clamp(1, last.max(1));
-        let boundaries: Vec<usize> = (0..=s)
-            .map(|k| ((k * last) as f64 / s as f64).round() as usize)
-            .collect();
+        let mut boundaries = vec![0];
+        for &b in interior {
+            if b > *boundaries.last().expect("non-empty") && b < last {
+                boundaries.push(b);
+            }
+        }
+        boundaries.push(last.max(1));
+        let s = boundaries.len() - 1;
+        let first_state = if problem.initial_box.is_some() { 0 } else { 1 };
         let segment_of = |step: usize| (0..s).find(|&k| step <= boundaries[k + 1]).unwrap_or(s - 1);
         let mut samples = vec![Vec::new(); s];
         let row_sample = problem
@@ -101,7 +129,7 @@ impl<'p> Reduced<'p> {
             .collect();
         let n_par = problem.model.actuators.len() * grid.per_actuator();
         let nx = problem.model.nq + problem.model.nv;
-        let n = n_par + (s - 1) * nx;
+        let n = n_par + (s - first_state) * nx;
         let m = problem.constraints.len() + (s - 1) * nx;
         let h = problem.dt;
         let mut pattern = Vec::new();
@@ -116,9 +144,10 @@ impl<'p> Reduced<'p> {
             .iter()
             .map(|c| (segment_of(c.step), c.time, None))
             .collect();
+        let column = |k: usize, i: usize| n_par + (k - first_state) * nx + i;
         for (k, &b) in boundaries.iter().enumerate().take(s).skip(1) {
             for i in 0..nx {
-                rows.push((k - 1, b as f64 * h, Some(n_par + (k - 1) * nx + i)));
+                rows.push((k - 1, b as f64 * h, Some(column(k, i))));
             }
         }
         for (r, &(k, t, own)) in rows.iter().enumerate() {
@@ -128,8 +157,8 @@ impl<'p> Reduced<'p> {
                     push(r, j);
                 }
             }
-            let mut cols: Vec<usize> = if k > 0 {
-                (0..nx).map(|i| n_par + (k - 1) * nx + i).collect()
+            let mut cols: Vec<usize> = if k >= first_state {
+                (0..nx).map(|i| column(k, i)).collect()
             } else {
                 Vec::new()
             };
@@ -153,6 +182,7 @@ impl<'p> Reduced<'p> {
             problem,
             grid,
             n_par,
+            first_state,
             nx,
             boundaries,
             samples,
@@ -183,9 +213,15 @@ impl<'p> Reduced<'p> {
         self.boundaries.len() - 1
     }
 
-    /// Number of spline parameters (the leading variables).
+    /// Segment boundaries in RK4 steps, `0 = b₀ < b₁ < … < b_S`.
+    pub fn boundaries(&self) -> &[usize] {
+        &self.boundaries
+    }
+
+    /// Number of motion parameters (the leading variables): the spline parameters, then the
+    /// initial state when it is a variable ([`Problem::motion_parameters`]).
     pub fn parameters(&self) -> usize {
-        self.n_par
+        self.n_par + (1 - self.first_state) * self.nx
     }
 
     /// Number of pose-constraint rows (the leading rows; continuity rows follow).
@@ -198,15 +234,22 @@ impl<'p> Reduced<'p> {
         self.pose_rows() + (k - 1) * self.nx + i
     }
 
-    /// Column of start-state component `i` of segment `k ≥ 1`.
+    /// Column of start-state component `i` of segment `k` (`k ≥ 1`, or `k = 0` with the
+    /// initial state as a variable).
     fn state_column(&self, k: usize, i: usize) -> usize {
-        self.n_par + (k - 1) * self.nx + i
+        self.n_par + (k - self.first_state) * self.nx + i
     }
 
-    /// Start state of segment `k` from the variables `x`: the initial state for `k = 0`.
+    /// Whether segment `k`'s start state is a variable.
+    fn has_state(&self, k: usize) -> bool {
+        k >= self.first_state
+    }
+
+    /// Start state of segment `k` from the variables `x`: the file's initial state for `k = 0`
+    /// unless it is a variable.
     fn start_state<T: Real>(&self, k: usize, x: &[T]) -> State<T> {
         let nq = self.problem.model.nq;
-        if k == 0 {
+        if !self.has_state(k) {
             let init = &self.problem.initial;
             State {
                 q: init.q.iter().map(|&z| T::from(z)).collect(),
@@ -221,15 +264,16 @@ impl<'p> Reduced<'p> {
         }
     }
 
-    /// The states at the segment starts `b₁…b_{S−1}` of one rollout of spline parameters `p`
-    /// from the initial state, flattened as the state variables (`(q, v)` per segment).
+    /// The states at the segment starts `b₁…b_{S−1}` of one rollout of motion parameters `p`
+    /// ([`Self::parameters`]) from the initial state, flattened as the state variables
+    /// (`(q, v)` per segment).
     pub fn rollout_states(&self, p: &[f64]) -> Result<Vec<f64>, SimError> {
         let h = self.problem.dt;
         let controls = SplineControls {
             grid: self.grid,
             params: p[..self.n_par].to_vec(),
         };
-        let mut state = self.problem.initial.clone();
+        let mut state = self.start_state(0, p);
         let mut sim = Simulator::<f64>::new(&self.problem.model);
         let mut out = Vec::with_capacity((self.segments() - 1) * self.nx);
         let mut n = 0;
@@ -363,10 +407,9 @@ impl<'p> Reduced<'p> {
         let (nq, nv, na) = (m.nq, m.nv, m.actuators.len());
         let nx = nq + nv;
         assert!(nx + 3 * na <= N, "too few dual directions");
-        assert_eq!(
-            self.segments(),
-            1,
-            "tangent propagation covers single shooting"
+        assert!(
+            self.segments() == 1 && !self.has_state(0),
+            "tangent propagation covers single shooting from a fixed initial state"
         );
         let n_par = x.len();
         let block = self.grid.per_actuator();
@@ -469,15 +512,16 @@ impl<'p> Reduced<'p> {
         }
         f
     }
-    /// Overwrites the state variables of `x` with the segment start states of the rollout of
-    /// its spline parameters (the initial state where that rollout fails).
+    /// Overwrites the start-state variables of segments `1…S−1` in `x` with the states of the
+    /// rollout of its motion parameters (the initial state where that rollout fails).
     pub fn fill_states(&self, x: &mut [f64]) {
         let states = self.rollout_states(x).unwrap_or_else(|_| {
-            let init = &self.problem.initial;
+            let init = self.start_state(0, x);
             let one: Vec<f64> = init.q.iter().chain(&init.v).copied().collect();
             one.repeat(self.segments() - 1)
         });
-        x[self.n_par..].copy_from_slice(&states);
+        let c = self.parameters();
+        x[c..].copy_from_slice(&states);
     }
 }
 
@@ -489,7 +533,7 @@ impl Nlp for Reduced<'_> {
     fn dims(&self) -> Dims {
         let extra = (self.segments() - 1) * self.nx;
         Dims {
-            n: self.n_par + extra,
+            n: self.parameters() + extra,
             m: self.pose_rows() + extra,
             jac_nnz: self.pattern.len(),
             hess_nnz: 0,
@@ -506,6 +550,11 @@ impl Nlp for Reduced<'_> {
                 xu[a * block + j] = act.bounds[1];
             }
         }
+        if let Some((lo, hi)) = &self.problem.initial_box {
+            let c = self.state_column(0, 0);
+            xl[c..c + self.nx].copy_from_slice(lo);
+            xu[c..c + self.nx].copy_from_slice(hi);
+        }
         cl.fill(0.0);
         cu.fill(0.0);
         for (r, c) in self.problem.constraints.iter().enumerate() {
@@ -514,13 +563,23 @@ impl Nlp for Reduced<'_> {
         }
     }
 
-    /// The hand-made forces, slopes zero, and the segment start states of their rollout (the
-    /// initial state where that rollout fails).
+    /// The hand-made forces, slopes zero, the file's initial state (when a variable), and the
+    /// segment start states of their rollout (the initial state where that rollout fails).
     fn start(&self, x: &mut [f64]) {
         let (k, block) = (self.grid.knots, self.grid.per_actuator());
         x.fill(0.0);
         for (a, s) in self.problem.start.iter().enumerate() {
             x[a * block..a * block + k].copy_from_slice(s);
+        }
+        if self.has_state(0) {
+            let init = &self.problem.initial;
+            let c = self.state_column(0, 0);
+            for (xi, v) in x[c..c + self.nx]
+                .iter_mut()
+                .zip(init.q.iter().chain(&init.v))
+            {
+                *xi = *v;
+            }
         }
         self.fill_states(x);
     }

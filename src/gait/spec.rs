@@ -306,8 +306,26 @@ pub struct ControlsSpec {
     pub knots: Option<usize>,
     /// Control horizon (s); default the last task time.
     pub horizon: Option<f64>,
-    /// Multiple-shooting segments over `[0, last task time]`; default 1 (single shooting).
+    /// Multiple-shooting segments over `[0, last task time]`, of equal length; default 1
+    /// (single shooting). Excludes `shooting_times`.
     pub shooting_segments: Option<usize>,
+    /// Multiple shooting split at these times (s, ascending, multiples of `dt` strictly between
+    /// 0 and the last task time). Excludes `shooting_segments`.
+    pub shooting_times: Option<Vec<f64>>,
+    /// The initial state as variables, within the given half-widths of the file's initial state.
+    pub initial_state: Option<InitialStateSpec>,
+}
+
+/// Half-widths of the initial-state variables' box around the file's initial state: one number
+/// for every coordinate, or one per coordinate (`nq` positions, `nv` velocities, in the model's
+/// coordinate order: root first). Zero fixes a coordinate.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialStateSpec {
+    /// Position half-widths (m or rad).
+    pub position: Numbers,
+    /// Velocity half-widths (m/s or rad/s).
+    pub velocity: Numbers,
 }
 
 /// Simulated quantity a task constrains.
@@ -364,6 +382,9 @@ pub struct TaskSpec {
     pub value: Option<f64>,
 }
 
+/// A box of states `(lower, upper)`, each `q` then `v` (the model's units).
+pub type StateBox = (Vec<f64>, Vec<f64>);
+
 /// A validated gait problem.
 #[derive(Debug, Clone)]
 pub struct Problem {
@@ -379,8 +400,15 @@ pub struct Problem {
     pub knots: usize,
     /// Control horizon (s).
     pub horizon: f64,
-    /// Multiple-shooting segments (1 = single shooting; `crate::gait::reduced`).
+    /// Multiple-shooting segments (1 = single shooting; `crate::gait::reduced`); with
+    /// `shooting_steps` non-empty, its length + 1.
     pub segments: usize,
+    /// Interior segment boundaries in RK4 steps (`[controls] shooting_times`), ascending; empty
+    /// for `segments` equal segments.
+    pub shooting_steps: Vec<usize>,
+    /// The initial state's variable box `(lower, upper)` (`q` then `v`), when the initial state
+    /// is a variable (`[controls] initial_state`).
+    pub initial_box: Option<StateBox>,
     /// Starting knot forces per actuator (N·m or N).
     pub start: Vec<Vec<f64>>,
     /// Pose constraints, ordered by time.
@@ -389,6 +417,39 @@ pub struct Problem {
     pub trials: TrialSettings,
     /// Solver options table.
     pub solver: SolverSpec,
+}
+
+impl Problem {
+    /// Number of spline parameters (values and slopes of every actuator's knots); the motion's
+    /// variables start with them.
+    pub fn spline_parameters(&self) -> usize {
+        self.model.actuators.len() * 2 * self.knots
+    }
+
+    /// Number of motion parameters: the spline parameters, then the initial state `(q, v)` when
+    /// it is a variable. One rollout of these from t = 0 is the motion.
+    pub fn motion_parameters(&self) -> usize {
+        self.spline_parameters()
+            + self
+                .initial_box
+                .as_ref()
+                .map_or(0, |_| self.model.nq + self.model.nv)
+    }
+
+    /// The initial state of the motion with parameters `x` (spline parameters, then the initial
+    /// state when it is a variable): the file's when it is not a variable or `x` stops short.
+    pub fn initial_of(&self, x: &[f64]) -> State<f64> {
+        let (n0, nq) = (self.spline_parameters(), self.model.nq);
+        let n1 = n0 + nq + self.model.nv;
+        if self.initial_box.is_some() && x.len() >= n1 {
+            State {
+                q: x[n0..n0 + nq].to_vec(),
+                v: x[n0 + nq..n1].to_vec(),
+            }
+        } else {
+            self.initial.clone()
+        }
+    }
 }
 
 /// Parses and validates a problem file's text.
@@ -728,6 +789,13 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
             ),
         ));
     }
+    let shooting_steps = build_shooting_times(source, &file, dt_steps(file.dt), last_step)?;
+    let segments = if shooting_steps.is_empty() {
+        segments
+    } else {
+        shooting_steps.len() + 1
+    };
+    let initial_box = build_initial_box(source, &file, &model, &initial)?;
     let trials = build_trials(source, &file.trials)?;
     Ok(Problem {
         name,
@@ -737,11 +805,109 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
         knots,
         horizon,
         segments,
+        shooting_steps,
+        initial_box,
         start,
         constraints,
         trials,
         solver: file.solver,
     })
+}
+
+/// Converts times (s) to RK4 steps of `dt`, `None` when not within 1e-9 of a step.
+fn dt_steps(dt: f64) -> impl Fn(f64) -> Option<usize> {
+    move |t: f64| {
+        let n = (t / dt).round();
+        ((t / dt - n).abs() <= 1e-9 * n.max(1.0)).then_some(n as usize)
+    }
+}
+
+/// `[controls] shooting_times` as interior RK4 steps (empty when absent).
+fn build_shooting_times(
+    source: &Source,
+    file: &FileSpec,
+    step_of: impl Fn(f64) -> Option<usize>,
+    last_step: usize,
+) -> Result<Vec<usize>, InputError> {
+    let Some(times) = &file.controls.shooting_times else {
+        return Ok(Vec::new());
+    };
+    let at = path(&["controls".into(), "shooting_times".into()]);
+    if file.controls.shooting_segments.is_some() {
+        return Err(source.error_at(
+            &at,
+            "give `shooting_times` or `shooting_segments`, not both".to_string(),
+        ));
+    }
+    let mut steps = Vec::with_capacity(times.len());
+    for &t in times {
+        match step_of(t) {
+            Some(n) if t.is_finite() && n > steps.last().copied().unwrap_or(0) && n < last_step => {
+                steps.push(n)
+            }
+            _ => {
+                return Err(source.error_at(
+                    &at,
+                    format!(
+                        "`shooting_times` must be ascending multiples of `dt` strictly between 0 and the last task time, got {t}"
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(steps)
+}
+
+/// `[controls] initial_state` as the variable box around `initial` (`q` then `v`).
+fn build_initial_box(
+    source: &Source,
+    file: &FileSpec,
+    model: &Model,
+    initial: &State<f64>,
+) -> Result<Option<StateBox>, InputError> {
+    let Some(spec) = &file.controls.initial_state else {
+        return Ok(None);
+    };
+    let at = |key: &'static str| {
+        vec![
+            Key::Name("controls"),
+            Key::Name("initial_state"),
+            Key::Name(key),
+        ]
+    };
+    if model
+        .links
+        .iter()
+        .any(|l| matches!(l.joint, JointKind::Floating))
+    {
+        return Err(source.error_at(
+            &at("position"),
+            "`initial_state` needs a model without a floating root (its quaternion would leave the unit sphere)".to_string(),
+        ));
+    }
+    let (mut lo, mut hi) = (Vec::new(), Vec::new());
+    for (key, nums, values) in [
+        ("position", &spec.position, &initial.q),
+        ("velocity", &spec.velocity, &initial.v),
+    ] {
+        let w = nums.as_slice();
+        let n = values.len();
+        let ok = finite_all(w)
+            && w.iter().all(|&x| x >= 0.0)
+            && (matches!(nums, Numbers::One(_)) || w.len() == n);
+        if !ok {
+            return Err(source.error_at(
+                &at(key),
+                format!("`{key}` must be a half-width ≥ 0 or a list of {n} of them"),
+            ));
+        }
+        for (i, &x) in values.iter().enumerate() {
+            let wi = if w.len() == 1 { w[0] } else { w[i] };
+            lo.push(x - wi);
+            hi.push(x + wi);
+        }
+    }
+    Ok(Some((lo, hi)))
 }
 
 fn build_trials(source: &Source, t: &TrialsSpec) -> Result<TrialSettings, InputError> {
@@ -1296,6 +1462,72 @@ min = 0.1
             let (line, _) = e.position.unwrap();
             let at = text.lines().nth(line - 1).unwrap();
             assert!(at.contains("shooting_segments"), "line {line} `{at}`");
+        }
+    }
+
+    #[test]
+    fn shooting_times_become_steps() {
+        let text = BASE.replacen(
+            "[[task]]",
+            "[controls]\nshooting_times = [0.1, 0.25]\n[[task]]",
+            1,
+        );
+        let p = load(&text).unwrap();
+        assert_eq!(p.shooting_steps, vec![100, 250]);
+        assert_eq!(p.segments, 3);
+        assert_eq!(load(BASE).unwrap().shooting_steps, Vec::<usize>::new());
+    }
+
+    #[test]
+    fn bad_shooting_times_point_at_the_key() {
+        for (bad, says) in [
+            ("shooting_times = [0.25, 0.1]", "ascending"),
+            ("shooting_times = [0.5]", "strictly between"),
+            ("shooting_times = [0.0]", "strictly between"),
+            ("shooting_times = [0.1005]", "multiples of `dt`"),
+            ("shooting_segments = 2\nshooting_times = [0.1]", "not both"),
+        ] {
+            let text = BASE.replacen("[[task]]", &format!("[controls]\n{bad}\n[[task]]"), 1);
+            let e = load(&text).unwrap_err();
+            assert!(e.message.contains(says), "{bad}: {}", e.message);
+            let (line, _) = e.position.unwrap();
+            let at = text.lines().nth(line - 1).unwrap();
+            assert!(at.contains("shooting_times"), "line {line} `{at}`");
+        }
+    }
+
+    #[test]
+    fn initial_state_box_around_the_file_state() {
+        let text = BASE.replacen(
+            "[[task]]",
+            "[controls]\ninitial_state = { position = [0.0, 0.01, 0.1, 0.2], velocity = 0.5 }\n[[task]]",
+            1,
+        );
+        let p = load(&text).unwrap();
+        let (lo, hi) = p.initial_box.clone().unwrap();
+        let w = [0.0, 0.01, 0.1, 0.2, 0.5, 0.5, 0.5, 0.5];
+        for i in 0..8 {
+            let x = if i < 4 {
+                p.initial.q[i]
+            } else {
+                p.initial.v[i - 4]
+            };
+            assert!((lo[i] - (x - w[i])).abs() < 1e-15 && (hi[i] - (x + w[i])).abs() < 1e-15);
+        }
+        assert_eq!(p.spline_parameters(), 12);
+        assert_eq!(p.motion_parameters(), 20);
+        let mut x = vec![0.0; 20];
+        x[12..].copy_from_slice(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]);
+        assert_eq!(p.initial_of(&x).v, vec![5.0, 6.0, 7.0, 8.0]);
+        assert_eq!(p.initial_of(&x[..12]).q, p.initial.q);
+        assert!(load(BASE).unwrap().initial_box.is_none());
+        for bad in [
+            "initial_state = { position = [0.1, 0.2], velocity = 0.0 }",
+            "initial_state = { position = -0.1, velocity = 0.0 }",
+        ] {
+            let text = BASE.replacen("[[task]]", &format!("[controls]\n{bad}\n[[task]]"), 1);
+            let e = load(&text).unwrap_err();
+            assert!(e.message.contains("half-width"), "{bad}: {}", e.message);
         }
     }
 }

@@ -50,7 +50,7 @@ impl Reduced<'_> {
     }
 
     /// The Jacobian entries `(slot, value)` of the rows segment `k` owns. The sensitivity
-    /// columns are the spline parameters and, for `k ≥ 1`, the segment's start state (seeded
+    /// columns are the spline parameters and, when it is a variable, the segment's start state (seeded
     /// with the identity).
     fn segment_sensitivities(&self, k: usize, x: &[f64]) -> Result<Vec<(usize, f64)>, SimError> {
         let p = self.problem;
@@ -60,7 +60,7 @@ impl Reduced<'_> {
         let nx = nq + nv;
         let ncol = nx + 3 * na;
         let n_var = x.len();
-        let n_par = self.n_par + if k > 0 { nx } else { 0 };
+        let n_par = self.n_par + if self.has_state(k) { nx } else { 0 };
         // Variable c (spline parameters actuator-major, then this segment's start state): its
         // global column, and its column in the sensitivity matrix (spline parameters stored
         // knot-major, [`Self::knot_major`]; start-state columns after them).
@@ -96,7 +96,7 @@ impl Reduced<'_> {
         let mut dk = vec![vec![0.0; nx * ncol]; 4];
         let mut step_t = vec![0.0; nx * ncol];
         let mut sens = vec![0.0; nx * n_par];
-        if k > 0 {
+        if self.has_state(k) {
             for i in 0..nx {
                 sens[i * n_par + self.n_par + i] = 1.0;
             }
