@@ -4,7 +4,7 @@
 //! gradient/simulation ratio; for comparison the dual-number oracle (chunks of 8 duals, one
 //! thread) and the discrete-tangent Jacobian. The ratio is also measured directly by timing the
 //! simulation and the gradient alternately (medians of 15 pairs, wall and on-CPU time) and
-//! printed.
+//! printed. The biped hop: one rollout and one exact gradient at its hand-made start.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -137,6 +137,30 @@ fn benches(c: &mut Criterion) {
         b.iter(|| {
             nlp.jacobian_by_tangents::<24>(&x, &mut jac2)
                 .expect("finite")
+        })
+    });
+    group.finish();
+
+    // The biped hop at its hand-made start: one rollout to the last constraint time (the
+    // reduced problem's `eval`) and one exact gradient + Jacobian, on one thread.
+    let p = problem("biped_hop");
+    let nlp = Reduced::new(&p);
+    let d = nlp.dims();
+    let mut x = vec![0.0; d.n];
+    nlp.start(&mut x);
+    let (mut f, mut rows) = (0.0, vec![0.0; d.m]);
+    let (mut grad, mut jac) = (vec![0.0; d.n], vec![0.0; d.jac_nnz]);
+    let mut group = c.benchmark_group("biped");
+    group.sample_size(10);
+    group.bench_function("rollout", |b| {
+        b.iter(|| nlp.eval(&x, &mut f, &mut rows).expect("finite"))
+    });
+    group.bench_function("exact_gradient_1thread", |b| {
+        b.iter(|| {
+            one.install(|| {
+                nlp.eval_derivatives(&x, &mut grad, &mut jac)
+                    .expect("finite")
+            })
         })
     });
     group.finish();
