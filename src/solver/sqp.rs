@@ -30,9 +30,9 @@
 //!    exact-Hessian solve whose line search fails, or whose penalty weights stay above
 //!    `EXACT_WEIGHT_LIMIT` for `EXACT_PATIENCE` iterations (curvature scaled by diverging
 //!    multipliers freezes the steps), continues with the quasi-Newton model instead. The
-//!    exact Hessian's convexification leaves out the variables held at a bound by the
-//!    Lagrangian gradient (see `hessian::held`): the dense path adds their unit rows to the
-//!    augmentation rows, the sparse path a dominant diagonal term before the QP's inertia test.
+//!    variables held at a bound by the Lagrangian gradient are decoupled from the exact Hessian
+//!    before it is convexified (see `hessian::held`), so that a negative curvature along them
+//!    (which the bound blocks) does not shift the whole Hessian.
 //!
 //! Hessian choice in `HessianMode::Auto`: the exact Hessian when the problem has one; else
 //! dense BFGS for n ≤ [`DENSE_BFGS_LIMIT`] (an n×n update costs O(n²) per iteration and the
@@ -1059,7 +1059,8 @@ impl<'a> Sqp<'a> {
             unreachable!()
         };
         if !sparse_qp {
-            let h = hessian::assemble_dense(n, rows, cols, &values);
+            let h =
+                hessian::decouple_dense(&hessian::assemble_dense(n, rows, cols, &values), &held);
             // Rows expected active: equalities and rows with a nonzero multiplier.
             let active: Vec<usize> = (0..self.ev.dims.m)
                 .filter(|&i| self.ev.cl[i] == self.ev.cu[i] || self.lambda[i] != 0.0)
@@ -1075,7 +1076,7 @@ impl<'a> Sqp<'a> {
                 }
             }
             let convexified = shift
-                .convexify_with_rows(&h, &a, &held)
+                .convexify_with_rows(&h, &a)
                 .ok_or_else(|| EvalError::Domain("Hessian not finite".into()))?;
             if self.options.verbosity >= 2 {
                 let _ = writeln!(
@@ -1099,7 +1100,7 @@ impl<'a> Sqp<'a> {
             *dense = Some(convexified.matrix);
         } else {
             let h = hessian::assemble_sparse_lower(n, rows, cols, &values);
-            *sparse = Some(hessian::augment_lower(&h, &held));
+            *sparse = Some(hessian::decouple_lower(&h, &held));
         }
         Ok(())
     }

@@ -15,9 +15,9 @@
 //! positive definite on the null space of A, `H + γAᵀA ≻ 0` for γ large enough). On the QP's
 //! feasible set `‖A d‖²` is constant for those rows, so when they stay active the QP step is
 //! the one of the unmodified H and the fast local convergence of the exact Hessian is kept.
-//! The variables held at a bound (see `held`) are such rows too (`eᵢᵀd = 0`): A gets their unit
-//! rows, so the test concerns the reduced Hessian on the free variables only, as the
-//! second-order conditions do. When no γ succeeds, the shift δI is added to `H + γAᵀA` with
+//! (The SQP first decouples the variables held at a bound, see `held`, so that this test
+//! concerns the free variables only, as the second-order conditions do.) When no γ succeeds,
+//! the shift δI is added to `H + γAᵀA` with
 //! γ = 1e2 (relative): as γ → ∞ this is IPOPT's inertia correction of the KKT matrix with those
 //! rows, so δ corrects the reduced Hessian only, where a shift of H alone must also overcome
 //! the indefiniteness across the rows (truss: reduced eigenvalues ≥ −0.8 against a shift of
@@ -26,7 +26,7 @@
 //! Multipliers: the QP with `H + γΣuₖuₖᵀ` returns row multipliers offset by `γ·uₖᵀd/‖aₖ‖`,
 //! nonzero where the linearized residual is (see [`Convexified::row_weight`]); the SQP adds
 //! them back, or γ ≫ 1 times an infeasibility would enter the next Hessian and the penalty
-//! weights. Held bounds have `dᵢ = 0`, so their multipliers are unaffected.
+//! weights.
 
 use nalgebra::DMatrix;
 use nalgebra_sparse::{CooMatrix, CscMatrix};
@@ -70,8 +70,8 @@ pub struct Convexified {
     pub matrix: DMatrix<f64>,
     /// The shift δ, relative to `max(1, maxᵢ|Hᵢᵢ|)` (0 when none was needed).
     pub shift: f64,
-    /// The weight γ (absolute) of the term `γ·Σₖ uₖuₖᵀ` over the unit rows `uₖ = aₖ/‖aₖ‖` (and
-    /// the held variables' `eᵢ`) that the matrix contains, 0 when none. A QP solved with it
+    /// The weight γ (absolute) of the term `γ·Σₖ uₖuₖᵀ` over the unit rows `uₖ = aₖ/‖aₖ‖` that
+    /// the matrix contains, 0 when none. A QP solved with it
     /// returns row multipliers λ̃ₖ; those of the unmodified H are
     /// `λₖ = λ̃ₖ + γ·aₖᵀd/‖aₖ‖²` (the term's gradient `γ uₖ uₖᵀd` moved to the rows).
     pub row_weight: f64,
@@ -115,18 +115,17 @@ impl InertiaShift {
     /// `h + δI` with the smallest δ of the schedule that makes it positive definite, or None
     /// when h is not finite.
     pub fn convexify(&mut self, h: &DMatrix<f64>) -> Option<(DMatrix<f64>, f64)> {
-        self.convexify_with_rows(h, &DMatrix::zeros(0, h.nrows()), &[])
+        self.convexify_with_rows(h, &DMatrix::zeros(0, h.nrows()))
             .map(|c| (c.matrix, c.shift))
     }
 
-    /// As [`InertiaShift::convexify`], trying `h + γ·(rowsᵀrows + Σ_{i ∈ held} eᵢeᵢᵀ)` first
-    /// (rows k×n normalized, `held` the variables held at a bound), and shifting that matrix
-    /// with γ = [`FALLBACK_GAMMA`] when no γ succeeds (see the module header).
+    /// As [`InertiaShift::convexify`], trying `h + γ·rowsᵀrows` first (rows k×n normalized),
+    /// and shifting that matrix with γ = [`FALLBACK_GAMMA`] when no γ succeeds (see the module
+    /// header).
     pub fn convexify_with_rows(
         &mut self,
         h: &DMatrix<f64>,
         rows: &DMatrix<f64>,
-        held: &[usize],
     ) -> Option<Convexified> {
         if !h.iter().all(|v| v.is_finite()) {
             return None;
@@ -141,7 +140,7 @@ impl InertiaShift {
             });
         }
         let mut base = (h.clone(), 0.0);
-        if rows.nrows() > 0 || !held.is_empty() {
+        if rows.nrows() > 0 {
             // Unit rows, so that a short row counts as much as a long one.
             let mut unit = rows.clone();
             for mut r in unit.row_iter_mut() {
@@ -150,10 +149,7 @@ impl InertiaShift {
                     r /= norm;
                 }
             }
-            let mut gram = unit.tr_mul(&unit);
-            for &i in held {
-                gram[(i, i)] += 1.0;
-            }
+            let gram = unit.tr_mul(&unit);
             for g in GAMMAS {
                 let augmented = h + &gram * (g * scale);
                 if safely_definite(&augmented, scale_of(&augmented)) {
@@ -207,7 +203,7 @@ mod tests {
         assert!(d2 > 2.0 && d2 <= d * 8.0);
         // Positive definite on the null space of the row (1, 0): augmentation, no shift.
         let rows = DMatrix::from_row_slice(1, 2, &[0.0, 1.0]);
-        let c = shift.convexify_with_rows(&h, &rows, &[]).unwrap();
+        let c = shift.convexify_with_rows(&h, &rows).unwrap();
         assert_eq!(c.shift, 0.0);
         assert!(c.row_weight > 0.0);
         assert!(c.matrix.cholesky().is_some());
@@ -219,26 +215,13 @@ mod tests {
         // the augmentation δ·2 > 0.01 suffices, for h alone δ·2 > 2 is needed.
         let (mut on_rows, mut alone) = (InertiaShift::default(), InertiaShift::default());
         for _ in 0..4 {
-            let c = on_rows.convexify_with_rows(&h3, &rows3, &[]).unwrap();
+            let c = on_rows.convexify_with_rows(&h3, &rows3).unwrap();
             assert!(c.matrix.cholesky().is_some());
             assert_eq!(c.row_weight, FALLBACK_GAMMA * 2.0);
             alone.convexify(&h3).unwrap();
         }
         assert!(on_rows.last() < 0.05 && on_rows.last() > 0.0);
         assert!(alone.last() > 1.0);
-        // A variable held at a bound takes its negative curvature out of the test.
-        let c = InertiaShift::default()
-            .convexify_with_rows(&h3, &DMatrix::zeros(0, 3), &[1])
-            .unwrap();
-        assert!(c.shift > 0.0 && c.row_weight == FALLBACK_GAMMA * 2.0);
-        let h4 = assemble_dense(2, &[0, 1, 1], &[0, 0, 1], &[1.0, 0.5, -3.0]);
-        let c = InertiaShift::default()
-            .convexify_with_rows(&h4, &DMatrix::zeros(0, 2), &[1])
-            .unwrap();
-        assert_eq!(c.shift, 0.0);
-        assert!(c.matrix.cholesky().is_some());
-        let pd = assemble_dense(2, &[0, 1], &[0, 1], &[1.0, 1.0]);
-        assert_eq!(shift.convexify(&pd).unwrap().1, 0.0);
     }
 
     #[test]

@@ -1,28 +1,32 @@
-//! Variables held at a bound, and the diagonal augmentation that takes them out of the
-//! convexification of an exact Hessian.
+//! Variables held at a bound, and how they are taken out of the convexification of an exact
+//! Hessian.
 //!
 //! A variable sits at a lower bound (`xᵢ = xlᵢ`) with the Lagrangian gradient
 //! `∇ᵢL = ∇ᵢf + Σₖ λₖ ∂cₖ/∂xᵢ > 0` pushing it into that bound (multiplier `zᵢ = −∇ᵢL < 0` in the
 //! QP convention `Hd + g + Aᵀλ + z = 0`), or at an upper bound with `∇ᵢL < 0`: the QP of the
-//! next iteration is expected to keep it there (`dᵢ = 0`), and the second-order conditions ask
-//! for positive curvature only on the other variables (Nocedal & Wright, 2nd ed., Thm. 12.6:
-//! the critical cone of a strongly active bound has `dᵢ = 0`). Its row and column of H do
-//! not matter for such a step, but an inertia test over all variables sees them: a concave
-//! function of a variable sitting at its bound (a cost growing like √c from c = 0) forces a
-//! shift `δI` of the whole Hessian that shortens every step.
+//! next iteration is expected to keep it there (`dᵢ = 0`). The second-order conditions ask for
+//! positive curvature only on the other variables (Nocedal & Wright, 2nd ed., Thm. 12.6: the
+//! critical cone of a strongly active bound has `dᵢ = 0`), but an inertia test over all
+//! variables also sees the held ones: a concave function of a variable sitting at its bound (a
+//! cost growing like √c from c = 0) forces a shift `δI` of the whole Hessian that shortens
+//! every step.
 //!
-//! The bound `dᵢ ≥ dlᵢ` is the row `eᵢᵀd` of the QP; Debreu's lemma for it reads: if H is
-//! positive definite on the variables not held, `H + γ Σ_{i held} eᵢeᵢᵀ ≻ 0` for γ large enough.
-//! The term is `γ dᵢ²`, zero on every step that keeps the bound, so a QP solution with the
-//! bound active is one of the unmodified H, with the same multipliers (the term's gradient
-//! vanishes at dᵢ = 0). A held variable that the QP would release moves less (it has the
-//! added curvature), and is free at the next iterate, where its multiplier changed sign.
-//!
-//! [`augment_lower`] adds, for the sparse QP (which tests the inertia itself), the diagonal
-//! `γᵢ = s + Σⱼ|Hᵢⱼ|` (s = `max(1, maxⱼ|Hⱼⱼ|)`, the shift scale of `exact`) to each held row,
-//! which makes it diagonally dominant by s; the dense path adds the held variables' unit rows
-//! to the augmentation rows of `exact` (a Cholesky test picks γ there).
+//! So the held variables B are decoupled: their rows and columns of H are replaced by
+//! `s·eᵢeᵢᵀ` (s = `max(1, maxⱼ|Hⱼⱼ|)`, the shift scale of `exact`), leaving
+//! ```text
+//!     H̃ = [ H_FF  0  ]      F = the other variables
+//!         [ 0    s·I ]
+//! ```
+//! A QP step that keeps the held bounds (d_B = 0) involves only H_FF: its d_F and row multipliers
+//! λ are those of the unmodified H with these bounds active — the Newton step of the problem
+//! restricted to the free variables, so the exact Hessian's fast local convergence is kept once
+//! the active bounds are identified — and the inertia test concerns H_FF on the null space of
+//! the rows, the second-order condition itself. Only the held bounds' own multipliers lose the
+//! term `(H_BF d_F)`, an O(‖d‖) error that vanishes at a solution; a variable the QP releases
+//! nonetheless moves with curvature s (a cautious step), and is free at the next iterate. The
+//! pattern of a sparse H is unchanged (zeros are stored), so its symbolic analysis is reused.
 
+use nalgebra::DMatrix;
 use nalgebra_sparse::CscMatrix;
 
 /// Indices of the variables held at a bound: at it to within `1e-10·(1 + |bound|)` and pushed
@@ -37,33 +41,52 @@ pub fn held_at_bounds(x: &[f64], xl: &[f64], xu: &[f64], grad_l: &[f64]) -> Vec<
         .collect()
 }
 
-/// `h + Σ_{i ∈ held} γᵢ eᵢeᵢᵀ` for a lower triangle `h` (row ≥ col) that stores every diagonal
-/// entry (see [`super::assemble_sparse_lower`]), with `γᵢ = s + Σⱼ|Hᵢⱼ|`; the pattern is
-/// unchanged.
-pub fn augment_lower(h: &CscMatrix<f64>, held: &[usize]) -> CscMatrix<f64> {
-    let n = h.nrows();
-    let mut row_sums = vec![0.0; n];
-    let mut scale = 1.0_f64;
-    for (r, c, &v) in h.triplet_iter() {
-        row_sums[r] += v.abs();
-        if r != c {
-            row_sums[c] += v.abs();
-        } else {
-            scale = scale.max(v.abs());
-        }
-    }
+/// Marks of `held` among n variables.
+fn marks(n: usize, held: &[usize]) -> Vec<bool> {
     let mut is_held = vec![false; n];
     for &i in held {
         is_held[i] = true;
     }
+    is_held
+}
+
+/// `h` with the rows and columns of the held variables replaced by `s·eᵢeᵢᵀ`, for a lower
+/// triangle (row ≥ col) that stores every diagonal entry (see [`super::assemble_sparse_lower`]);
+/// the pattern is unchanged.
+pub fn decouple_lower(h: &CscMatrix<f64>, held: &[usize]) -> CscMatrix<f64> {
     let mut out = h.clone();
+    if held.is_empty() {
+        return out;
+    }
+    let n = h.nrows();
+    let scale = h
+        .triplet_iter()
+        .filter(|(r, c, _)| r == c)
+        .fold(1.0_f64, |a, (_, _, v)| a.max(v.abs()));
+    let is_held = marks(n, held);
     let (offsets, rows, values) = out.csc_data_mut();
     for c in 0..n {
         for k in offsets[c]..offsets[c + 1] {
-            if rows[k] == c && is_held[c] {
-                values[k] += scale + row_sums[c];
+            let r = rows[k];
+            if is_held[r] || is_held[c] {
+                values[k] = if r == c { scale } else { 0.0 };
             }
         }
+    }
+    out
+}
+
+/// As [`decouple_lower`] for a dense symmetric `h`.
+pub fn decouple_dense(h: &DMatrix<f64>, held: &[usize]) -> DMatrix<f64> {
+    let mut out = h.clone();
+    if held.is_empty() {
+        return out;
+    }
+    let scale = h.diagonal().iter().fold(1.0_f64, |a, v| a.max(v.abs()));
+    for &i in held {
+        out.row_mut(i).fill(0.0);
+        out.column_mut(i).fill(0.0);
+        out[(i, i)] = scale;
     }
     out
 }
@@ -86,25 +109,25 @@ mod tests {
     }
 
     #[test]
-    fn augmentation_makes_held_rows_dominant_and_keeps_the_pattern() {
-        // H = [[-5, 2], [2, 1]]: indefinite; holding variable 0 leaves the curvature 1 > 0 of
-        // variable 1, and the augmented matrix is positive definite.
-        let h = assemble_sparse_lower(2, &[0, 1, 1], &[0, 0, 1], &[-5.0, 2.0, 1.0]);
-        let a = augment_lower(&h, &[0]);
-        assert_eq!(a.col_offsets(), h.col_offsets());
-        assert_eq!(a.row_indices(), h.row_indices());
-        let t: Vec<_> = a.triplet_iter().map(|(r, c, &v)| (r, c, v)).collect();
-        let (r, c, v): (Vec<_>, Vec<_>, Vec<_>) =
-            t.iter()
-                .fold((vec![], vec![], vec![]), |mut acc, &(r, c, v)| {
-                    acc.0.push(r);
-                    acc.1.push(c);
-                    acc.2.push(v);
-                    acc
-                });
-        // γ₀ = s + |−5| + |2| = 5 + 7 = 12.
-        assert_eq!(v[0], 7.0);
-        assert!(assemble_dense(2, &r, &c, &v).cholesky().is_some());
-        assert_eq!(augment_lower(&h, &[]).values(), h.values());
+    fn decoupling_keeps_the_free_block_and_the_pattern() {
+        // H = [[-5, 2, 1], [2, 1, 0.5], [1, 0.5, 3]]: indefinite through variable 0; holding
+        // it leaves the positive definite block of variables 1 and 2.
+        let (r, c) = ([0, 1, 2, 1, 2, 2], [0, 0, 0, 1, 1, 2]);
+        let v = [-5.0, 2.0, 1.0, 1.0, 0.5, 3.0];
+        let h = assemble_sparse_lower(3, &r, &c, &v);
+        let full = assemble_dense(3, &r, &c, &v);
+        let sparse = decouple_lower(&h, &[0]);
+        assert_eq!(sparse.col_offsets(), h.col_offsets());
+        assert_eq!(sparse.row_indices(), h.row_indices());
+        let dense = decouple_dense(&full, &[0]);
+        let expected =
+            DMatrix::from_row_slice(3, 3, &[5.0, 0.0, 0.0, 0.0, 1.0, 0.5, 0.0, 0.5, 3.0]);
+        assert_eq!(dense, expected);
+        let triplets: Vec<_> = sparse.triplet_iter().map(|(r, c, &v)| (r, c, v)).collect();
+        for (r, c, v) in triplets {
+            assert_eq!(v, expected[(r, c)]);
+        }
+        assert!(full.cholesky().is_none() && dense.cholesky().is_some());
+        assert_eq!(decouple_lower(&h, &[]).values(), h.values());
     }
 }

@@ -20,8 +20,8 @@ pub enum Model {
         shift: InertiaShift,
         /// Dense convexified matrix (small n) or the raw lower triangle (large n).
         dense: Option<DMatrix<f64>>,
-        /// Raw lower triangle for the sparse QP (large n), with the held variables' diagonal
-        /// terms (see `held`).
+        /// Lower triangle for the sparse QP (large n), the held variables decoupled (see
+        /// `held`); the QP convexifies it.
         sparse: Option<CscMatrix<f64>>,
         /// Rows augmented into `dense` and their weights `γ/‖aₖ‖²`: the QP's multiplier of row
         /// k is short by `weight·aₖᵀd` (see [`super::Convexified::row_weight`]).
