@@ -1061,10 +1061,13 @@ impl<'a> Sqp<'a> {
         if !sparse_qp {
             let h =
                 hessian::decouple_dense(&hessian::assemble_dense(n, rows, cols, &values), &held);
-            // Rows expected active: equalities and rows with a nonzero multiplier.
+            // Rows expected active: equalities (first) and rows with a nonzero multiplier.
+            let is_equality = |i: usize| self.ev.cl[i] == self.ev.cu[i];
             let active: Vec<usize> = (0..self.ev.dims.m)
-                .filter(|&i| self.ev.cl[i] == self.ev.cu[i] || self.lambda[i] != 0.0)
+                .filter(|&i| is_equality(i))
+                .chain((0..self.ev.dims.m).filter(|&i| !is_equality(i) && self.lambda[i] != 0.0))
                 .collect();
+            let equalities = active.iter().filter(|&&i| is_equality(i)).count();
             let mut position = vec![usize::MAX; self.ev.dims.m];
             for (k, &i) in active.iter().enumerate() {
                 position[i] = k;
@@ -1076,7 +1079,7 @@ impl<'a> Sqp<'a> {
                 }
             }
             let convexified = shift
-                .convexify_with_rows(&h, &a)
+                .convexify_with_rows(&h, &a, equalities)
                 .ok_or_else(|| EvalError::Domain("Hessian not finite".into()))?;
             if self.options.verbosity >= 2 {
                 let _ = writeln!(
@@ -1091,10 +1094,11 @@ impl<'a> Sqp<'a> {
             *row_weights = active
                 .iter()
                 .enumerate()
+                .take(convexified.weighted_rows)
                 .filter_map(|(k, &i)| {
                     let norm2 = a.row(k).norm_squared();
                     (convexified.row_weight > 0.0 && norm2 > 0.0)
-                        .then(|| (i, convexified.row_weight / norm2))
+                        .then(|| (i, convexified.row_weight / norm2, is_equality(i)))
                 })
                 .collect();
             *dense = Some(convexified.matrix);

@@ -17,11 +17,13 @@
 //! the one of the unmodified H and the fast local convergence of the exact Hessian is kept.
 //! (The SQP first decouples the variables held at a bound, see `held`, so that this test
 //! concerns the free variables only, as the second-order conditions do.) When no γ succeeds,
-//! the shift δI is added to `H + γAᵀA` with
+//! the shift δI is added to `H + γA_EᵀA_E` over the equality rows E with
 //! γ = 1e2 (relative): as γ → ∞ this is IPOPT's inertia correction of the KKT matrix with those
 //! rows, so δ corrects the reduced Hessian only, where a shift of H alone must also overcome
 //! the indefiniteness across the rows (truss: reduced eigenvalues ≥ −0.8 against a shift of
-//! ~6e3 for H alone, at a Hessian scale of 6e3).
+//! ~6e3 for H alone, at a Hessian scale of 6e3). Inequality rows are left out of that base: an
+//! inequality the QP should leave would be held by the γ term (HS108 and HS116 then ended at
+//! other points).
 //!
 //! Multipliers: the QP with `H + γΣuₖuₖᵀ` returns row multipliers offset by `γ·uₖᵀd/‖aₖ‖`,
 //! nonzero where the linearized residual is (see [`Convexified::row_weight`]); the SQP adds
@@ -70,11 +72,13 @@ pub struct Convexified {
     pub matrix: DMatrix<f64>,
     /// The shift δ, relative to `max(1, maxᵢ|Hᵢᵢ|)` (0 when none was needed).
     pub shift: f64,
-    /// The weight γ (absolute) of the term `γ·Σₖ uₖuₖᵀ` over the unit rows `uₖ = aₖ/‖aₖ‖` that
-    /// the matrix contains, 0 when none. A QP solved with it
+    /// The weight γ (absolute) of the term `γ·Σₖ uₖuₖᵀ` over the unit rows `uₖ = aₖ/‖aₖ‖`,
+    /// k < `weighted_rows`, that the matrix contains, 0 when none. A QP solved with it
     /// returns row multipliers λ̃ₖ; those of the unmodified H are
     /// `λₖ = λ̃ₖ + γ·aₖᵀd/‖aₖ‖²` (the term's gradient `γ uₖ uₖᵀd` moved to the rows).
     pub row_weight: f64,
+    /// How many of the leading rows carry `row_weight`.
+    pub weighted_rows: usize,
 }
 
 /// The remembered inertia-correction shift.
@@ -115,17 +119,18 @@ impl InertiaShift {
     /// `h + δI` with the smallest δ of the schedule that makes it positive definite, or None
     /// when h is not finite.
     pub fn convexify(&mut self, h: &DMatrix<f64>) -> Option<(DMatrix<f64>, f64)> {
-        self.convexify_with_rows(h, &DMatrix::zeros(0, h.nrows()))
+        self.convexify_with_rows(h, &DMatrix::zeros(0, h.nrows()), 0)
             .map(|c| (c.matrix, c.shift))
     }
 
     /// As [`InertiaShift::convexify`], trying `h + γ·rowsᵀrows` first (rows k×n normalized),
-    /// and shifting that matrix with γ = [`FALLBACK_GAMMA`] when no γ succeeds (see the module
-    /// header).
+    /// and, when no γ succeeds, shifting h plus the term of the first `equalities` rows (the
+    /// equality rows) with γ = [`FALLBACK_GAMMA`] (see the module header).
     pub fn convexify_with_rows(
         &mut self,
         h: &DMatrix<f64>,
         rows: &DMatrix<f64>,
+        equalities: usize,
     ) -> Option<Convexified> {
         if !h.iter().all(|v| v.is_finite()) {
             return None;
@@ -137,9 +142,10 @@ impl InertiaShift {
                 matrix: h.clone(),
                 shift: 0.0,
                 row_weight: 0.0,
+                weighted_rows: 0,
             });
         }
-        let mut base = (h.clone(), 0.0);
+        let mut base = (h.clone(), 0.0, 0);
         if rows.nrows() > 0 {
             // Unit rows, so that a short row counts as much as a long one.
             let mut unit = rows.clone();
@@ -157,10 +163,19 @@ impl InertiaShift {
                         matrix: augmented,
                         shift: 0.0,
                         row_weight: g * scale,
+                        weighted_rows: rows.nrows(),
                     });
                 }
             }
-            base = (h + &gram * (FALLBACK_GAMMA * scale), FALLBACK_GAMMA * scale);
+            if equalities > 0 {
+                let eq = unit.rows(0, equalities);
+                let gram = eq.tr_mul(&eq);
+                base = (
+                    h + &gram * (FALLBACK_GAMMA * scale),
+                    FALLBACK_GAMMA * scale,
+                    equalities,
+                );
+            }
         }
         let base_scale = scale_of(&base.0);
         let first = self.last == 0.0;
@@ -180,6 +195,7 @@ impl InertiaShift {
                     matrix: shifted,
                     shift: delta,
                     row_weight: base.1,
+                    weighted_rows: base.2,
                 });
             }
             delta *= if first { 100.0 } else { 8.0 };
@@ -203,7 +219,7 @@ mod tests {
         assert!(d2 > 2.0 && d2 <= d * 8.0);
         // Positive definite on the null space of the row (1, 0): augmentation, no shift.
         let rows = DMatrix::from_row_slice(1, 2, &[0.0, 1.0]);
-        let c = shift.convexify_with_rows(&h, &rows).unwrap();
+        let c = shift.convexify_with_rows(&h, &rows, 1).unwrap();
         assert_eq!(c.shift, 0.0);
         assert!(c.row_weight > 0.0);
         assert!(c.matrix.cholesky().is_some());
@@ -215,7 +231,7 @@ mod tests {
         // the augmentation δ·2 > 0.01 suffices, for h alone δ·2 > 2 is needed.
         let (mut on_rows, mut alone) = (InertiaShift::default(), InertiaShift::default());
         for _ in 0..4 {
-            let c = on_rows.convexify_with_rows(&h3, &rows3).unwrap();
+            let c = on_rows.convexify_with_rows(&h3, &rows3, 1).unwrap();
             assert!(c.matrix.cholesky().is_some());
             assert_eq!(c.row_weight, FALLBACK_GAMMA * 2.0);
             alone.convexify(&h3).unwrap();
