@@ -46,8 +46,7 @@ pub fn assemble_dense(n: usize, rows: &[usize], cols: &[usize], values: &[f64]) 
 }
 
 /// Sparse lower triangle (row ≥ col) from triplets; entries given above the diagonal are
-/// mirrored below it. Every diagonal entry is stored (explicit zeros where the triplets have
-/// none), so that diagonal terms can be added without changing the pattern (see `held`).
+/// mirrored below it.
 pub fn assemble_sparse_lower(
     n: usize,
     rows: &[usize],
@@ -55,9 +54,6 @@ pub fn assemble_sparse_lower(
     values: &[f64],
 ) -> CscMatrix<f64> {
     let mut coo = CooMatrix::new(n, n);
-    for i in 0..n {
-        coo.push(i, i, 0.0);
-    }
     for ((&r, &c), &v) in rows.iter().zip(cols).zip(values) {
         let (r, c) = if r >= c { (r, c) } else { (c, r) };
         coo.push(r, c, v);

@@ -20,8 +20,7 @@ pub enum Model {
         shift: InertiaShift,
         /// Dense convexified matrix (small n) or the raw lower triangle (large n).
         dense: Option<DMatrix<f64>>,
-        /// Lower triangle for the sparse QP (large n), the held variables decoupled (see
-        /// `held`); the QP convexifies it.
+        /// Raw lower triangle for the sparse QP (large n).
         sparse: Option<CscMatrix<f64>>,
         /// Rows augmented into `dense`, their weights `γ/‖aₖ‖²` and whether they are
         /// equalities: the QP's multiplier of an active row k is short by `weight·aₖᵀd` (see
