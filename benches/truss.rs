@@ -1,5 +1,6 @@
 //! Truss solve times: whole runs (`optimize::truss::run`: staged layout-LP start, then the
-//! geometry and sizing SQP, then export) of the shipped examples, and the layout LP alone.
+//! geometry and sizing SQP, then export) of the shipped examples, warren_bridge also with its
+//! former solver settings (L-BFGS, sparse QP), and the layout LP alone.
 //! Figures go to BENCHMARKS.md (truss section).
 
 use std::path::Path;
@@ -17,6 +18,26 @@ fn path(name: &str) -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("problems/truss")
         .join(format!("{name}.toml"))
+}
+
+/// warren_bridge as it was solved before the exact Hessian's reduced-space convexification:
+/// limited-memory BFGS with the sparse QP (the file's `[solver]` table rewritten into a copy
+/// in the temporary directory), for a before/after ratio within one bench run.
+fn warren_lbfgs(c: &mut Criterion) {
+    let text = std::fs::read_to_string(path("warren_bridge")).expect("reads");
+    let text = text
+        .replace("hessian = \"exact\"", "hessian = \"lbfgs\"")
+        .replace("qp = \"auto\"", "qp = \"sparse\"");
+    let copy = std::env::temp_dir().join("warren_bridge_lbfgs.toml");
+    std::fs::write(&copy, text).expect("writes");
+    let problem = load(&copy).expect("loads");
+    let opts = RunOptions {
+        quiet: true,
+        ..Default::default()
+    };
+    c.bench_function("truss run warren_bridge lbfgs", |b| {
+        b.iter(|| optimize::truss::run(&problem, &opts).expect("runs"))
+    });
 }
 
 fn runs(c: &mut Criterion) {
@@ -45,6 +66,6 @@ fn layout(c: &mut Criterion) {
 criterion_group! {
     name = benches;
     config = Criterion::default().sample_size(10);
-    targets = layout, runs
+    targets = layout, runs, warren_lbfgs
 }
 criterion_main!(benches);

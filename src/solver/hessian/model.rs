@@ -3,7 +3,7 @@
 //! the operations the outer loop needs (the QP representation, products H·d, resets).
 
 use nalgebra::{DMatrix, DVector};
-use nalgebra_sparse::CscMatrix;
+use nalgebra_sparse::{CscMatrix, CsrMatrix};
 
 use super::{DenseBfgs, InertiaShift, Lbfgs, assemble_dense};
 use crate::solver::qp::QpHessian;
@@ -22,6 +22,10 @@ pub enum Model {
         dense: Option<DMatrix<f64>>,
         /// Raw lower triangle for the sparse QP (large n).
         sparse: Option<CscMatrix<f64>>,
+        /// Rows augmented into `dense`, their weights `γ/‖aₖ‖²` and whether they are
+        /// equalities: the QP's multiplier of an active row k is short by `weight·aₖᵀd` (see
+        /// [`super::Convexified::row_weight`]).
+        row_weights: Vec<(usize, f64, bool)>,
     },
 }
 
@@ -89,6 +93,35 @@ impl Model {
                 }
                 out
             }
+        }
+    }
+
+    /// Adds back to the row multipliers of a QP solved with this model what the augmentation
+    /// of an exact Hessian took from them (`a` the QP's rows, `d` its step): on equality rows,
+    /// and on inequality rows active in the QP (λ̃ ≠ 0), where a restored value of the other
+    /// sign becomes 0. An inequality row the QP left inactive keeps λ = 0: the augmentation's
+    /// term only penalized moving off it, it is no force of the row.
+    pub fn restore_multipliers(&self, lambda: &mut [f64], a: &CsrMatrix<f64>, d: &[f64]) {
+        let Model::Exact { row_weights, .. } = self else {
+            return;
+        };
+        for &(k, weight, equality) in row_weights {
+            if !equality && lambda[k] == 0.0 {
+                continue;
+            }
+            let row = a.row(k);
+            let ad: f64 = row
+                .col_indices()
+                .iter()
+                .zip(row.values())
+                .map(|(&j, v)| v * d[j])
+                .sum();
+            let restored = lambda[k] + weight * ad;
+            lambda[k] = if equality || restored * lambda[k] > 0.0 {
+                restored
+            } else {
+                0.0
+            };
         }
     }
 
