@@ -283,6 +283,84 @@ fn maratos_example_takes_full_steps_and_converges_superlinearly() {
     assert!(errors[n - 1] <= 1e-2 * errors[n - 2], "{errors:?}");
 }
 
+/// `min eˣ + e⁻ʸ + 3c − 4c² − 5xc  s.t.  x² + y² = 2,  0 ≤ c ≤ 1`: the optimum (−1, 1, 0) has
+/// c held at its lower bound by the gradient 3 − 5x = 8, where the Hessian's curvature in c is
+/// −8 (coupled to x by −5); on the free variables (the circle's tangent) it is positive.
+fn concave_at_bound() -> Small {
+    Small {
+        x0: vec![-0.5, 1.5, 0.0],
+        xl: vec![-INF, -INF, 0.0],
+        xu: vec![INF, INF, 1.0],
+        cl: vec![2.0],
+        cu: vec![2.0],
+        values: Box::new(|x, c| {
+            c[0] = x[0] * x[0] + x[1] * x[1];
+            Ok(x[0].exp() + (-x[1]).exp() + 3.0 * x[2] - 4.0 * x[2] * x[2] - 5.0 * x[0] * x[2])
+        }),
+        derivatives: Box::new(|x, g, j| {
+            g.copy_from_slice(&[
+                x[0].exp() - 5.0 * x[2],
+                -(-x[1]).exp(),
+                3.0 - 8.0 * x[2] - 5.0 * x[0],
+            ]);
+            j.copy_from_slice(&[2.0 * x[0], 2.0 * x[1], 0.0]);
+        }),
+        hessian: Some(Box::new(|x, sigma, lambda, h| {
+            let l = 2.0 * lambda[0];
+            h.copy_from_slice(&[
+                sigma * x[0].exp() + l,
+                0.0,
+                sigma * (-x[1]).exp() + l,
+                -5.0 * sigma,
+                0.0,
+                -8.0 * sigma,
+            ]);
+        })),
+    }
+}
+
+#[test]
+fn negative_curvature_blocked_by_a_bound_keeps_full_newton_steps() {
+    // The convexification tests the Hessian only on the variables not held at a bound: no
+    // shift, so the exact Hessian takes full Newton steps and converges quadratically, on both
+    // QP paths.
+    for qp_method in [QpMethod::Dense, QpMethod::Sparse] {
+        let s = solve(
+            &concave_at_bound(),
+            &Options {
+                hessian: HessianMode::Exact,
+                qp_method,
+                ..quiet()
+            },
+        );
+        let steps: Vec<f64> = s.log.iter().skip(1).map(|r| r.step).collect();
+        let errors: Vec<f64> = s
+            .log
+            .iter()
+            .map(|r| (r.objective - 2.0 * (-1.0_f64).exp()).abs())
+            .collect();
+        println!("{qp_method:?}: steps {steps:?}");
+        println!("{qp_method:?}: |f − f*| {errors:?}");
+        assert_eq!(s.status, Status::Optimal, "{qp_method:?}");
+        assert!(
+            (s.x[0] + 1.0).abs() < 1e-5 && (s.x[1] - 1.0).abs() < 1e-5 && s.x[2] == 0.0,
+            "{:?}",
+            s.x
+        );
+        assert!(steps.iter().all(|&a| a == 1.0), "{qp_method:?}: {steps:?}");
+        assert!(
+            s.iterations <= 6,
+            "{qp_method:?}: {} iterations",
+            s.iterations
+        );
+        // Quadratic: the last errors fall like e_{k+1} ≤ C·e_k² with a modest C.
+        let n = errors.len();
+        assert!(n >= 3);
+        let (a, b) = (errors[n - 3], errors[n - 2]);
+        assert!(b <= 10.0 * a * a, "{qp_method:?}: {errors:?}");
+    }
+}
+
 #[test]
 fn limits_and_interrupt_return_the_best_point() {
     let nlp = powell_maratos(2.0);

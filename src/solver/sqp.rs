@@ -29,7 +29,10 @@
 //!    multipliers λ = λ_QP (initial multipliers: least squares, for the exact Hessian). An
 //!    exact-Hessian solve whose line search fails, or whose penalty weights stay above
 //!    `EXACT_WEIGHT_LIMIT` for `EXACT_PATIENCE` iterations (curvature scaled by diverging
-//!    multipliers freezes the steps), continues with the quasi-Newton model instead.
+//!    multipliers freezes the steps), continues with the quasi-Newton model instead. The
+//!    variables held at a bound by the Lagrangian gradient are decoupled from the exact Hessian
+//!    before it is convexified (see `hessian::held`), so that a negative curvature along them
+//!    (which the bound blocks) does not shift the whole Hessian.
 //!
 //! Hessian choice in `HessianMode::Auto`: the exact Hessian when the problem has one; else
 //! dense BFGS for n ≤ [`DENSE_BFGS_LIMIT`] (an n×n update costs O(n²) per iteration and the
@@ -256,6 +259,7 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
             shift: InertiaShift::default(),
             dense: None,
             sparse: None,
+            row_weights: Vec::new(),
         },
         _ => Model::Bfgs(DenseBfgs::new(n)),
     };
@@ -699,7 +703,8 @@ impl<'a> Sqp<'a> {
             bl: &bl,
             bu: &bu,
         };
-        let qp = qp::solve(&problem, &mut self.warm, tol);
+        let mut qp = qp::solve(&problem, &mut self.warm, tol);
+        self.model.restore_multipliers(&mut qp.lambda, jac, &qp.d);
         let lin = Linearization {
             a: jac,
             dl: &dl,
@@ -748,6 +753,7 @@ impl<'a> Sqp<'a> {
             .collect();
         let best_reduction = (now - least).max(0.0);
         let mut sol = elastic::solve_elastic(h, g, &lin, &rho, &mut self.elastic_warm, tol);
+        self.model.restore_multipliers(&mut sol.lambda, jac, &sol.d);
         iterations += sol.iterations;
         for _ in 0..MAX_STEERING {
             let after = lin.violation_after(&sol.d);
@@ -759,6 +765,7 @@ impl<'a> Sqp<'a> {
                 *w *= 10.0;
             }
             sol = elastic::solve_elastic(h, g, &lin, &rho, &mut self.elastic_warm, tol);
+            self.model.restore_multipliers(&mut sol.lambda, jac, &sol.d);
             iterations += sol.iterations;
         }
         self.rho = rho;
@@ -1035,17 +1042,25 @@ impl<'a> Sqp<'a> {
         let n = self.ev.dims.n;
         let sparse_qp = self.sparse_qp();
         let values = self.ev.hessian(&point.x, &self.lambda)?;
+        let held = hessian::held_at_bounds(
+            &point.x,
+            &self.ev.xl,
+            &self.ev.xu,
+            &self.lagrangian_gradient(point),
+        );
         let (rows, cols) = (&self.ev.hess_rows, &self.ev.hess_cols);
         let Model::Exact {
             shift,
             dense,
             sparse,
+            row_weights,
         } = &mut self.model
         else {
             unreachable!()
         };
         if !sparse_qp {
-            let h = hessian::assemble_dense(n, rows, cols, &values);
+            let h =
+                hessian::decouple_dense(&hessian::assemble_dense(n, rows, cols, &values), &held);
             // Rows expected active: equalities and rows with a nonzero multiplier.
             let active: Vec<usize> = (0..self.ev.dims.m)
                 .filter(|&i| self.ev.cl[i] == self.ev.cu[i] || self.lambda[i] != 0.0)
@@ -1060,19 +1075,32 @@ impl<'a> Sqp<'a> {
                     a[(position[r], c)] += point.derivatives.jac[k];
                 }
             }
-            let (m, delta) = shift
+            let convexified = shift
                 .convexify_with_rows(&h, &a)
                 .ok_or_else(|| EvalError::Domain("Hessian not finite".into()))?;
             if self.options.verbosity >= 2 {
                 let _ = writeln!(
                     std::io::stderr(),
-                    "      Hessian shift {delta:.2e} (augmented rows: {})",
-                    a.nrows()
+                    "      Hessian shift {:.2e} (augmented rows: {}, held at bounds: {}, weight {:.2e})",
+                    convexified.shift,
+                    a.nrows(),
+                    held.len(),
+                    convexified.row_weight
                 );
             }
-            *dense = Some(m);
+            *row_weights = active
+                .iter()
+                .enumerate()
+                .filter_map(|(k, &i)| {
+                    let norm2 = a.row(k).norm_squared();
+                    (convexified.row_weight > 0.0 && norm2 > 0.0)
+                        .then(|| (i, convexified.row_weight / norm2))
+                })
+                .collect();
+            *dense = Some(convexified.matrix);
         } else {
-            *sparse = Some(hessian::assemble_sparse_lower(n, rows, cols, &values));
+            let h = hessian::assemble_sparse_lower(n, rows, cols, &values);
+            *sparse = Some(hessian::decouple_lower(&h, &held));
         }
         Ok(())
     }

@@ -203,14 +203,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     }
     let (mut nlp, start_report) = problem.staged_nlp(&model, seed)?;
     timings.insert("build".to_string(), started.elapsed().as_secs_f64());
-    let mut options = problem.spec.solver.options();
-    if let Some(m) = opts.max_iter {
-        options.max_iterations = m;
-    }
-    if opts.quiet {
-        options.verbosity = 0;
-    }
-    options.interrupt = opts.interrupt.clone();
+    let options = opts.solver_options(&problem.spec.solver);
     let rounds = opts.rounds.unwrap_or(problem.spec.rounds.count).max(1);
     let initial = (model.structure.joints.len(), model.structure.beams.len());
     let mut reports = Vec::new();

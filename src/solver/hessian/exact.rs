@@ -15,6 +15,18 @@
 //! positive definite on the null space of A, `H + γAᵀA ≻ 0` for γ large enough). On the QP's
 //! feasible set `‖A d‖²` is constant for those rows, so when they stay active the QP step is
 //! the one of the unmodified H and the fast local convergence of the exact Hessian is kept.
+//! (The SQP first decouples the variables held at a bound, see `held`, so that this test
+//! concerns the free variables only, as the second-order conditions do.) When no γ succeeds,
+//! the shift δI is added to `H + γAᵀA` with
+//! γ = 1e2 (relative): as γ → ∞ this is IPOPT's inertia correction of the KKT matrix with those
+//! rows, so δ corrects the reduced Hessian only, where a shift of H alone must also overcome
+//! the indefiniteness across the rows (truss: reduced eigenvalues ≥ −0.8 against a shift of
+//! ~6e3 for H alone, at a Hessian scale of 6e3).
+//!
+//! Multipliers: the QP with `H + γΣuₖuₖᵀ` returns row multipliers offset by `γ·uₖᵀd/‖aₖ‖`,
+//! nonzero where the linearized residual is (see [`Convexified::row_weight`]); the SQP adds
+//! them back, or γ ≫ 1 times an infeasibility would enter the next Hessian and the penalty
+//! weights.
 
 use nalgebra::DMatrix;
 use nalgebra_sparse::{CooMatrix, CscMatrix};
@@ -32,7 +44,8 @@ pub fn assemble_dense(n: usize, rows: &[usize], cols: &[usize], values: &[f64]) 
 }
 
 /// Sparse lower triangle (row ≥ col) from triplets; entries given above the diagonal are
-/// mirrored below it.
+/// mirrored below it. Every diagonal entry is stored (explicit zeros where the triplets have
+/// none), so that diagonal terms can be added without changing the pattern (see `held`).
 pub fn assemble_sparse_lower(
     n: usize,
     rows: &[usize],
@@ -40,11 +53,28 @@ pub fn assemble_sparse_lower(
     values: &[f64],
 ) -> CscMatrix<f64> {
     let mut coo = CooMatrix::new(n, n);
+    for i in 0..n {
+        coo.push(i, i, 0.0);
+    }
     for ((&r, &c), &v) in rows.iter().zip(cols).zip(values) {
         let (r, c) = if r >= c { (r, c) } else { (c, r) };
         coo.push(r, c, v);
     }
     CscMatrix::from(&coo)
+}
+
+/// A convexified Hessian.
+#[derive(Debug, Clone)]
+pub struct Convexified {
+    /// The positive definite matrix handed to the QP.
+    pub matrix: DMatrix<f64>,
+    /// The shift δ, relative to `max(1, maxᵢ|Hᵢᵢ|)` (0 when none was needed).
+    pub shift: f64,
+    /// The weight γ (absolute) of the term `γ·Σₖ uₖuₖᵀ` over the unit rows `uₖ = aₖ/‖aₖ‖` that
+    /// the matrix contains, 0 when none. A QP solved with it
+    /// returns row multipliers λ̃ₖ; those of the unmodified H are
+    /// `λₖ = λ̃ₖ + γ·aₖᵀd/‖aₖ‖²` (the term's gradient `γ uₖ uₖᵀd` moved to the rows).
+    pub row_weight: f64,
 }
 
 /// The remembered inertia-correction shift.
@@ -60,6 +90,8 @@ const DELTA_MAX: f64 = 1e40;
 const PIVOT_MIN: f64 = 1e-10;
 /// Augmentation weights tried, relative to the Hessian scale over the row scale.
 const GAMMAS: [f64; 3] = [1.0, 1e2, 1e4];
+/// Augmentation weight under the shift when none of `GAMMAS` suffices (relative).
+pub const FALLBACK_GAMMA: f64 = 1e2;
 
 /// `max(1, maxᵢ|Hᵢᵢ|)`.
 fn scale_of(h: &DMatrix<f64>) -> f64 {
@@ -84,22 +116,30 @@ impl InertiaShift {
     /// when h is not finite.
     pub fn convexify(&mut self, h: &DMatrix<f64>) -> Option<(DMatrix<f64>, f64)> {
         self.convexify_with_rows(h, &DMatrix::zeros(0, h.nrows()))
+            .map(|c| (c.matrix, c.shift))
     }
 
-    /// As [`InertiaShift::convexify`], trying `h + γ·rowsᵀrows` first (rows k×n).
+    /// As [`InertiaShift::convexify`], trying `h + γ·rowsᵀrows` first (rows k×n normalized),
+    /// and shifting that matrix with γ = [`FALLBACK_GAMMA`] when no γ succeeds (see the module
+    /// header).
     pub fn convexify_with_rows(
         &mut self,
         h: &DMatrix<f64>,
         rows: &DMatrix<f64>,
-    ) -> Option<(DMatrix<f64>, f64)> {
+    ) -> Option<Convexified> {
         if !h.iter().all(|v| v.is_finite()) {
             return None;
         }
         let scale = scale_of(h);
         if safely_definite(h, scale) {
             self.last = 0.0;
-            return Some((h.clone(), 0.0));
+            return Some(Convexified {
+                matrix: h.clone(),
+                shift: 0.0,
+                row_weight: 0.0,
+            });
         }
+        let mut base = (h.clone(), 0.0);
         if rows.nrows() > 0 {
             // Unit rows, so that a short row counts as much as a long one.
             let mut unit = rows.clone();
@@ -113,10 +153,16 @@ impl InertiaShift {
             for g in GAMMAS {
                 let augmented = h + &gram * (g * scale);
                 if safely_definite(&augmented, scale_of(&augmented)) {
-                    return Some((augmented, 0.0));
+                    return Some(Convexified {
+                        matrix: augmented,
+                        shift: 0.0,
+                        row_weight: g * scale,
+                    });
                 }
             }
+            base = (h + &gram * (FALLBACK_GAMMA * scale), FALLBACK_GAMMA * scale);
         }
+        let base_scale = scale_of(&base.0);
         let first = self.last == 0.0;
         let mut delta = if first {
             DELTA_0
@@ -124,13 +170,17 @@ impl InertiaShift {
             (self.last / 3.0).max(DELTA_MIN)
         };
         while delta <= DELTA_MAX {
-            let mut shifted = h.clone();
+            let mut shifted = base.0.clone();
             for i in 0..h.nrows() {
                 shifted[(i, i)] += delta * scale;
             }
-            if safely_definite(&shifted, scale) {
+            if safely_definite(&shifted, base_scale) {
                 self.last = delta;
-                return Some((shifted, delta));
+                return Some(Convexified {
+                    matrix: shifted,
+                    shift: delta,
+                    row_weight: base.1,
+                });
             }
             delta *= if first { 100.0 } else { 8.0 };
         }
@@ -153,11 +203,25 @@ mod tests {
         assert!(d2 > 2.0 && d2 <= d * 8.0);
         // Positive definite on the null space of the row (1, 0): augmentation, no shift.
         let rows = DMatrix::from_row_slice(1, 2, &[0.0, 1.0]);
-        let (m, d3) = shift.convexify_with_rows(&h, &rows).unwrap();
-        assert_eq!(d3, 0.0);
-        assert!(m.cholesky().is_some());
-        let pd = assemble_dense(2, &[0, 1], &[0, 1], &[1.0, 1.0]);
-        assert_eq!(shift.convexify(&pd).unwrap().1, 0.0);
+        let c = shift.convexify_with_rows(&h, &rows).unwrap();
+        assert_eq!(c.shift, 0.0);
+        assert!(c.row_weight > 0.0);
+        assert!(c.matrix.cholesky().is_some());
+        // Indefinite on the null space of the row: shifted on top of the augmentation, by
+        // less than the shift of h alone.
+        let h3 = assemble_dense(3, &[0, 1, 2], &[0, 1, 2], &[1.0, -2.0, -0.01]);
+        let rows3 = DMatrix::from_row_slice(1, 3, &[0.0, 1.0, 0.0]);
+        // The schedule starts at δ₀ = 1 and falls by 1/3 per call while it suffices: on top of
+        // the augmentation δ·2 > 0.01 suffices, for h alone δ·2 > 2 is needed.
+        let (mut on_rows, mut alone) = (InertiaShift::default(), InertiaShift::default());
+        for _ in 0..4 {
+            let c = on_rows.convexify_with_rows(&h3, &rows3).unwrap();
+            assert!(c.matrix.cholesky().is_some());
+            assert_eq!(c.row_weight, FALLBACK_GAMMA * 2.0);
+            alone.convexify(&h3).unwrap();
+        }
+        assert!(on_rows.last() < 0.05 && on_rows.last() > 0.0);
+        assert!(alone.last() > 1.0);
     }
 
     #[test]

@@ -4,17 +4,22 @@
 //! - [`Lbfgs`]: limited-memory BFGS in the compact form of Byrd, Nocedal & Schnabel (1994),
 //!   `B = δI − W M Wᵀ`, never forming an n×n matrix;
 //! - [`InertiaShift`]: the δ schedule that makes an exact Hessian positive definite
-//!   (Wächter & Biegler 2006, §3.1), remembered between iterations.
+//!   (Wächter & Biegler 2006, §3.1), remembered between iterations;
+//! - [`held_at_bounds`], [`decouple_dense`], [`decouple_lower`]: the variables held at a bound
+//!   by their multiplier, taken out of that convexification (only the Hessian on the free
+//!   variables must be positive definite, on the null space of the active rows).
 //!
 //! All work on the scaled Lagrangian `L = s_f·f + Σ λᵢ sᵢ cᵢ` of the SQP (unitless).
 
 mod bfgs;
 mod exact;
+mod held;
 mod lbfgs;
 mod model;
 
 pub use bfgs::DenseBfgs;
-pub use exact::{InertiaShift, assemble_dense, assemble_sparse_lower};
+pub use exact::{Convexified, InertiaShift, assemble_dense, assemble_sparse_lower};
+pub use held::{decouple_dense, decouple_lower, held_at_bounds};
 pub use lbfgs::Lbfgs;
 pub use model::Model;
 

@@ -3,7 +3,7 @@
 //! the operations the outer loop needs (the QP representation, products H·d, resets).
 
 use nalgebra::{DMatrix, DVector};
-use nalgebra_sparse::CscMatrix;
+use nalgebra_sparse::{CscMatrix, CsrMatrix};
 
 use super::{DenseBfgs, InertiaShift, Lbfgs, assemble_dense};
 use crate::solver::qp::QpHessian;
@@ -20,8 +20,12 @@ pub enum Model {
         shift: InertiaShift,
         /// Dense convexified matrix (small n) or the raw lower triangle (large n).
         dense: Option<DMatrix<f64>>,
-        /// Raw lower triangle for the sparse QP (large n).
+        /// Lower triangle for the sparse QP (large n), the held variables decoupled (see
+        /// `held`); the QP convexifies it.
         sparse: Option<CscMatrix<f64>>,
+        /// Rows augmented into `dense` and their weights `γ/‖aₖ‖²`: the QP's multiplier of row
+        /// k is short by `weight·aₖᵀd` (see [`super::Convexified::row_weight`]).
+        row_weights: Vec<(usize, f64)>,
     },
 }
 
@@ -89,6 +93,24 @@ impl Model {
                 }
                 out
             }
+        }
+    }
+
+    /// Adds back to the row multipliers of a QP solved with this model what the augmentation
+    /// of an exact Hessian took from them (`a` the QP's rows, `d` its step).
+    pub fn restore_multipliers(&self, lambda: &mut [f64], a: &CsrMatrix<f64>, d: &[f64]) {
+        let Model::Exact { row_weights, .. } = self else {
+            return;
+        };
+        for &(k, weight) in row_weights {
+            let row = a.row(k);
+            let ad: f64 = row
+                .col_indices()
+                .iter()
+                .zip(row.values())
+                .map(|(&j, v)| v * d[j])
+                .sum();
+            lambda[k] += weight * ad;
         }
     }
 

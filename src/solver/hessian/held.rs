@@ -1,0 +1,133 @@
+//! Variables held at a bound, and how they are taken out of the convexification of an exact
+//! Hessian.
+//!
+//! A variable sits at a lower bound (`xᵢ = xlᵢ`) with the Lagrangian gradient
+//! `∇ᵢL = ∇ᵢf + Σₖ λₖ ∂cₖ/∂xᵢ > 0` pushing it into that bound (multiplier `zᵢ = −∇ᵢL < 0` in the
+//! QP convention `Hd + g + Aᵀλ + z = 0`), or at an upper bound with `∇ᵢL < 0`: the QP of the
+//! next iteration is expected to keep it there (`dᵢ = 0`). The second-order conditions ask for
+//! positive curvature only on the other variables (Nocedal & Wright, 2nd ed., Thm. 12.6: the
+//! critical cone of a strongly active bound has `dᵢ = 0`), but an inertia test over all
+//! variables also sees the held ones: a concave function of a variable sitting at its bound (a
+//! cost growing like √c from c = 0) forces a shift `δI` of the whole Hessian that shortens
+//! every step.
+//!
+//! So the held variables B are decoupled: their rows and columns of H are replaced by
+//! `s·eᵢeᵢᵀ` (s = `max(1, maxⱼ|Hⱼⱼ|)`, the shift scale of `exact`), leaving
+//! ```text
+//!     H̃ = [ H_FF  0  ]      F = the other variables
+//!         [ 0    s·I ]
+//! ```
+//! A QP step that keeps the held bounds (d_B = 0) involves only H_FF: its d_F and row multipliers
+//! λ are those of the unmodified H with these bounds active — the Newton step of the problem
+//! restricted to the free variables, so the exact Hessian's fast local convergence is kept once
+//! the active bounds are identified — and the inertia test concerns H_FF on the null space of
+//! the rows, the second-order condition itself. Only the held bounds' own multipliers lose the
+//! term `(H_BF d_F)`, an O(‖d‖) error that vanishes at a solution; a variable the QP releases
+//! nonetheless moves with curvature s (a cautious step), and is free at the next iterate. The
+//! pattern of a sparse H is unchanged (zeros are stored), so its symbolic analysis is reused.
+
+use nalgebra::DMatrix;
+use nalgebra_sparse::CscMatrix;
+
+/// Indices of the variables held at a bound: at it to within `1e-10·(1 + |bound|)` and pushed
+/// into it by the Lagrangian gradient `grad_l` (see the module header). Scaled units.
+pub fn held_at_bounds(x: &[f64], xl: &[f64], xu: &[f64], grad_l: &[f64]) -> Vec<usize> {
+    let near = |a: f64, b: f64| (a - b).abs() <= 1e-10 * (1.0 + b.abs());
+    (0..x.len())
+        .filter(|&i| {
+            (xl[i].is_finite() && near(x[i], xl[i]) && grad_l[i] > 0.0)
+                || (xu[i].is_finite() && near(x[i], xu[i]) && grad_l[i] < 0.0)
+        })
+        .collect()
+}
+
+/// Marks of `held` among n variables.
+fn marks(n: usize, held: &[usize]) -> Vec<bool> {
+    let mut is_held = vec![false; n];
+    for &i in held {
+        is_held[i] = true;
+    }
+    is_held
+}
+
+/// `h` with the rows and columns of the held variables replaced by `s·eᵢeᵢᵀ`, for a lower
+/// triangle (row ≥ col) that stores every diagonal entry (see [`super::assemble_sparse_lower`]);
+/// the pattern is unchanged.
+pub fn decouple_lower(h: &CscMatrix<f64>, held: &[usize]) -> CscMatrix<f64> {
+    let mut out = h.clone();
+    if held.is_empty() {
+        return out;
+    }
+    let n = h.nrows();
+    let scale = h
+        .triplet_iter()
+        .filter(|(r, c, _)| r == c)
+        .fold(1.0_f64, |a, (_, _, v)| a.max(v.abs()));
+    let is_held = marks(n, held);
+    let (offsets, rows, values) = out.csc_data_mut();
+    for c in 0..n {
+        for k in offsets[c]..offsets[c + 1] {
+            let r = rows[k];
+            if is_held[r] || is_held[c] {
+                values[k] = if r == c { scale } else { 0.0 };
+            }
+        }
+    }
+    out
+}
+
+/// As [`decouple_lower`] for a dense symmetric `h`.
+pub fn decouple_dense(h: &DMatrix<f64>, held: &[usize]) -> DMatrix<f64> {
+    let mut out = h.clone();
+    if held.is_empty() {
+        return out;
+    }
+    let scale = h.diagonal().iter().fold(1.0_f64, |a, v| a.max(v.abs()));
+    for &i in held {
+        out.row_mut(i).fill(0.0);
+        out.column_mut(i).fill(0.0);
+        out[(i, i)] = scale;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solver::hessian::{assemble_dense, assemble_sparse_lower};
+
+    #[test]
+    fn held_variables_are_at_a_bound_with_the_right_sign() {
+        let inf = f64::INFINITY;
+        let x = [0.0, 0.0, 1.0, 1.0, 0.5, 0.0];
+        let xl = [0.0, 0.0, 0.0, 0.0, 0.0, -inf];
+        let xu = [1.0, 1.0, 1.0, 1.0, 1.0, inf];
+        let g = [2.0, -2.0, -1.0, 1.0, 3.0, 1.0];
+        // 0: lower, pushed in; 1: lower, pulled off; 2: upper, pushed in; 3: upper, pulled
+        // off; 4: interior; 5: unbounded below.
+        assert_eq!(held_at_bounds(&x, &xl, &xu, &g), vec![0, 2]);
+    }
+
+    #[test]
+    fn decoupling_keeps_the_free_block_and_the_pattern() {
+        // H = [[-5, 2, 1], [2, 1, 0.5], [1, 0.5, 3]]: indefinite through variable 0; holding
+        // it leaves the positive definite block of variables 1 and 2.
+        let (r, c) = ([0, 1, 2, 1, 2, 2], [0, 0, 0, 1, 1, 2]);
+        let v = [-5.0, 2.0, 1.0, 1.0, 0.5, 3.0];
+        let h = assemble_sparse_lower(3, &r, &c, &v);
+        let full = assemble_dense(3, &r, &c, &v);
+        let sparse = decouple_lower(&h, &[0]);
+        assert_eq!(sparse.col_offsets(), h.col_offsets());
+        assert_eq!(sparse.row_indices(), h.row_indices());
+        let dense = decouple_dense(&full, &[0]);
+        let expected =
+            DMatrix::from_row_slice(3, 3, &[5.0, 0.0, 0.0, 0.0, 1.0, 0.5, 0.0, 0.5, 3.0]);
+        assert_eq!(dense, expected);
+        let triplets: Vec<_> = sparse.triplet_iter().map(|(r, c, &v)| (r, c, v)).collect();
+        for (r, c, v) in triplets {
+            assert_eq!(v, expected[(r, c)]);
+        }
+        assert!(full.cholesky().is_none() && dense.cholesky().is_some());
+        assert_eq!(decouple_lower(&h, &[]).values(), h.values());
+    }
+}
