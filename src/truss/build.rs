@@ -104,8 +104,16 @@ pub fn build(spec: &TrussSpec, src: &Source, seed: u64) -> Result<Model, InputEr
         &obstacles,
         tol,
     );
-    let structure = Structure { joints, beams };
     let settings = settings(spec, largest_load, obstacles, cases);
+    let beams = ground::mirror_closure(
+        &joints,
+        beams,
+        &settings.symmetry,
+        &forbidden,
+        &settings.obstacles,
+        tol,
+    );
+    let structure = Structure { joints, beams };
     Ok(Model {
         structure,
         settings,

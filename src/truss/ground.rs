@@ -22,6 +22,9 @@
 //! Crossing beams (such as the two diagonals of a square) are allowed: beams are not joined where
 //! they cross. The topology rounds can remove the weaker of two crossing beams
 //! (`rounds.remove_crossings`). User-listed extra beams are added as given.
+//!
+//! With symmetry planes the beam set is closed under the mirrors ([`mirror_closure`]): the
+//! tie-breaking by index is not mirror symmetric.
 
 use std::collections::BTreeSet;
 
@@ -29,7 +32,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::geometry::segment_point_distance;
-use super::model::{Beam, Joint, JointKind, Obstacle, Vec3};
+use super::model::{Beam, Joint, JointKind, Mirror, Obstacle, Vec3};
 
 /// How free joints are placed.
 #[derive(Debug, Clone, PartialEq)]
@@ -215,6 +218,45 @@ pub fn connect(
     }
     beams.extend(extra.iter().copied());
     beams.into_iter().collect()
+}
+
+/// Adds the mirror image of every beam under every plane, repeatedly, where both image joints
+/// exist (within `tol`, m) and the image pair is admissible. The k-nearest rule breaks distance
+/// ties by joint index, which no mirror respects: on a lattice it picks one of two mirror-image
+/// diagonals, so the ground structure, its layout LP and the pruned start would not be mirror
+/// symmetric while the symmetry rows force the geometry to be.
+pub fn mirror_closure(
+    joints: &[Joint],
+    beams: Vec<Beam>,
+    mirrors: &[Mirror],
+    forbidden: &BTreeSet<Beam>,
+    obstacles: &[Obstacle],
+    tol: f64,
+) -> Vec<Beam> {
+    let images: Vec<Vec<Option<usize>>> = (mirrors.iter())
+        .map(|m| {
+            (joints.iter())
+                .map(|j| {
+                    let p = m.reflect(&j.position);
+                    joints.iter().position(|k| (k.position - p).norm() <= tol)
+                })
+                .collect()
+        })
+        .collect();
+    let mut set: BTreeSet<Beam> = beams.into_iter().collect();
+    let mut added = true;
+    while added {
+        added = false;
+        for image in &images {
+            let new: Vec<Beam> = (set.iter())
+                .filter_map(|b| Some(Beam::new(image[b.ends[0]]?, image[b.ends[1]]?)))
+                .filter(|b| !set.contains(b) && admissible(joints, *b, forbidden, obstacles, tol))
+                .collect();
+            added |= !new.is_empty();
+            set.extend(new);
+        }
+    }
+    set.into_iter().collect()
 }
 
 fn admissible(

@@ -191,6 +191,17 @@ impl Tableau {
 /// Solves `min cᵀx s.t. A x = b, x ≥ 0` (module header).
 pub fn solve(a: &DMatrix<f64>, b: &[f64], c: &[f64]) -> Result<LpSolution, LpError> {
     let (m, n) = a.shape();
+    solve_limited(a, b, c, 50 * (m + n) + 1000)
+}
+
+/// [`solve`] with at most `limit` pivots (`LpError::PivotLimit` beyond).
+fn solve_limited(
+    a: &DMatrix<f64>,
+    b: &[f64],
+    c: &[f64],
+    limit: usize,
+) -> Result<LpSolution, LpError> {
+    let (m, n) = a.shape();
     assert_eq!(b.len(), m);
     assert_eq!(c.len(), n);
     let cols = n + m;
@@ -228,7 +239,6 @@ pub fn solve(a: &DMatrix<f64>, b: &[f64], c: &[f64]) -> Result<LpSolution, LpErr
         tol: 1e-10 * scale,
     };
     let mut pivots = 0;
-    let limit = 50 * (m + n) + 1000;
     tab.optimize(n, &mut pivots, limit)?;
     tab.refactor();
     let infeasibility = -tab.t[(m, cols)];
@@ -292,6 +302,12 @@ const SUPPORT_FRACTION: f64 = 1e-7;
 
 /// Largest relative objective increase accepted from the crossover vertex.
 const CROSSOVER_GAP: f64 = 1e-8;
+
+/// Pivots allowed to the crossover simplex per row and column of its LP. On a support with
+/// many tied members the degenerate dense simplex can run for minutes (cooling_tower with
+/// self-weight in the LP); past this budget the interior-point solution is kept (the layout
+/// start needs only each member's sign and whether it is idle).
+const CROSSOVER_PIVOTS: usize = 2;
 
 /// Solves `min cᵀx s.t. A x = b, x ≥ 0` by the sparse interior-point method and a crossover to
 /// a vertex (module header). Components of x below zero by rounding are set to zero.
@@ -380,7 +396,8 @@ fn crossover(a: &CsrMatrix<f64>, b: &[f64], c: &[f64], x: &[f64]) -> Option<(Vec
     }
     let sub_b: Vec<f64> = rows.iter().map(|&r| b[r]).collect();
     let sub_c: Vec<f64> = support.iter().map(|&j| c[j]).collect();
-    let vertex = solve(&dense, &sub_b, &sub_c).ok()?;
+    let limit = CROSSOVER_PIVOTS * (rows.len() + support.len()) + 100;
+    let vertex = solve_limited(&dense, &sub_b, &sub_c, limit).ok()?;
     let mut full = vec![0.0; x.len()];
     for (k, &j) in support.iter().enumerate() {
         full[j] = vertex.x[k];

@@ -22,6 +22,7 @@ use nalgebra::DMatrix;
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
 use super::lp::{self, LpError};
+use super::mass::gravity;
 use super::model::Structure;
 use super::nlp::balance_basis;
 
@@ -68,17 +69,22 @@ pub fn layout(
         })
         .collect();
     let axes = if planar { 2 } else { 3 };
-    layout_with_costs(structure, case, axes, &costs, LpMethod::Simplex)
+    layout_with_costs(structure, case, axes, &costs, None, LpMethod::Simplex)
 }
 
 /// The layout LP with general per-beam costs: `costs[j] = (cost per newton of tension, cost per
 /// newton of compression)` of beam j (any unit; `volume` is in that unit times N), balance in
 /// the first `axes` coordinate directions, solved by `method`.
+///
+/// `self_weight[j] = (kg per newton of tension, kg per newton of compression)` of beam j, if
+/// given: the beam's weight `g·(w_T·t_j + w_C·c_j)` is lumped half on each end, as in the NLP's
+/// balance rows (seed eq. 4.1). It is linear in the forces, so the problem stays an LP.
 pub fn layout_with_costs(
     structure: &Structure,
     case: usize,
     axes: usize,
     costs: &[(f64, f64)],
+    self_weight: Option<&[(f64, f64)]>,
     method: LpMethod,
 ) -> Result<PlasticLayout, LpError> {
     let beams = structure.beams.len();
@@ -107,8 +113,10 @@ pub fn layout_with_costs(
                 let v = sign * direction.dot(&e);
                 // Column j: compression c_j (λ = +c); column beams + j: tension t_j (λ = −t).
                 // Duplicate entries (a beam joining a joint to itself cannot occur) would sum.
-                a.push(row, j, v);
-                a.push(row, beams + j, -v);
+                let (w_t, w_c) = self_weight.map_or((0.0, 0.0), |w| w[j]);
+                let half_weight = 0.5 * direction.dot(&gravity());
+                a.push(row, j, v + half_weight * w_c);
+                a.push(row, beams + j, -v + half_weight * w_t);
             }
         }
         cost[j] = costs[j].1;
@@ -175,6 +183,34 @@ mod tests {
         assert!((sol.volume - expected).abs() < 1e-12 * expected);
         assert!((sol.dual_volume - sol.volume).abs() < 1e-9 * expected);
         assert!(sol.forces.iter().all(|f| (f - p * 5.0 / 8.0).abs() < 1e-6));
+    }
+
+    #[test]
+    fn self_weight_adds_half_the_hangers_weight_to_its_load() {
+        // A hanger of length 2 m from an anchor at (0, 2) down to a load P at (0, 0): its
+        // tension t carries P and half its own weight g·w·t, so t = P/(1 − g·w/2) for w kg per
+        // newton; the cost counts t.
+        let p = 1e5;
+        let w = 2.0 * 7850.0 / 250e6;
+        let s = Structure {
+            joints: vec![
+                joint(0.0, 2.0, JointKind::Anchor(Support::Pinned), Vec3::zeros()),
+                joint(0.0, 0.0, JointKind::Load, Vec3::new(0.0, -p, 0.0)),
+            ],
+            beams: vec![Beam::new(0, 1)],
+        };
+        let method = LpMethod::Simplex;
+        let sol = layout_with_costs(&s, 0, 2, &[(1.0, 1.0)], Some(&[(w, w)]), method).unwrap();
+        let t = p / (1.0 - 0.5 * crate::truss::mass::STANDARD_GRAVITY * w);
+        assert!(
+            (sol.forces[0] + t).abs() < 1e-9 * t,
+            "{} vs {}",
+            -sol.forces[0],
+            t
+        );
+        assert!((sol.volume - t).abs() < 1e-9 * t);
+        let light = layout_with_costs(&s, 0, 2, &[(1.0, 1.0)], None, method).unwrap();
+        assert!((light.forces[0] + p).abs() < 1e-9 * p);
     }
 
     /// Fully connected planar ground structure on a grid, load and supports among its nodes.
@@ -258,8 +294,8 @@ mod tests {
         let costs: Vec<(f64, f64)> = (0..s.beams.len())
             .map(|j| (s.length(j) / 2.0, s.length(j)))
             .collect();
-        let simplex = layout_with_costs(&s, 0, 2, &costs, LpMethod::Simplex).unwrap();
-        let interior = layout_with_costs(&s, 0, 2, &costs, LpMethod::InteriorPoint).unwrap();
+        let simplex = layout_with_costs(&s, 0, 2, &costs, None, LpMethod::Simplex).unwrap();
+        let interior = layout_with_costs(&s, 0, 2, &costs, None, LpMethod::InteriorPoint).unwrap();
         let gap = (interior.volume - simplex.volume).abs() / simplex.volume;
         assert!(gap < 1e-6, "{} vs {}", interior.volume, simplex.volume);
         assert!(interior.primal_residual < 1e-9, "{interior:?}");

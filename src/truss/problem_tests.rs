@@ -245,3 +245,56 @@ fn the_layout_start_keeps_the_mirror_images_of_kept_joints() {
         }
     }
 }
+
+#[test]
+fn symmetric_ground_structures_are_closed_under_their_mirrors() {
+    // eiffel_tower's k-nearest lattice picks one of two mirror-image diagonals by index; the
+    // mirror closure adds the other, so the layout LP and its pruned start are symmetric.
+    let p = problem("eiffel_tower");
+    let s = &p.model().structure;
+    let beams: std::collections::BTreeSet<_> = s.beams.iter().copied().collect();
+    let image_of = |mirror: &super::model::Mirror, i: usize| {
+        let q = mirror.reflect(&s.joints[i].position);
+        (s.joints.iter()).position(|k| (k.position - q).norm() < 1e-6)
+    };
+    for mirror in &p.model().settings.symmetry {
+        for b in &s.beams {
+            let (a, c) = (image_of(mirror, b.ends[0]), image_of(mirror, b.ends[1]));
+            let image = super::model::Beam::new(a.unwrap(), c.unwrap());
+            assert!(beams.contains(&image), "{b:?} has no mirror image");
+        }
+    }
+}
+
+#[test]
+fn with_linear_mass_the_layout_start_balances_self_weight() {
+    // The LP lumps each beam's weight (linear in its force parts) on its ends as the NLP does:
+    // with linear mass its forces balance loads and self-weight at the start geometry exactly.
+    let p = problem("roof_fink");
+    let mut settings = p.model().settings.clone();
+    settings.mass = super::mass::MassModel::linear(2.5e8, 2.5e8, 7850.0);
+    assert!(settings.self_weight);
+    let start = super::start::layout_start(&p.model().structure, &settings).unwrap();
+    let nlp = super::nlp::TrussNlp::with_parts(
+        start.structure,
+        settings.clone(),
+        start.forces,
+        start.parts,
+    )
+    .unwrap();
+    let mut x = vec![0.0; nlp.dims().n];
+    nlp.start(&mut x);
+    let residual = nlp.max_balance_residual(&x).unwrap() / nlp.force_scale();
+    assert!(residual < 1e-8, "relative residual {residual:e}");
+    // Without self-weight in the LP the same start is off by the beams' weight.
+    settings.self_weight = false;
+    let light = super::start::layout_start(&p.model().structure, &settings).unwrap();
+    settings.self_weight = true;
+    let nlp =
+        super::nlp::TrussNlp::with_parts(light.structure, settings, light.forces, light.parts)
+            .unwrap();
+    let mut x = vec![0.0; nlp.dims().n];
+    nlp.start(&mut x);
+    let off = nlp.max_balance_residual(&x).unwrap() / nlp.force_scale();
+    assert!(off > 1e3 * residual.max(1e-12), "{off:e} vs {residual:e}");
+}

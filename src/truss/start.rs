@@ -4,7 +4,7 @@
 //! Stage 1 (sizing at fixed geometry, a linear program solved by the sparse interior-point
 //! method of [`super::lp::solve_sparse`]): per load case
 //! ```text
-//!     min Σ_j (a_j·t_j + b_j·c_j)   s.t. force balance (the NLP's rows, self-weight left out),
+//!     min Σ_j (a_j·t_j + b_j·c_j)   s.t. force balance (the NLP's rows),
 //!                                        t, c ≥ 0,  λ = c − t   (N, + compression)
 //! ```
 //! with per-newton costs that follow the mass model at the start lengths L_j (m):
@@ -13,6 +13,15 @@
 //!   `k_C·√c·L²` through 0 and the largest load F (members carrying about F are priced exactly,
 //!   lighter ones too cheaply, heavier ones too dearly);
 //! - the `length` objective prices every newton by `L_j` (the load path).
+//!
+//! Self-weight (when the model has it): each beam's mass is estimated by the same per-newton
+//! laws (`m_j ≈ k_T·L_j·t_j + b_j·c_j`, without the tension-preference weight) and lumped half on
+//! each end, which keeps the balance rows linear in t and c. Exact for linear mass; for Euler
+//! mass it is the secant estimate. Without it, a joint the LP leaves on a straight chord of
+//! two collinear members has no member to carry that chord's weight: the geometry solve can
+//! only balance it by bending the chord, which an obstacle plane through the chord (a roof's
+//! ceiling line) forbids, and the solve ends locally infeasible. Should the LP with self-weight
+//! have no solution, the LP without it is used.
 //!
 //! With `linear` mass and no self-weight, stage 1 is exactly the plastic layout optimum of the
 //! ground structure. Stage 2 (the caller) optimizes geometry and sizes from these forces.
@@ -71,22 +80,39 @@ pub struct LayoutStart {
 
 /// Per-newton LP costs of every beam at its start length (module header).
 pub fn beam_costs(structure: &Structure, settings: &Settings, force_scale: f64) -> Vec<(f64, f64)> {
-    let mass = &settings.mass;
     let weight = match settings.objective {
         Objective::MassTensionPreference(w) => w,
         _ => 1.0,
     };
+    let masses = masses_per_newton(structure, settings, force_scale);
+    (0..structure.beams.len())
+        .map(|j| {
+            if settings.objective == Objective::Length {
+                let length = structure.length(j);
+                return (length, length);
+            }
+            (masses[j].0, weight * masses[j].1)
+        })
+        .collect()
+}
+
+/// Every beam's mass per newton of tension and of compression at its start length, kg/N: the
+/// tension law, and the linear law or the Euler secant through the largest load
+/// `force_scale` (module header). The LP's self-weight uses these.
+pub fn masses_per_newton(
+    structure: &Structure,
+    settings: &Settings,
+    force_scale: f64,
+) -> Vec<(f64, f64)> {
+    let mass = &settings.mass;
     (0..structure.beams.len())
         .map(|j| {
             let length = structure.length(j);
-            if settings.objective == Objective::Length {
-                return (length, length);
-            }
             let compression = match mass.compression {
                 Compression::Linear { k_c } => k_c * length,
                 Compression::Euler { k_c } => k_c * length * length / force_scale.sqrt(),
             };
-            (mass.k_t * length, weight * compression)
+            (mass.k_t * length, compression)
         })
         .collect()
 }
@@ -96,10 +122,17 @@ pub fn layout_start(structure: &Structure, settings: &Settings) -> Result<Layout
     let clear: Vec<bool> = (structure.beams.iter())
         .map(|b| clears_spheres(structure, b, &settings.obstacles))
         .collect();
-    match solve_on(structure, settings, &clear) {
-        Err(_) if clear.iter().any(|&c| !c) => {
-            solve_on(structure, settings, &vec![true; structure.beams.len()])
-        }
+    let attempt = |self_weight: bool| match solve_on(structure, settings, &clear, self_weight) {
+        Err(_) if clear.iter().any(|&c| !c) => solve_on(
+            structure,
+            settings,
+            &vec![true; structure.beams.len()],
+            self_weight,
+        ),
+        result => result,
+    };
+    match attempt(settings.self_weight) {
+        Err(_) if settings.self_weight => attempt(false),
         result => result,
     }
 }
@@ -117,11 +150,13 @@ fn clears_spheres(structure: &Structure, beam: &Beam, obstacles: &[Obstacle]) ->
     })
 }
 
-/// Solves the LP on the beams marked `usable`, symmetrizes, prunes.
+/// Solves the LP on the beams marked `usable` (with the beams' estimated weight lumped on their
+/// ends if `self_weight`), symmetrizes, prunes.
 fn solve_on(
     structure: &Structure,
     settings: &Settings,
     usable: &[bool],
+    self_weight: bool,
 ) -> Result<LayoutStart, LpError> {
     let kept: Vec<usize> = (0..structure.beams.len()).filter(|&j| usable[j]).collect();
     let force_scale = (structure.joints.iter())
@@ -143,6 +178,7 @@ fn solve_on(
         beams: kept.iter().map(|&j| structure.beams[j]).collect(),
     };
     let costs = beam_costs(&sub, settings, force_scale);
+    let self_weight = self_weight.then(|| masses_per_newton(&sub, settings, force_scale));
     let cost_scale = costs
         .iter()
         .map(|c| c.0.max(c.1))
@@ -160,6 +196,7 @@ fn solve_on(
             c,
             settings.balance_axes(),
             &scaled,
+            self_weight.as_deref(),
             LpMethod::InteriorPoint,
         )?;
         for (k, &j) in kept.iter().enumerate() {
@@ -180,10 +217,10 @@ fn solve_on(
     Ok(prune(structure, forces, cost, &settings.symmetry))
 }
 
-/// Marks the mirror images (under every plane, repeatedly) of the kept joints as kept. A ground
-/// structure of k nearest neighbours breaks distance ties in one order, so its beams need not be
-/// mirror symmetric when its joints are (the forces are then not averaged), and a kept free
-/// joint could lose the image its symmetry rows pair it with. An image kept without beams is
+/// Marks the mirror images (under every plane, repeatedly) of the kept joints as kept. Generated
+/// beams are closed under the mirrors ([`super::ground::mirror_closure`]), but user-listed extra
+/// or forbidden pairs can still make the beams asymmetric (the forces are then not averaged), and
+/// a kept free joint could lose the image its symmetry rows pair it with. An image kept without beams is
 /// placed by those rows.
 fn keep_mirror_images(structure: &Structure, mirrors: &[Mirror], keep: &mut [bool]) {
     let joints = &structure.joints;
