@@ -251,8 +251,9 @@ pub struct CellToml {
     pub footprint: Option<Vec<[f64; 2]>>,
     /// Or a regular polygon footprint (its `height` is ignored).
     pub circle: Option<RimToml>,
-    /// Crown height of the start dome, m.
-    pub height: f64,
+    /// Crown height of a paraboloid start dome, m; omitted: the start is inflated to `volume`.
+    #[serde(default)]
+    pub height: Option<f64>,
     /// Enclosed volume, m³.
     pub volume: f64,
 }
@@ -474,7 +475,7 @@ impl CmcSpec {
                     if !positive(c.volume) {
                         return Err(self.err(&at("volume"), "`volume` must be positive m³"));
                     }
-                    if !positive(c.height) {
+                    if c.height.is_some_and(|h| !positive(h)) {
                         return Err(self.err(&at("height"), "`height` must be positive m"));
                     }
                 }
