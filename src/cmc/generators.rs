@@ -1340,9 +1340,15 @@ mod tests {
                 let (r, apothem) = if p.x < 30.0 {
                     (p.xz().norm(), 20.0 * (PI / 24.0).cos())
                 } else {
-                    ((p.xz() - nalgebra::Vector2::new(40.0, 0.0)).norm(), 9.0 * (PI / 16.0).cos())
+                    (
+                        (p.xz() - nalgebra::Vector2::new(40.0, 0.0)).norm(),
+                        9.0 * (PI / 16.0).cos(),
+                    )
                 };
-                assert!(r >= apothem - 1e-9 && r <= apothem / (PI / 24.0).cos().min((PI / 16.0).cos()) + 1e-9);
+                assert!(
+                    r >= apothem - 1e-9
+                        && r <= apothem / (PI / 24.0).cos().min((PI / 16.0).cos()) + 1e-9
+                );
             }
         }
     }

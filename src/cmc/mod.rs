@@ -140,11 +140,19 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     // The iteration log of every solve, one after the other (iteration numbers restart).
     let mut log = solution.log.clone();
     let mut rounds = Vec::new();
-    // Equiangulate and re-solve (cmc::remesh); each round's areas show the flips' effect.
+    let max_edge = problem
+        .spec
+        .file
+        .quality
+        .refine
+        .map(|r| r * median_edge_length(nlp.mesh()));
+    // Equiangulate (and refine) and re-solve (cmc::remesh); each round's areas show the
+    // effect. A feasible point that stalled or ran out of iterations is remeshed too: such a
+    // stall here is usually a sliver that flips or splits remove.
     for _ in 0..problem.spec.file.quality.flip_rounds {
-        let feasible_stall = solution.status == Status::Stalled
+        let feasible_stop = matches!(solution.status, Status::Stalled | Status::IterationLimit)
             && solution.max_violation <= options.constraint_tolerance;
-        if !(solution.status.is_success() || feasible_stall) {
+        if !(solution.status.is_success() || feasible_stop) {
             break;
         }
         let mesh = nlp
@@ -153,7 +161,17 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         let area_before = area::total_area(&mesh);
         let (flipped, flips) = remesh::equiangulate(&mesh, 10)
             .map_err(|e| Error::Runtime(format!("edge flips: {e}")))?;
-        if flips == 0 {
+        let (flipped, splits) = match max_edge {
+            Some(length) => {
+                let (split, splits) = remesh::split_long_edges(&flipped, length, 3)
+                    .map_err(|e| Error::Runtime(format!("edge splits: {e}")))?;
+                let (flipped, more) = remesh::equiangulate(&split, 10)
+                    .map_err(|e| Error::Runtime(format!("edge flips: {e}")))?;
+                (flipped, splits + more)
+            }
+            None => (flipped, 0),
+        };
+        if flips + splits == 0 {
             break;
         }
         let area_flipped = area::total_area(&flipped);
@@ -168,6 +186,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         evaluations.hessians += solution.evaluations.hessians;
         rounds.push(serde_json::json!({
             "flips": flips,
+            "splits": splits,
             "area_before_flips": area_before,
             "area_after_flips": area_flipped,
             "area_after_resolve": nlp.mesh_at(&solution.x).map(|m| area::total_area(&m)).ok(),
@@ -297,6 +316,18 @@ fn check(
             bytes: preview::svg(&mesh, 800.0, &format!("{} (start)", problem.name)).into_bytes(),
         }],
     })
+}
+
+/// Median edge length of a mesh, m.
+fn median_edge_length(mesh: &mesh::Mesh) -> f64 {
+    let p = mesh.positions();
+    let mut lengths: Vec<f64> = mesh
+        .edges()
+        .iter()
+        .map(|e| (p[e.vertices[0]] - p[e.vertices[1]]).norm())
+        .collect();
+    lengths.sort_by(f64::total_cmp);
+    lengths.get(lengths.len() / 2).copied().unwrap_or(0.0)
 }
 
 #[cfg(test)]

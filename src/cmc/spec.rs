@@ -10,6 +10,7 @@
 //! [quality]
 //! tangential_weight = 0.01      # w of the tangential regularization (cmc::nlp), ≥ 0
 //! flip_rounds = 1               # edge-flip + re-solve rounds after the first solve (cmc::remesh)
+//! refine = 1.5                  # optional: in those rounds split edges > 1.5 × median start edge
 //! [[chord]]                     # optional chord-length constraints between vertex indices
 //! a = 0
 //! b = 12
@@ -65,6 +66,10 @@ pub struct QualitySpec {
     /// Rounds of equiangulation (edge flips) and re-solving after the first solve; default 1.
     #[serde(default = "default_flip_rounds")]
     pub flip_rounds: usize,
+    /// In those rounds also split edges longer than `refine` × the start mesh's median edge
+    /// length (cmc::remesh::split_long_edges); omitted: no refinement.
+    #[serde(default)]
+    pub refine: Option<f64>,
 }
 
 fn default_weight() -> f64 {
@@ -80,6 +85,7 @@ impl Default for QualitySpec {
         QualitySpec {
             tangential_weight: default_weight(),
             flip_rounds: default_flip_rounds(),
+            refine: None,
         }
     }
 }
@@ -331,6 +337,15 @@ impl CmcSpec {
                     "`flip_rounds` must be at most 10, got {}",
                     f.quality.flip_rounds
                 ),
+            ));
+        }
+        if f.quality
+            .refine
+            .is_some_and(|r| !(r.is_finite() && r >= 1.0))
+        {
+            return Err(self.err(
+                &["quality".into(), "refine".into()],
+                "`refine` must be a finite number ≥ 1 (a multiple of the median edge length)",
             ));
         }
         if !(f.quality.tangential_weight >= 0.0 && f.quality.tangential_weight.is_finite()) {
