@@ -13,10 +13,15 @@
 //!
 //! Splits. An edge longer than a given length gets a new vertex at its midpoint, and each
 //! triangle `(a, b, c)` on it becomes `(a, m, c)`, `(m, b, c)` in the same surface and
-//! orientation (a junction edge splits all its triangles, so junction lines stay shared). The
-//! midpoint lies on the old triangles, so area, area vector and enclosed volumes are exactly
-//! unchanged: refinement only adds freedom where the solve stretched the mesh (around tent
-//! poles, say), and the next solve moves the new vertices onto the surface. Old vertices keep
+//! orientation (a junction edge splits all its triangles, so junction lines stay shared). On an
+//! edge inside a surface the new vertex goes to Loop's subdivision point `3/8 (a + b) +
+//! 1/8 (c + d)` (c, d opposite): on a flat region that is in the plane (area unchanged
+//! exactly), on a curved one it moves off the chord by O(h²) towards the smooth surface, so
+//! the area changes only at second order while the new vertices' curvature rows start near
+//! the surface's value (a midpoint would be flat there: a large start violation). Boundary and
+//! junction edges get their midpoint, so each surface's boundary polygon and hence its vector
+//! area `½∮ x × dx` are exactly unchanged. Refinement adds freedom where the solve stretched
+//! the mesh (around tent poles, say). Old vertices keep
 //! their indices (chords stay valid); new ones are appended. Flags: the new vertex is free and
 //! carries a curvature constraint unless both ends are excluded. Edges between two fixed
 //! vertices (wires, pole caps, rims) are never split, and neither are boundary edges unless
@@ -144,7 +149,7 @@ pub fn split_long_edges(
             }
             let [a, b] = edge.vertices;
             let m = positions.len();
-            positions.push((pos[a] + pos[b]) / 2.0);
+            positions.push(new_position(&current, &pos, edge));
             let (fa, fb) = (flags[a], flags[b]);
             new_flags.push(VertexFlags {
                 fixed: false,
@@ -178,6 +183,23 @@ pub fn split_long_edges(
         current = next?;
     }
     Ok((current, splits))
+}
+
+/// Where the new vertex on `edge` goes: Loop's subdivision rule `3/8 (a + b) + 1/8 (c + d)`
+/// on an edge with two triangles (opposite vertices c, d), which lands near the smooth surface
+/// through the mesh, so the new vertex's curvature row starts close to the others; the
+/// midpoint on boundary and junction edges, which stay on their curves.
+fn new_position(mesh: &Mesh, pos: &[Point], edge: &super::mesh::Edge) -> Point {
+    let [a, b] = edge.vertices;
+    let opposite: Vec<usize> = edge
+        .triangles
+        .iter()
+        .filter_map(|&t| ordered(mesh.triangles()[t], [a, b]).map(|(_, _, r)| r))
+        .collect();
+    match opposite.as_slice() {
+        &[c, d] => (pos[a] + pos[b]) * 0.375 + (pos[c] + pos[d]) * 0.125,
+        _ => (pos[a] + pos[b]) / 2.0,
+    }
 }
 
 /// Whether an edge with end flags `a`, `b` and `triangles` triangles may be split.
@@ -292,9 +314,7 @@ mod tests {
         assert_eq!(&split.positions()[..n], mesh.positions());
         assert_eq!(&split.flags()[..n], mesh.flags());
         assert!(split.flags()[n..].iter().all(|f| !f.fixed));
-        // Midpoints lie on the old triangles: area, area vector and volumes are unchanged.
-        let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
-        assert!(rel(total_area(&split), total_area(&mesh)) < 1e-13);
+        // The boundary polygons, and so each surface's vector area ½∮ x × dx, are unchanged.
         for s in 0..mesh.surfaces().len() {
             let sum = |m: &Mesh| -> Point {
                 m.surface_triangles(s)
@@ -302,9 +322,6 @@ mod tests {
                     .sum()
             };
             assert!((sum(&split) - sum(&mesh)).norm() < 1e-12);
-        }
-        for (_, region, _) in &shape.volumes {
-            assert!(rel(region.volume(&split), region.volume(&mesh)) < 1e-13);
         }
         // Junction lines stay shared: as many junction vertices as before plus the split
         // junction edges' midpoints, each a junction vertex again.
@@ -362,7 +379,7 @@ mod tests {
         assert_eq!(fixed_edges(&split), fixed_edges(&mesh));
         let boundary = |m: &Mesh| m.edges().iter().filter(|e| e.triangles.len() == 1).count();
         assert_eq!(boundary(&split), boundary(&mesh));
-        assert!((total_area(&split) - total_area(&mesh)).abs() < 1e-12 * total_area(&mesh));
+        assert!((total_area(&split) - total_area(&mesh)).abs() < 1e-2 * total_area(&mesh));
         // Every edge that may be split is now short enough.
         let p = split.positions();
         for e in split.edges() {
@@ -372,5 +389,28 @@ mod tests {
                 assert!((p[a] - p[b]).norm() <= limit);
             }
         }
+    }
+
+    #[test]
+    fn refinement_changes_area_and_volume_at_second_order() {
+        // Split every edge of the exact double bubble once: the new vertices sit O(h²) off the
+        // old triangles, so the relative changes fall about 4× when h halves.
+        let mut changes = Vec::new();
+        for levels in [4, 8] {
+            let shape = crate::cmc::generators::double_bubble([1.0, 2.0], levels).unwrap();
+            let mesh = &shape.mesh;
+            let (split, splits) = split_long_edges(mesh, 0.0, 1).unwrap();
+            assert!(splits > 0);
+            let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
+            let volume = shape
+                .volumes
+                .iter()
+                .map(|(_, r, _)| rel(r.volume(&split), r.volume(mesh)))
+                .fold(0.0, f64::max);
+            changes.push((rel(total_area(&split), total_area(mesh)), volume));
+        }
+        let (a, b) = (changes[0], changes[1]);
+        assert!(a.0 / b.0 > 3.0 && a.1 / b.1 > 3.0, "{changes:?}");
+        assert!(b.0 < 1e-2 && b.1 < 1e-2, "{changes:?}");
     }
 }
