@@ -335,6 +335,12 @@ mod tests {
     use super::*;
     use std::path::PathBuf;
 
+    /// The low test resolution of a problem file: 3, or 6 for the circus tent, whose pole caps
+    /// would fix every vertex of the three-ring mesh.
+    fn low_resolution(name: &str) -> usize {
+        if name == "circus_tent" { 6 } else { 3 }
+    }
+
     const PROBLEMS: [&str; 16] = [
         "u_wires",
         "double_bubble",
@@ -378,7 +384,9 @@ mod tests {
     )]
     fn every_problem_passes_the_derivative_check_at_low_resolution() {
         for name in PROBLEMS {
-            let problem = load(&path(name)).unwrap().with_resolution(3);
+            let problem = load(&path(name))
+                .unwrap()
+                .with_resolution(low_resolution(name));
             let outcome = run(
                 &problem,
                 &RunOptions {
@@ -485,7 +493,11 @@ mod tests {
             "convention_center",
             "tennis_cushion",
         ] {
-            let outcome = solve(&load(&path(name)).unwrap().with_resolution(3));
+            let outcome = solve(
+                &load(&path(name))
+                    .unwrap()
+                    .with_resolution(low_resolution(name)),
+            );
             assert!(outcome.status.unwrap().is_success(), "{name}");
             assert!(outcome.summary.max_violation < 1e-6, "{name}");
             let q = &outcome.summary.figures["quality"];
