@@ -794,7 +794,7 @@ pub fn tents(specs: &[TentSpec], levels: usize) -> Result<Shape, MeshError> {
     for spec in specs {
         let s = b.surface(&spec.name);
         let first = b.vertex_count();
-        add_outline_patch(&mut b, s, &spec.boundary, levels, |_| Point::zeros());
+        add_outline_patch(&mut b, s, &spec.boundary, levels, |r| r, |_| Point::zeros());
         patches.push((first, b.vertex_count()));
     }
     let mut mesh = b.build()?;
@@ -865,12 +865,15 @@ fn harmonic(mesh: &Mesh, pos: &mut [Point], axes: &[usize]) {
 /// `s`, normals up: a Coons grid with near-square cells for quadrilaterals (elongated shapes
 /// stay well shaped), a fan disk around the centroid otherwise. Interior points are the linear
 /// interpolation of the rim plus `lift(crown)`, where `crown` is 1 at the middle and 0 on the
-/// rim (`1 − ρ²` on fan disks, `(1 − (2u−1)²)(1 − (2v−1)²)` on grids).
+/// rim (`1 − ρ²` on fan disks, `(1 − (2u−1)²)(1 − (2v−1)²)` on grids). On fan disks ring k
+/// sits at the fraction `radial(k/levels)` of the way from the centroid to the rim (`ρ` above
+/// is that fraction), so rings can follow a steep crown evenly; grids ignore `radial`.
 fn add_outline_patch(
     b: &mut MeshBuilder,
     s: usize,
     boundary: &[Point],
     levels: usize,
+    radial: impl Fn(f64) -> f64,
     lift: impl Fn(f64) -> Point,
 ) {
     let sides = boundary.len();
@@ -898,11 +901,54 @@ fn add_outline_patch(
         return;
     }
     let centre = boundary.iter().sum::<Point>() / sides as f64;
+    if sides > RING_DISK_SECTORS {
+        // Fan sectors of 360°/sides would give slivers: six sectors, rim on the polygon.
+        let start = (centre.z - boundary[0].z).atan2(boundary[0].x - centre.x);
+        let place = |rho: f64, p: usize, f: f64| {
+            let angle = start + 2.0 * PI * (p as f64 + f) / RING_DISK_SECTORS as f64;
+            let rim = ray_to_polygon(boundary, &centre, angle);
+            let rho = radial(rho);
+            centre + (rim - centre) * rho + lift(1.0 - rho * rho)
+        };
+        add_fan_disk(b, s, RING_DISK_SECTORS, levels, None, place, Point::y());
+        return;
+    }
     let place = |rho: f64, p: usize, f: f64| {
         let rim = boundary[p] + (boundary[(p + 1) % sides] - boundary[p]) * f;
+        let rho = radial(rho);
         centre + (rim - centre) * rho + lift(1.0 - rho * rho)
     };
     add_fan_disk(b, s, sides, levels, None, place, Point::y());
+}
+
+/// Sectors of the disk meshes over polygons of more corners: ring k of a six-sector fan disk
+/// holds `6k` vertices at even angles, so its triangles are nearly equilateral.
+const RING_DISK_SECTORS: usize = 6;
+
+/// The point of polygon `boundary` (3-D corners, star-shaped about `centre` seen from above)
+/// hit by the horizontal ray from `centre` at `angle` (rad, from +x towards −z, the
+/// counter-clockwise sense seen from above); its height interpolates the hit edge's ends.
+/// Non-finite if the ray misses (then the mesh builder reports the vertex).
+fn ray_to_polygon(boundary: &[Point], centre: &Point, angle: f64) -> Point {
+    let d = (angle.cos(), -angle.sin());
+    let cross = |a: (f64, f64), b: (f64, f64)| a.0 * b.1 - a.1 * b.0;
+    let mut best = (f64::INFINITY, Point::repeat(f64::NAN));
+    for (i, p) in boundary.iter().enumerate() {
+        let q = boundary[(i + 1) % boundary.len()];
+        let e = (q.x - p.x, q.z - p.z);
+        let w = (p.x - centre.x, p.z - centre.z);
+        let denom = cross(d, e);
+        if denom.abs() < 1e-300 {
+            continue;
+        }
+        // centre + t·d = p + u·e.
+        let t = cross(w, e) / denom;
+        let u = cross(w, d) / denom;
+        if t > 0.0 && (-1e-12..=1.0 + 1e-12).contains(&u) && t < best.0 {
+            best = (t, p + (q - p) * u.clamp(0.0, 1.0));
+        }
+    }
+    best.1
 }
 
 /// A pneumatic cell: a footprint polygon on the ground (x, z; m, counter-clockwise seen from
@@ -913,18 +959,27 @@ pub struct CellSpec {
     pub name: String,
     /// Footprint corners (x, z), m.
     pub footprint: Vec<[f64; 2]>,
-    /// Height of the start dome's crown, m.
-    pub height: f64,
+    /// Crown height of a paraboloid start dome, m; `None`: the start is inflated to `volume`
+    /// (see [`cells`]).
+    pub height: Option<f64>,
     /// Enclosed volume, m³.
     pub volume: f64,
 }
 
-/// Pneumatic cells: paraboloid start domes over their footprints, rims fixed on the ground
-/// (y = 0), each enclosing its own volume (reference point on the ground), normals outward.
+/// Pneumatic cells: start domes over their footprints, rims fixed on the ground (y = 0), each
+/// enclosing its own volume (reference point on the ground), normals outward.
+///
+/// With a given `height` the start is a paraboloid-like crown of that height. Without one it
+/// is inflated to the target: the spherical cap over the disk of the footprint's area that
+/// encloses `volume` (segment volume `πh(3a² + h²)/6 = V`, solved for the height h), its
+/// heights then scaled so that the mesh encloses `volume` exactly (a vertical scaling by s
+/// scales the enclosed volume by s, the base being on the reference plane y = 0). The solve
+/// then starts volume-feasible and near constant curvature instead of pumping the cells up.
 pub fn cells(specs: &[CellSpec], levels: usize) -> Result<Shape, MeshError> {
     let levels = levels.max(1);
     let mut b = MeshBuilder::new();
     let mut regions = Vec::new();
+    let mut ranges = Vec::new();
     for spec in specs {
         let s = b.surface(&spec.name);
         let boundary: Vec<Point> = spec
@@ -932,10 +987,30 @@ pub fn cells(specs: &[CellSpec], levels: usize) -> Result<Shape, MeshError> {
             .iter()
             .map(|&[x, z]| Point::new(x, 0.0, z))
             .collect();
-        let height = spec.height;
-        add_outline_patch(&mut b, s, &boundary, levels, |crown| {
-            Point::y() * height * crown
-        });
+        let first = b.vertex_count();
+        match spec.height {
+            Some(height) => add_outline_patch(
+                &mut b,
+                s,
+                &boundary,
+                levels,
+                |r| r,
+                |crown| Point::y() * height * crown,
+            ),
+            None => {
+                let radius = (polygon_area(&spec.footprint) / PI).sqrt();
+                let cap = SphericalCap::with_volume(radius, spec.volume);
+                add_outline_patch(
+                    &mut b,
+                    s,
+                    &boundary,
+                    levels,
+                    |r| cap.even_rings(r),
+                    |crown| Point::y() * cap.height_at(radius * (1.0 - crown).max(0.0).sqrt()),
+                );
+            }
+        }
+        ranges.push((first, b.vertex_count()));
         let centre = boundary.iter().sum::<Point>() / boundary.len() as f64;
         regions.push((
             spec.name.clone(),
@@ -948,10 +1023,75 @@ pub fn cells(specs: &[CellSpec], levels: usize) -> Result<Shape, MeshError> {
     }
     let mut mesh = b.build()?;
     mesh.fix_boundary();
+    let mut pos = mesh.positions().to_vec();
+    for ((spec, &(first, last)), (_, region, target)) in specs.iter().zip(&ranges).zip(&regions) {
+        if spec.height.is_none() {
+            let factor = target / region.volume(&mesh);
+            for p in &mut pos[first..last] {
+                p.y *= factor;
+            }
+        }
+    }
+    mesh.set_positions(pos)?;
     Ok(Shape {
         mesh,
         volumes: regions,
     })
+}
+
+/// Area of a polygon in the (x, z) plane, m² (either orientation).
+fn polygon_area(corners: &[[f64; 2]]) -> f64 {
+    let n = corners.len();
+    let twice: f64 = (0..n)
+        .map(|i| {
+            let (a, b) = (corners[i], corners[(i + 1) % n]);
+            a[0] * b[1] - a[1] * b[0]
+        })
+        .sum();
+    twice.abs() / 2.0
+}
+
+/// A spherical cap over a disk of radius `a` on the ground, crown height `h` (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct SphericalCap {
+    a: f64,
+    h: f64,
+}
+
+impl SphericalCap {
+    /// The cap over radius `a` (m) enclosing `volume` (m³) with the ground: Newton on the
+    /// increasing, convex `segment_volume(a, h) − V` from the paraboloid height `2V/(πa²)`, which
+    /// lies above the root, so the iterates decrease monotonically onto it.
+    fn with_volume(a: f64, volume: f64) -> SphericalCap {
+        let mut h = 2.0 * volume / (PI * a * a);
+        for _ in 0..100 {
+            let step = (segment_volume(a, h) - volume) / (PI * (a * a + h * h) / 2.0);
+            h -= step;
+            if step.abs() <= 1e-14 * h {
+                break;
+            }
+        }
+        SphericalCap { a, h }
+    }
+
+    /// Sphere radius, m.
+    fn radius(&self) -> f64 {
+        (self.a * self.a + self.h * self.h) / (2.0 * self.h)
+    }
+
+    /// Horizontal distance (as a fraction of `a`) of the point a fraction `t` of the way along
+    /// the meridian from the crown to the rim (up to the equator for caps beyond a hemisphere):
+    /// rings at even `t` are evenly spaced on the surface, not only seen from above.
+    fn even_rings(&self, t: f64) -> f64 {
+        let end = self.a.atan2(self.radius() - self.h).min(PI / 2.0);
+        self.radius() * (t * end).sin() / self.a
+    }
+
+    /// Height above the ground at horizontal distance `r ≤ a` from the axis, m.
+    fn height_at(&self, r: f64) -> f64 {
+        let radius = self.radius();
+        (radius * radius - r * r).max(0.0).sqrt() - (radius - self.h)
+    }
 }
 
 #[cfg(test)]
@@ -1134,7 +1274,7 @@ mod tests {
                         [3.0 * a.cos(), -3.0 * a.sin()]
                     })
                     .collect(),
-                height: 2.0,
+                height: Some(2.0),
                 volume: 30.0,
             }],
             6,
@@ -1143,5 +1283,73 @@ mod tests {
         // The paraboloid over a near-disk of radius 3, height 2 encloses about π·9·2/2.
         let v = c.volumes[0].1.volume(&c.mesh);
         assert!((v / (PI * 9.0) - 1.0).abs() < 0.1, "{v}");
+    }
+
+    #[test]
+    fn inflated_cells_enclose_their_volumes_on_well_shaped_rings() {
+        // The cap that encloses V over radius a: πh(3a² + h²)/6 = V, and for a hemisphere
+        // (h = a) V = 2πa³/3.
+        let cap = SphericalCap::with_volume(2.0, 2.0 * PI * 8.0 / 3.0);
+        assert!((cap.h - 2.0).abs() < 1e-12, "{}", cap.h);
+        assert!((cap.height_at(0.0) - 2.0).abs() < 1e-12 && cap.height_at(2.0).abs() < 1e-12);
+        let cap = SphericalCap::with_volume(20.0, 10_000.0);
+        assert!((segment_volume(20.0, cap.h) / 10_000.0 - 1.0).abs() < 1e-12);
+        let circle = |r: f64, sides: usize, at: [f64; 2]| -> Vec<[f64; 2]> {
+            (0..sides)
+                .map(|k| {
+                    let a = 2.0 * PI * k as f64 / sides as f64;
+                    [at[0] + r * a.cos(), at[1] - r * a.sin()]
+                })
+                .collect()
+        };
+        let specs = [
+            CellSpec {
+                name: "dome".into(),
+                footprint: circle(20.0, 24, [0.0, 0.0]),
+                height: None,
+                volume: 10_000.0,
+            },
+            CellSpec {
+                name: "cell".into(),
+                footprint: circle(9.0, 16, [40.0, 0.0]),
+                height: None,
+                volume: 1_200.0,
+            },
+        ];
+        for levels in [2, 5] {
+            let shape = cells(&specs, levels).unwrap();
+            let m = &shape.mesh;
+            for (_, region, target) in &shape.volumes {
+                assert!((region.volume(m) / target - 1.0).abs() < 1e-12);
+            }
+            // Six-sector rings evenly spaced along the meridians: no slivers (24 fan sectors
+            // have angles ≤ 360°/24 = 15° in plan, less on the steep rim), and the rim vertices
+            // lie on the footprint's edges.
+            let q = crate::cmc::figures::quality(m);
+            assert!(q.min_angle_deg > 30.0, "{q:?}");
+            let rim: Vec<&Point> = m
+                .positions()
+                .iter()
+                .zip(m.flags())
+                .filter(|(_, f)| f.fixed)
+                .map(|(p, _)| p)
+                .collect();
+            assert_eq!(rim.len(), 2 * 6 * levels);
+            for p in rim {
+                assert!(p.y.abs() < 1e-12);
+                let (r, apothem) = if p.x < 30.0 {
+                    (p.xz().norm(), 20.0 * (PI / 24.0).cos())
+                } else {
+                    (
+                        (p.xz() - nalgebra::Vector2::new(40.0, 0.0)).norm(),
+                        9.0 * (PI / 16.0).cos(),
+                    )
+                };
+                assert!(
+                    r >= apothem - 1e-9
+                        && r <= apothem / (PI / 24.0).cos().min((PI / 16.0).cos()) + 1e-9
+                );
+            }
+        }
     }
 }

@@ -11,6 +11,7 @@
 //! tangential_weight = 0.01      # w of the tangential regularization (cmc::nlp), ≥ 0
 //! flip_rounds = 1               # edge-flip + re-solve rounds after the first solve (cmc::remesh)
 //! coarse_resolution = 1         # optional: solve coarse first, then refine (cmc::multilevel)
+//! refine = 1.5                  # optional: in those rounds split edges > 1.5 × median start edge
 //! [[chord]]                     # optional chord-length constraints between vertex indices
 //! a = 0
 //! b = 12
@@ -70,6 +71,10 @@ pub struct QualitySpec {
     /// default none (solve the resolution's start directly).
     #[serde(default)]
     pub coarse_resolution: Option<usize>,
+    /// In those rounds also split edges longer than `refine` × the start mesh's median edge
+    /// length (cmc::remesh::split_long_edges); omitted: no refinement.
+    #[serde(default)]
+    pub refine: Option<f64>,
 }
 
 fn default_weight() -> f64 {
@@ -86,6 +91,7 @@ impl Default for QualitySpec {
             tangential_weight: default_weight(),
             flip_rounds: default_flip_rounds(),
             coarse_resolution: None,
+            refine: None,
         }
     }
 }
@@ -257,8 +263,9 @@ pub struct CellToml {
     pub footprint: Option<Vec<[f64; 2]>>,
     /// Or a regular polygon footprint (its `height` is ignored).
     pub circle: Option<RimToml>,
-    /// Crown height of the start dome, m.
-    pub height: f64,
+    /// Crown height of a paraboloid start dome, m; omitted: the start is inflated to `volume`.
+    #[serde(default)]
+    pub height: Option<f64>,
     /// Enclosed volume, m³.
     pub volume: f64,
 }
@@ -342,6 +349,15 @@ impl CmcSpec {
             return Err(self.err(
                 &["quality".into(), "coarse_resolution".into()],
                 "`coarse_resolution` must be at least 1",
+            ));
+        }
+        if f.quality
+            .refine
+            .is_some_and(|r| !(r.is_finite() && r >= 1.0))
+        {
+            return Err(self.err(
+                &["quality".into(), "refine".into()],
+                "`refine` must be a finite number ≥ 1 (a multiple of the median edge length)",
             ));
         }
         if !(f.quality.tangential_weight >= 0.0 && f.quality.tangential_weight.is_finite()) {
@@ -486,7 +502,7 @@ impl CmcSpec {
                     if !positive(c.volume) {
                         return Err(self.err(&at("volume"), "`volume` must be positive m³"));
                     }
-                    if !positive(c.height) {
+                    if c.height.is_some_and(|h| !positive(h)) {
                         return Err(self.err(&at("height"), "`height` must be positive m"));
                     }
                 }
