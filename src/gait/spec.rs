@@ -93,7 +93,8 @@ pub struct TrialsSpec {
     /// Fraction of half the force range reserved for the spline's excursion between knots;
     /// default 0.2, in (0, 1).
     pub slope_margin: Option<f64>,
-    /// Re-solves of a trial that stopped short of success (not by a budget); default 1.
+    /// Unproductive re-solves (not halving the violation sum) of a trial that stopped short
+    /// of success (not by a budget); default 1.
     pub restarts: Option<usize>,
     /// Run the Levenberg–Marquardt feasibility phase ([`crate::gait::feasibility`]) before
     /// each SQP solve; default false.
@@ -114,7 +115,8 @@ pub struct TrialSettings {
     pub spread: f64,
     /// Fraction of the half force range kept free for between-knot excursions.
     pub slope_margin: f64,
-    /// Re-solves from the end point of a trial that stopped short of success.
+    /// Re-solves from the end point of a trial that stopped short of success, counting only
+    /// those that do not halve the violation sum.
     pub restarts: usize,
     /// Levenberg–Marquardt feasibility phase before the SQP solve.
     pub feasibility_first: bool,
