@@ -668,6 +668,16 @@ mod tests {
         p
     }
 
+    /// Largest entry-wise gap between a Jacobian and the dual-number oracle's, relative to the
+    /// oracle's entry or, for small entries, to 1e-3 of its largest entry.
+    pub(super) fn gap_to_oracle(fast: &[f64], oracle: &[f64]) -> f64 {
+        let largest = oracle.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        fast.iter()
+            .zip(oracle)
+            .map(|(a, b)| (a - b).abs() / b.abs().max(1e-3 * largest))
+            .fold(0.0, f64::max)
+    }
+
     #[test]
     fn exact_derivatives_match_central_differences() {
         for (name, factor) in [("luxo_leap", 0.1), ("pogo_jump", 0.1), ("biped_hop", 0.05)] {

@@ -296,7 +296,7 @@ impl Reduced<'_> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::shortened;
+    use super::super::tests::{gap_to_oracle, shortened};
     use super::*;
     use crate::solver::Nlp;
     use rand::{RngExt, SeedableRng};
@@ -325,11 +325,7 @@ mod tests {
             nlp.jacobian_by_parameter_duals(&x, &mut oracle).unwrap();
             assert!(fast.iter().all(|v| v.is_finite()), "{name}: not finite");
             let largest = oracle.iter().fold(0.0f64, |s, v| s.max(v.abs()));
-            let gap = fast
-                .iter()
-                .zip(&oracle)
-                .map(|(a, b)| (a - b).abs() / b.abs().max(1e-3 * largest))
-                .fold(0.0, f64::max);
+            let gap = gap_to_oracle(&fast, &oracle);
             println!(
                 "{name}: nnz = {}, max |J| = {largest:.2e}, max |sensitivity − dual| / max(|dual|, 1e-3·max|J|) = {gap:.2e}",
                 d.jac_nnz
