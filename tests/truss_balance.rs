@@ -70,6 +70,13 @@ fn residuals(file: &str, tag: &str) -> (f64, f64) {
     let result: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("result.json")).unwrap()).unwrap();
     let _ = std::fs::remove_dir_all(&out);
+    // Balance to 1e-6 is only owed by a converged design (a stalled solve once ended the Warren
+    // bridge at violation 0.56).
+    let status = result["status"].as_str().unwrap_or_default();
+    assert!(
+        status == "Optimal" || status == "Acceptable",
+        "{file}: status {status}"
+    );
     let joints = &model.structure.joints;
     let cases = model.settings.load_cases.len();
     let largest = (joints.iter().flat_map(|j| j.loads.iter()))

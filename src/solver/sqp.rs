@@ -23,8 +23,10 @@
 //!    one second-order correction (N&W eq. 18.51) re-solves the QP with the constraint bounds
 //!    shifted by `c(x+d) − c(x) − J d`, against the Maratos effect. Steps whose predicted
 //!    merit decrease comes mostly from the violation (and elastic steps) must also decrease
-//!    the violation itself. A failed or non-finite evaluation at a trial point only shortens
-//!    the step; `EvalError::Fatal` ends the solve with `EvaluationError`.
+//!    the violation itself. With the exact Hessian no trial point may multiply the violation
+//!    by more than [`VIOLATION_GROWTH`] (above [`VIOLATION_FLOOR`]). A failed or non-finite
+//!    evaluation at a trial point only shortens the step; `EvalError::Fatal` ends the solve
+//!    with `EvaluationError`.
 //! 6. Hessian update (damped BFGS / L-BFGS) or exact Hessian at the new point with the new
 //!    multipliers λ = λ_QP (initial multipliers: least squares, for the exact Hessian). An
 //!    exact-Hessian solve whose line search fails, or whose penalty weights stay above
@@ -91,6 +93,14 @@ const ELASTIC_WEIGHT: f64 = 1e4;
 /// Largest step `‖αd‖∞` relative to `1 + ‖x‖∞` tried by the line search (SNOPT's major step
 /// limit), so that a huge QP step cannot throw the iterate far away in one go.
 const STEP_LIMIT: f64 = 2.0;
+/// With the exact Hessian, a trial point may multiply the ℓ1 violation by at most this factor
+/// once it exceeds [`VIOLATION_FLOOR`]: the ℓ1 merit is exact only near a solution, and a long
+/// Newton step along a nearly singular reduced Hessian can lower it with weights ρᵢ = |λᵢ|
+/// while the true constraint forces far from x are much larger (truss: a step from violation
+/// 0.05 to 2.6 lowered φ, after which the weights diverged). Backtracking cuts such steps.
+const VIOLATION_GROWTH: f64 = 10.0;
+/// Scaled ℓ1 violation below which the growth cap does not apply.
+const VIOLATION_FLOOR: f64 = 0.1;
 /// An objective below this on a feasible point ends the solve `Unbounded` (SNOPT's
 /// "unbounded objective").
 const UNBOUNDED_OBJECTIVE: f64 = -1e20;
@@ -203,6 +213,8 @@ struct Acceptance {
     v0: f64,
     /// Predicted violation change along d when the violation must decrease in fact.
     violation_slope: Option<f64>,
+    /// Largest ℓ1 violation accepted at a trial point (see [`VIOLATION_GROWTH`]).
+    violation_cap: f64,
     /// Change of φ that counts as no change: its rounding level.
     merit_noise: f64,
     /// Change of the violation that counts as no change.
@@ -842,10 +854,11 @@ impl<'a> Sqp<'a> {
     fn accepts(&self, test: &Acceptance, values: &Values, alpha: f64) -> bool {
         let merit_ok =
             self.merit(values) <= test.phi0 + ARMIJO * alpha * test.slope + test.merit_noise;
-        let violation_ok = test.violation_slope.is_none_or(|vs| {
-            merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu)
-                <= test.v0 + ARMIJO * alpha * vs + test.violation_noise
-        });
+        let violation = merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu);
+        let violation_ok = violation <= test.violation_cap
+            && test
+                .violation_slope
+                .is_none_or(|vs| violation <= test.v0 + ARMIJO * alpha * vs + test.violation_noise);
         merit_ok && violation_ok
     }
 
@@ -904,11 +917,17 @@ impl<'a> Sqp<'a> {
         // (near a solution of a problem with a large objective), changes within 10·ε_mach·|φ₀|
         // count as no increase (IPOPT's relaxation), or the line search could only fail.
         let resolution = 10.0 * f64::EPSILON * phi0.abs();
+        let v0 = merit::l1_violation(&point.values.c, &self.ev.cl, &self.ev.cu);
         let mut test = Acceptance {
             phi0,
             slope,
-            v0: merit::l1_violation(&point.values.c, &self.ev.cl, &self.ev.cu),
+            v0,
             violation_slope,
+            violation_cap: if self.model.is_quasi_newton() {
+                f64::INFINITY
+            } else {
+                VIOLATION_GROWTH * v0.max(VIOLATION_FLOOR)
+            },
             merit_noise: if -slope <= 100.0 * resolution {
                 resolution
             } else {
