@@ -16,7 +16,7 @@
 
 use super::sim::Simulator;
 use super::spec::Problem;
-use super::spline::{KnotGrid, SplineControls};
+use super::spline::SplineControls;
 use super::task::PoseConstraint;
 
 /// The stage problems for spline parameters `params` (physical units): `stages` problems with
@@ -104,10 +104,7 @@ fn rollout_values(
     rows: &[&PoseConstraint],
     last: usize,
 ) -> Option<Vec<Vec<f64>>> {
-    let grid = KnotGrid {
-        knots: problem.knots,
-        horizon: problem.horizon,
-    };
+    let grid = problem.knot_grid();
     let controls = SplineControls {
         grid,
         params: params.to_vec(),

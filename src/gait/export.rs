@@ -17,7 +17,7 @@ use super::character::Shape;
 use super::sim::{Controls, Simulator, State};
 use super::spatial::Xform;
 use super::spec::Problem;
-use super::spline::{KnotGrid, SplineControls};
+use super::spline::SplineControls;
 use crate::io::gltf::{Animation, Material, Mesh, Node, Scene, Track};
 use crate::io::result::{Csv, num};
 use crate::io::shapes;
@@ -48,10 +48,7 @@ pub struct Sampled {
 /// when it is a variable) over the control horizon and samples it every
 /// `interval` seconds (rounded to whole steps).
 pub fn sample(problem: &Problem, x: &[f64], interval: f64) -> Result<Sampled, String> {
-    let grid = KnotGrid {
-        knots: problem.knots,
-        horizon: problem.horizon,
-    };
+    let grid = problem.knot_grid();
     let controls = SplineControls {
         grid,
         params: x.to_vec(),

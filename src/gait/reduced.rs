@@ -100,10 +100,7 @@ impl<'p> Reduced<'p> {
     /// Builds the NLP with segments split at the RK4 steps `interior` (ascending; steps not
     /// strictly between 0 and the last constraint's step are dropped, as are repeats).
     pub fn with_boundaries(problem: &'p Problem, interior: &[usize]) -> Self {
-        let grid = KnotGrid {
-            knots: problem.knots,
-            horizon: problem.horizon,
-        };
+        let grid = problem.knot_grid();
         let last = problem.constraints.last().map_or(0, |c| c.step);
         let mut boundaries = vec![0];
         for &b in interior {

@@ -38,6 +38,7 @@ use super::character::{
 };
 use super::sim::State;
 use super::spatial::{Mat3, RigidInertia, Vec3};
+use super::spline::KnotGrid;
 use super::task::{PoseConstraint, Quantity};
 use crate::error::InputError;
 use crate::spec::{Key, SolverSpec, Source};
@@ -422,6 +423,14 @@ pub struct Problem {
 }
 
 impl Problem {
+    /// The control splines' knot grid: `knots` knots spread evenly over the horizon (s).
+    pub fn knot_grid(&self) -> KnotGrid {
+        KnotGrid {
+            knots: self.knots,
+            horizon: self.horizon,
+        }
+    }
+
     /// Number of spline parameters (values and slopes of every actuator's knots); the motion's
     /// variables start with them.
     pub fn spline_parameters(&self) -> usize {
