@@ -177,7 +177,7 @@ fn usage_errors_exit_2_and_help_shows_an_example() {
 #[test]
 fn cmc_problem_file_starts_from_a_shipped_glb() {
     // problems/cmc/double_bubble_gltf.toml imports double_bubble_start.glb (the generator's
-    // resolution-3 double bubble written by examples/cmc_start_glb.rs): it must solve to the
+    // resolution-3 double bubble written by benches/drivers/cmc_start_glb.rs): it must solve to the
     // same area as the generated start, tests/golden/problems/cmc/double_bubble_short.toml.
     let scratch = Scratch::new("gltf");
     let run = |file: &str, dir: &str| -> serde_json::Value {

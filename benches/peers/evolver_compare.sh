@@ -2,7 +2,7 @@
 # Surface Evolver vs optimize on the same CMC start meshes (not run in CI).
 #
 # For each case: the problem file's start mesh at the given resolution is written as an Evolver
-# datafile (examples/evolver_export.rs, lengths in cm) and minimized by `evolver-nox-d`
+# datafile (benches/peers/evolver_export.rs, lengths in cm) and minimized by `evolver-nox-d`
 # (20 gradient steps, 10 Newton steps with line search `hessian_seek`, then plain Newton
 # steps `hessian` until the energy changes by less than 1e-12 relative);
 # optimize solves the same file at the same resolution with no edge flips (so both keep the

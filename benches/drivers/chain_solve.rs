@@ -5,7 +5,7 @@
 //! (default 100 links: n = 198, m = 100; the QP method `auto`; all three Hessian modes).
 //! `VERBOSITY=N` shows the iteration log, `LBFGS_MEMORY=p` sets the L-BFGS memory.
 
-#[path = "../tests/common/chain.rs"]
+#[path = "../../tests/common/chain.rs"]
 #[allow(dead_code)]
 mod chain;
 

@@ -5,7 +5,7 @@
 //! RESOLUTION overrides the file's refinement level; SCALE multiplies every length (default
 //! 100: metres to centimetres, so areas print in cm²).
 
-#[path = "common/cmc_start.rs"]
+#[path = "../common/cmc_start.rs"]
 mod cmc_start;
 
 use std::process::ExitCode;

@@ -8,7 +8,7 @@
 //! `cargo run --release --example cmc_start_glb -- FILE.toml OUT.glb [RESOLUTION]`; it made
 //! `problems/cmc/double_bubble_start.glb` from `problems/cmc/double_bubble.toml` at resolution 3.
 
-#[path = "common/cmc_start.rs"]
+#[path = "../common/cmc_start.rs"]
 mod cmc_start;
 
 use std::process::ExitCode;

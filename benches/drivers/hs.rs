@@ -3,7 +3,7 @@
 //! `cargo run --release --example hs -- HS71 [bfgs|lbfgs|exact] [max_iterations] [x0,x1,…]`
 //! (`QP=sparse|dense` forces the QP method; verbosity 2 adds the step, penalty and Hessian-shift details under each line).
 
-#[path = "../tests/common/hs.rs"]
+#[path = "../../tests/common/hs.rs"]
 mod hs;
 
 use optimize::solver::qp::QpMethod;

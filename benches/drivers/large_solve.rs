@@ -6,7 +6,7 @@
 //! process's resident high-water mark `VmHWM` from /proc/self/status (Linux). `VERBOSITY=0`
 //! silences the iteration log; `QP=dense|sparse` forces the QP method.
 
-#[path = "../tests/common/large.rs"]
+#[path = "../../tests/common/large.rs"]
 #[allow(dead_code)]
 mod large;
 
