@@ -149,6 +149,7 @@ fn written_results_balance_every_joint() {
             "wheel",
         ),
         ("problems/truss/warren_bridge.toml", "warren"),
+        ("problems/truss/crane_tripod.toml", "crane"),
     ] {
         let (residual, reported) = residuals(file, tag);
         println!("{file}: residual {residual:.2e} of the largest load (reported {reported:.2e})");
