@@ -18,7 +18,7 @@ use serde::de::DeserializeOwned;
 
 use crate::error::InputError;
 use crate::solver::qp::QpMethod;
-use crate::solver::{HessianMode, Options};
+use crate::solver::{Globalization, HessianMode, Options};
 
 mod global;
 pub use global::{GlobalMethodName, GlobalSpec};
@@ -179,6 +179,8 @@ pub struct SolverSpec {
     pub lbfgs_memory: Option<usize>,
     /// QP subproblem method: "auto" (default), "dense" or "sparse".
     pub qp: Option<QpMethod>,
+    /// Step acceptance: "line_search" (default) or "trust_region".
+    pub globalization: Option<Globalization>,
     /// Iteration-log detail: 0 silent, 1 one line per iteration (default), 2 more.
     pub verbosity: Option<u8>,
 }
@@ -249,6 +251,9 @@ impl SolverSpec {
         }
         if let Some(v) = self.qp {
             o.qp_method = v;
+        }
+        if let Some(v) = self.globalization {
+            o.globalization = v;
         }
         if let Some(v) = self.verbosity {
             o.verbosity = v;

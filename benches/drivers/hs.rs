@@ -1,13 +1,15 @@
-//! Solves one Hock–Schittkowski problem with the live iteration log on stderr.
+//! Solves one Hock–Schittkowski problem with the live iteration log on stderr, or all of them
+//! with one summary line each (name `all`).
 //!
-//! `cargo run --release --example hs -- HS71 [bfgs|lbfgs|exact] [max_iterations] [x0,x1,…]`
-//! (`QP=sparse|dense` forces the QP method; verbosity 2 adds the step, penalty and Hessian-shift details under each line).
+//! `cargo run --release --example hs -- HS71|all [bfgs|lbfgs|exact] [max_iterations] [x0,x1,…]`
+//! (`QP=sparse|dense` forces the QP method, `GLOBALIZATION=trust_region` the trust region;
+//! verbosity 2 adds the step, penalty and Hessian-shift details under each line).
 
 #[path = "../../tests/common/hs.rs"]
 mod hs;
 
 use optimize::solver::qp::QpMethod;
-use optimize::solver::{HessianMode, Options, solve};
+use optimize::solver::{Globalization, HessianMode, Options, solve};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -22,6 +24,33 @@ fn main() {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(1);
+    let globalization = match std::env::var("GLOBALIZATION").as_deref() {
+        Ok("trust_region") => Globalization::TrustRegion,
+        _ => Globalization::LineSearch,
+    };
+    if name == "all" {
+        let options = Options {
+            hessian: mode,
+            verbosity: 0,
+            max_iterations: iterations,
+            globalization,
+            ..Options::default()
+        };
+        for problem in hs::all() {
+            let s = solve(&problem.nlp(mode == HessianMode::Exact), &options);
+            println!(
+                "{}: {:?}, f = {:.10e} (book: {:.10e}), violation {:.1e}, {} iterations, {} evaluations",
+                problem.name,
+                s.status,
+                s.objective,
+                problem.fstar,
+                problem.violation(&s.x),
+                s.iterations,
+                s.evaluations.functions
+            );
+        }
+        return;
+    }
     let Some(problem) = hs::all().into_iter().find(|p| p.name == name) else {
         eprintln!("unknown problem {name}");
         std::process::exit(2);
@@ -34,6 +63,7 @@ fn main() {
         hessian: mode,
         verbosity,
         max_iterations: iterations,
+        globalization,
         qp_method: match std::env::var("QP").as_deref() {
             Ok("sparse") => QpMethod::Sparse,
             Ok("dense") => QpMethod::Dense,

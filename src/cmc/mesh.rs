@@ -397,6 +397,18 @@ impl Mesh {
         &self.edges
     }
 
+    /// Every edge's length, ascending, m.
+    pub fn sorted_edge_lengths(&self) -> Vec<f64> {
+        let p = &self.positions;
+        let mut lengths: Vec<f64> = self
+            .edges()
+            .iter()
+            .map(|e| (p[e.vertices[0]] - p[e.vertices[1]]).norm())
+            .collect();
+        lengths.sort_by(f64::total_cmp);
+        lengths
+    }
+
     /// Triangles of surface `s`.
     pub fn surface_triangles(&self, s: usize) -> impl Iterator<Item = usize> + '_ {
         (0..self.triangles.len()).filter(move |&t| self.triangle_surface[t] == s)

@@ -361,13 +361,7 @@ fn check(
 
 /// Median edge length of a mesh, m.
 fn median_edge_length(mesh: &mesh::Mesh) -> f64 {
-    let p = mesh.positions();
-    let mut lengths: Vec<f64> = mesh
-        .edges()
-        .iter()
-        .map(|e| (p[e.vertices[0]] - p[e.vertices[1]]).norm())
-        .collect();
-    lengths.sort_by(f64::total_cmp);
+    let lengths = mesh.sorted_edge_lengths();
     lengths.get(lengths.len() / 2).copied().unwrap_or(0.0)
 }
 

@@ -288,23 +288,12 @@ mod tests {
         }
     }
 
-    fn edge_lengths(m: &Mesh) -> Vec<f64> {
-        let p = m.positions();
-        let mut l: Vec<f64> = m
-            .edges()
-            .iter()
-            .map(|e| (p[e.vertices[0]] - p[e.vertices[1]]).norm())
-            .collect();
-        l.sort_by(f64::total_cmp);
-        l
-    }
-
     #[test]
     fn splits_keep_geometry_junctions_and_flags() {
         let shape = crate::cmc::generators::double_bubble([1.0, 2.0], 4).unwrap();
         let mut rng = crate::cmc::testing::rng(7);
         let mesh = crate::cmc::testing::perturbed(&shape.mesh, 0.2, &mut rng);
-        let lengths = edge_lengths(&mesh);
+        let lengths = mesh.sorted_edge_lengths();
         let median = lengths[lengths.len() / 2];
         let (split, splits) = split_long_edges(&mesh, median, 1).unwrap();
         assert!(splits > 0);
@@ -334,7 +323,7 @@ mod tests {
             split.junction_vertices().len(),
             mesh.junction_vertices().len() + new_junction
         );
-        assert!(edge_lengths(&split).last() <= lengths.last());
+        assert!(split.sorted_edge_lengths().last() <= lengths.last());
     }
 
     #[test]
@@ -372,7 +361,7 @@ mod tests {
             .iter()
             .map(|&[a, b]| (p[a] - p[b]).norm())
             .fold(0.0, f64::max);
-        assert!(limit < *edge_lengths(&mesh).last().unwrap());
+        assert!(limit < *mesh.sorted_edge_lengths().last().unwrap());
         let (split, splits) = split_long_edges(&mesh, limit, 20).unwrap();
         assert!(splits > 0);
         // Rim and caps untouched; the film still hangs from them (no new boundary edges).

@@ -78,7 +78,7 @@ mod status;
 mod termination;
 
 pub use nlp::{Bounds, Dims, EvalError, Nlp};
-pub use options::{HessianMode, Options};
+pub use options::{Globalization, HessianMode, Options};
 pub use solution::{Evaluations, IterationRecord, Solution};
 pub use sqp::solve;
 pub use status::Status;

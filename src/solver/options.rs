@@ -22,6 +22,20 @@ pub enum HessianMode {
     Exact,
 }
 
+/// How the SQP method makes sure a step improves the ℓ1 merit function.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Globalization {
+    /// Backtracking Armijo line search along the QP step (with a second-order correction).
+    #[default]
+    LineSearch,
+    /// Fletcher's Sℓ1QP trust region: the QP step is bounded by an ℓ∞ radius that shrinks
+    /// when the merit function's actual decrease falls short of the model's prediction and
+    /// grows when it matches; the elastic penalty steering only asks for what the linearized
+    /// constraints can reach within the radius.
+    TrustRegion,
+}
+
 /// Everything that steers a solve. `Default` gives the documented defaults.
 #[derive(Debug, Clone)]
 pub struct Options {
@@ -40,6 +54,8 @@ pub struct Options {
     /// QP subproblem method: `Auto` (dense Goldfarb–Idnani for n ≤ [`crate::solver::qp::DENSE_LIMIT`],
     /// sparse interior point above), or either one forced (`Sparse` never forms an n×n matrix).
     pub qp_method: QpMethod,
+    /// Line search (default) or trust region.
+    pub globalization: Globalization,
     /// 0 silent, 1 one line per iteration, 2 more detail. The log goes to stderr.
     pub verbosity: u8,
     /// Set from outside (Ctrl-C) to stop at the end of the current iteration with status
@@ -57,6 +73,7 @@ impl Default for Options {
             hessian: HessianMode::Auto,
             lbfgs_memory: 10,
             qp_method: QpMethod::Auto,
+            globalization: Globalization::LineSearch,
             verbosity: 1,
             interrupt: None,
         }

@@ -27,6 +27,10 @@
 //!    by more than [`VIOLATION_GROWTH`] (above [`VIOLATION_FLOOR`]). A failed or non-finite
 //!    evaluation at a trial point only shortens the step; `EvalError::Fatal` ends the solve
 //!    with `EvaluationError`.
+//!    Under [`Globalization::TrustRegion`] (Fletcher's Sℓ1QP proper) the QP's step box is
+//!    intersected with an ℓ∞ radius instead, and the step is accepted or rejected by the ratio
+//!    of the merit's actual to predicted decrease (see `trust_region_step`); a QP that fails
+//!    is retried with a fresh quasi-Newton model, then with smaller radii.
 //! 6. Hessian update (damped BFGS / L-BFGS) or exact Hessian at the new point with the new
 //!    multipliers λ = λ_QP (initial multipliers: least squares, for the exact Hessian). An
 //!    exact-Hessian solve whose line search fails, or whose penalty weights stay above
@@ -67,7 +71,9 @@ use super::multipliers::{self, LinearizedPoint};
 use super::noise;
 use super::qp::{self, QpHessian, QpMethod, QpProblem, QpSolution, QpStatus, WarmStart};
 use super::termination::{self, Kkt, KktInput};
-use super::{EvalError, HessianMode, IterationRecord, Nlp, Options, Solution, Status};
+use super::{
+    EvalError, Globalization, HessianMode, IterationRecord, Nlp, Options, Solution, Status,
+};
 
 /// Largest n for which `HessianMode::Auto` picks dense BFGS over L-BFGS.
 pub const DENSE_BFGS_LIMIT: usize = 500;
@@ -80,6 +86,9 @@ pub const DENSE_BFGS_LIMIT: usize = 500;
 /// case) still reaches its iteration limit on the sparse path where the dense one converges.
 pub const EXACT_SPARSE_LIMIT: usize = 1000;
 
+/// Under the trust region, a QP that fails is retried with a tenth of the radius while the
+/// radius exceeds this times `1 + ‖x‖∞`.
+const QP_RETRY_RADIUS: f64 = 1e-8;
 /// Armijo constant of the line search.
 const ARMIJO: f64 = 1e-4;
 /// Smallest step length tried before the line search gives up.
@@ -224,7 +233,13 @@ struct Acceptance {
 }
 
 enum LineSearch {
-    Accepted { point: Point, alpha: f64 },
+    Accepted {
+        point: Point,
+        alpha: f64,
+    },
+    /// Trust region only: the step was rejected and the radius reduced; the iteration is
+    /// repeated at the same point.
+    Rejected,
     Failed,
     Fatal,
 }
@@ -248,6 +263,9 @@ struct Sqp<'a> {
     /// The QP method in effect ([`Options::qp_method`], with `Auto` resolved for exact
     /// Hessians above [`EXACT_SPARSE_LIMIT`]).
     qp_method: QpMethod,
+    /// ℓ∞ trust-region radius on the step (unscaled variables; infinite under the line search,
+    /// and at most [`STEP_LIMIT`]·(1 + ‖x‖∞) in effect).
+    radius: f64,
 }
 
 /// Solves `nlp` from its starting point (see the module documentation for the method).
@@ -297,6 +315,7 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
         feasibility_warm: RefCell::new(WarmStart::new(qp_method)),
         qp_method,
         jac_shape,
+        radius: f64::INFINITY,
     };
     sqp.run()
 }
@@ -448,6 +467,21 @@ impl<'a> Sqp<'a> {
                         step.qp.status, step.elastic
                     ));
                 }
+                // Under the trust region: a fresh quasi-Newton model (an ill-conditioned one
+                // fails the dense QP's factorization), then smaller radii.
+                let radius = self.effective_radius(&point);
+                if radius.is_finite() && radius > QP_RETRY_RADIUS * (1.0 + xnorm) {
+                    if self.model.is_quasi_newton() && !reset_done {
+                        self.model.reset();
+                        reset_done = true;
+                    } else {
+                        self.radius = 0.1 * radius;
+                    }
+                    alpha_in = 0.0;
+                    qp_in = step.qp_iterations;
+                    iteration += 1;
+                    continue;
+                }
                 let status = self.stalled_status(kkt, &point, &jac);
                 return self.finish(status, &point, Some(&lambda_qp));
             }
@@ -510,10 +544,24 @@ impl<'a> Sqp<'a> {
             let predicted: f64 = rows.iter().sum();
             let violation_slope = (predicted > 0.0 && (step.elastic || reduction >= -0.5 * slope))
                 .then_some(-predicted);
-            match self.line_search(&point, &jac, d, slope, violation_slope) {
+            let outcome = match self.options.globalization {
+                Globalization::LineSearch => {
+                    self.line_search(&point, &jac, d, slope, violation_slope)
+                }
+                Globalization::TrustRegion => self.trust_region_step(&point, &jac, d, slope, dhd),
+            };
+            match outcome {
+                LineSearch::Rejected => {
+                    alpha_in = 0.0;
+                    qp_in = step.qp_iterations;
+                }
                 LineSearch::Accepted { point: next, alpha } => {
                     reset_done = false;
-                    if !self.model.is_quasi_newton() && self.sparse_qp() && !step.elastic {
+                    if !self.model.is_quasi_newton()
+                        && self.sparse_qp()
+                        && !step.elastic
+                        && self.options.globalization == Globalization::LineSearch
+                    {
                         self.damp_exact_steps(alpha, dhd, d);
                     }
                     self.lambda = lambda_qp;
@@ -671,6 +719,28 @@ impl<'a> Sqp<'a> {
         }
     }
 
+    /// The QP's step bounds: the variable bounds, and under the trust region the radius.
+    fn step_box(&self, point: &Point) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+        let (mut dl, mut du, bl, bu) = self.bounds_of_step(point);
+        let radius = self.effective_radius(point);
+        if radius.is_finite() {
+            for (l, u) in dl.iter_mut().zip(du.iter_mut()) {
+                *l = l.max(-radius);
+                *u = u.min(radius);
+            }
+        }
+        (dl, du, bl, bu)
+    }
+
+    /// The trust-region radius in effect at `point` (infinite under the line search).
+    fn effective_radius(&self, point: &Point) -> f64 {
+        if self.options.globalization == Globalization::LineSearch {
+            return f64::INFINITY;
+        }
+        let xnorm = point.x.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+        self.radius.min(STEP_LIMIT * (1.0 + xnorm))
+    }
+
     fn bounds_of_step(&self, point: &Point) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
         let x = &point.x;
         let c = &point.values.c;
@@ -686,6 +756,22 @@ impl<'a> Sqp<'a> {
     /// `tolerance·v` (invariant under scaling of c; near a stationary point the reduction
     /// vanishes to first order). Also returns the least linearized violation.
     fn violation_stationary(&self, point: &Point, jac: &CsrMatrix<f64>) -> (bool, f64) {
+        let radius = point.x.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
+        let (now, least) = self.least_violation(point, jac, radius);
+        match least {
+            Some(least) => (now - least <= self.options.tolerance * now, least),
+            None => (false, now),
+        }
+    }
+
+    /// The current linearized ℓ1 violation and the least one reachable within `|d|∞ ≤
+    /// radius` and the variable bounds (None if that subproblem fails).
+    fn least_violation(
+        &self,
+        point: &Point,
+        jac: &CsrMatrix<f64>,
+        radius: f64,
+    ) -> (f64, Option<f64>) {
         let (dl, du, bl, bu) = self.bounds_of_step(point);
         let lin = Linearization {
             a: jac,
@@ -695,17 +781,15 @@ impl<'a> Sqp<'a> {
             bu: &bu,
         };
         let now = lin.violation_now();
-        let radius = point.x.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
         let mut warm = self.feasibility_warm.borrow_mut();
-        match elastic::least_violation(&lin, radius, &mut warm, self.qp_tolerance()) {
-            Some((least, _)) => (now - least <= self.options.tolerance * now, least),
-            None => (false, now),
-        }
+        let least = elastic::least_violation(&lin, radius, &mut warm, self.qp_tolerance())
+            .map(|(least, _)| least);
+        (now, least)
     }
 
     /// Solves the QP at `point`, switching to elastic mode when it is inconsistent.
     fn choose_step(&mut self, point: &Point, jac: &CsrMatrix<f64>) -> StepChoice {
-        let (dl, du, bl, bu) = self.bounds_of_step(point);
+        let (dl, du, bl, bu) = self.step_box(point);
         let g = &point.derivatives.grad;
         let tol = self.qp_tolerance();
         let problem = QpProblem {
@@ -765,6 +849,14 @@ impl<'a> Sqp<'a> {
             .iter()
             .map(|w| w.clamp(floor, ELASTIC_WEIGHT.max(floor)))
             .collect();
+        // Steering asks for a tenth of what the linearization can reach: within the trust
+        // region, if there is one.
+        let radius = self.effective_radius(point);
+        let least = if radius.is_finite() {
+            self.least_violation(point, jac, radius).1.unwrap_or(least)
+        } else {
+            least
+        };
         let best_reduction = (now - least).max(0.0);
         let mut sol = elastic::solve_elastic(h, g, &lin, &rho, &mut self.elastic_warm, tol);
         self.model.restore_multipliers(&mut sol.lambda, jac, &sol.d);
@@ -782,7 +874,10 @@ impl<'a> Sqp<'a> {
             self.model.restore_multipliers(&mut sol.lambda, jac, &sol.d);
             iterations += sol.iterations;
         }
-        self.rho = rho;
+        // A failed subproblem keeps the weights (steering raised them in vain).
+        if sol.status == QpStatus::Optimal {
+            self.rho = rho;
+        }
         StepChoice {
             qp: sol,
             elastic: true,
@@ -1012,6 +1107,111 @@ impl<'a> Sqp<'a> {
         LineSearch::Failed
     }
 
+    /// One trust-region trial (Fletcher's Sℓ1QP; Nocedal & Wright, 2nd ed., Algorithm 18.4):
+    /// the step d, already bounded by the radius, is accepted when the merit function falls
+    /// by at least [`ARMIJO`] times the decrease the model predicts,
+    /// `pred = −(slope + ½dᵀHd)` (slope = ∇fᵀd − Σρᵢ·(linearized decrease of row i)),
+    /// or else after one second-order correction. The radius then grows ×2 when the ratio of
+    /// actual to predicted decrease exceeds 0.75 on a step at the radius, and shrinks to half
+    /// the step when it is below 0.25. A rejected step shrinks the radius to the minimizer of
+    /// the quadratic through φ(0), its slope and φ(x + d), within [0.1, 0.5]·‖d‖∞, and the
+    /// iteration is repeated at the same point; `Failed` once the radius falls below
+    /// [`MIN_STEP`]·(1 + ‖x‖∞). With the exact Hessian the violation cap of the line search
+    /// applies too.
+    fn trust_region_step(
+        &mut self,
+        point: &Point,
+        jac: &CsrMatrix<f64>,
+        d: &[f64],
+        slope: f64,
+        dhd: f64,
+    ) -> LineSearch {
+        let dnorm = d.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+        let xnorm = point.x.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
+        if dnorm <= 1e-15 * xnorm {
+            return LineSearch::Failed;
+        }
+        let radius = self.effective_radius(point);
+        let predicted = -(slope + 0.5 * dhd.max(0.0));
+        let phi0 = self.merit(&point.values);
+        let v0 = merit::l1_violation(&point.values.c, &self.ev.cl, &self.ev.cu);
+        let test = Acceptance {
+            phi0,
+            slope: -predicted,
+            v0,
+            violation_slope: None,
+            violation_cap: if self.model.is_quasi_newton() {
+                f64::INFINITY
+            } else {
+                VIOLATION_GROWTH * v0.max(VIOLATION_FLOOR)
+            },
+            merit_noise: 10.0 * f64::EPSILON * phi0.abs(),
+            violation_noise: 0.0,
+            noise_measured: false,
+        };
+        let x = self.trial(&point.x, d, 1.0);
+        let Ok(evaluated) = self.evaluate(x) else {
+            return LineSearch::Fatal;
+        };
+        let mut phi = f64::INFINITY;
+        if let Some((values, x)) = evaluated {
+            phi = self.merit(&values);
+            if self.accepts(&test, &values, 1.0) {
+                let ratio = (phi0 - phi) / predicted;
+                match self.complete(x, values) {
+                    Err(()) => return LineSearch::Fatal,
+                    Ok(Some(next)) => {
+                        if ratio > 0.75 && dnorm >= 0.8 * radius {
+                            self.radius = 2.0 * radius;
+                        } else if ratio < 0.25 {
+                            self.radius = 0.5 * dnorm;
+                        }
+                        self.log_radius(ratio);
+                        return LineSearch::Accepted {
+                            point: next,
+                            alpha: 1.0,
+                        };
+                    }
+                    Ok(None) => {}
+                }
+            } else {
+                match self.second_order_correction(point, jac, d, &values, &test) {
+                    Err(()) => return LineSearch::Fatal,
+                    Ok(Some(next)) => {
+                        self.log_radius(f64::NAN);
+                        return LineSearch::Accepted {
+                            point: next,
+                            alpha: 1.0,
+                        };
+                    }
+                    Ok(None) => {}
+                }
+            }
+        }
+        let denom = 2.0 * (phi - phi0 + predicted);
+        let shrink = if denom > 0.0 && phi.is_finite() {
+            predicted / denom
+        } else {
+            0.1
+        };
+        self.radius = shrink.clamp(0.1, 0.5) * dnorm;
+        self.log_radius((phi0 - phi) / predicted);
+        if self.radius < MIN_STEP * xnorm {
+            return LineSearch::Failed;
+        }
+        LineSearch::Rejected
+    }
+
+    /// Verbosity 2: the trust-region ratio of the last trial and the new radius.
+    fn log_radius(&self, ratio: f64) {
+        if self.options.verbosity >= 2 {
+            self.say(&format!(
+                "      trust region: ratio {ratio:.3e}, radius {:.3e}",
+                self.radius
+            ));
+        }
+    }
+
     /// The corrected step `x + d + p` with p from the QP whose constraint bounds are shifted
     /// by `c(x+d) − c(x) − J d`. Returns the accepted point, if the merit test passes.
     fn second_order_correction(
@@ -1022,7 +1222,7 @@ impl<'a> Sqp<'a> {
         trial_values: &Values,
         test: &Acceptance,
     ) -> Result<Option<Point>, ()> {
-        let (dl, du, mut bl, mut bu) = self.bounds_of_step(point);
+        let (dl, du, mut bl, mut bu) = self.step_box(point);
         let jd = jac * &DVector::from_column_slice(d);
         for i in 0..bl.len() {
             let shift = trial_values.c[i] - point.values.c[i] - jd[i];
