@@ -1,32 +1,32 @@
 //! Hand-made starts for the gait task files, found by derivative-free search, and the passive
 //! springs' set points that make a file's initial pose an equilibrium.
 //!
-//! `search FILE ROLLOUTS SEED [--knots A..B] [--mirror N] [--until T]`: the searched values
-//! are the knot values at knots `A..B` (default: all but the first and the last) of every
-//! actuator; with `--mirror N` only the first `N` actuators are searched and actuators `N..2N` copy them (a
-//! symmetric gait: the biped's right leg copies its left). The other knots keep the file's
-//! `start`, all slopes are zero, and every value is clamped into the spline box the solver uses
-//! ([`optimize::gait::formulation::Formulation::physical_bounds`]). The score is the sum of
-//! squared pose-constraint violations (m², rad², m²/s², rad²/s²) of one rollout plus 1e-6 × the
-//! effort `∫ΣF²dt` (N²·s), minimized by a (1+1) evolution strategy (Gaussian steps from a
-//! `ChaCha8Rng`, step size ×1.5 after a success and ×0.975 after a failure, within [0.02, 3]
-//! N·m). With `--until T` only the pose constraints at times ≤ T s are scored (and simulated),
-//! e.g. a take-off searched before its landing. Starting from the file's `start`, it prints the
-//! knot values per searched actuator (N·m), to be written into the file's `start` arrays.
+//! `search FILE ROLLOUTS SEED [--knots A..B] [--mirror N] [--until T]`: the searched values are the
+//! knot values at knots `A..B` (default: all but the first and the last) of every actuator; with
+//! `--mirror N` only the first `N` actuators are searched and actuators `N..2N` copy them (a
+//! symmetric gait: the biped's right leg copies its left). The other knots keep the file's `start`,
+//! all slopes are zero, and every value is clamped into the spline box the solver uses
+//! ([`optimize::gait::formulation::Formulation::physical_bounds`]). The score is the sum of squared
+//! pose-constraint violations (m², rad², m²/s², rad²/s²) of one rollout plus 1e-6 × the effort
+//! `∫ΣF²dt` (N²·s), minimized by a (1+1) evolution strategy (Gaussian steps from a `ChaCha8Rng`,
+//! step size ×1.5 after a success and ×0.975 after a failure, within [0.02, 3] N·m). With
+//! `--until T` only the pose constraints at times ≤ T s are scored (and simulated), e.g. a take-off searched
+//! before its landing. Starting from the file's `start`, it prints the knot values per searched
+//! actuator (N·m), to be written into the file's `start` arrays.
 //!
-//! `settle FILE SECONDS ROUNDS`: fixed-point iteration on the joint springs' `rest` values and
-//! the root's initial pose so that the file's joint angles are held with zero actuator force.
-//! Each round simulates SECONDS of zero-force motion from the current start and moves every
-//! sprung joint's rest angle by the joint's drift `q₀ − q(T)`, and a planar root's height and
-//! pitch to their values at `T` (the base sinks onto its contact springs). It prints the rest
-//! values, the root pose and the largest drift and speed at `T` of the last round.
+//! `settle FILE SECONDS ROUNDS`: fixed-point iteration on the joint springs' `rest` values and the
+//! root's initial pose so that the file's joint angles are held with zero actuator force. Each
+//! round simulates SECONDS of zero-force motion from the current start and moves every sprung
+//! joint's rest angle by the joint's drift `q₀ − q(T)`, and a planar root's height and pitch to
+//! their values at `T` (the base sinks onto its contact springs). It prints the rest values, the
+//! root pose and the largest drift and speed at `T` of the last round.
 //!
-//! `show FILE`: the file's start, one rollout: every pose constraint's value and bounds, and
-//! every 0.05 s the root pose, the joint angles and the lowest contact point's height.
+//! `show FILE`: the file's start, one rollout: every pose constraint's value and bounds, and every
+//! 0.05 s the root pose, the joint angles and the lowest contact point's height.
 //!
-//! Usage: `cargo run --release --example gait_start -- search problems/gait/biped_hop.toml 2000
-//! 1 --knots 1..7 --mirror 3`, `… -- settle problems/gait/luxo_leap.toml 2 20`. About 0.02 s
-//! (Luxo) to 0.03 s (biped) of CPU per 1 s rollout at dt = 2e-4 s.
+//! Usage: `cargo run --release --example gait_start -- search problems/gait/biped_hop.toml 2000 1
+//! --knots 1..7 --mirror 3`, `… -- settle problems/gait/luxo_leap.toml 2 20`. About 0.02 s (Luxo)
+//! to 0.03 s (biped) of CPU per 1 s rollout at dt = 2e-4 s.
 
 use optimize::gait::Problem;
 use optimize::gait::character::JointKind;
