@@ -394,7 +394,8 @@ mod tests {
     #[test]
     fn link_rotation_matches_world_points() {
         let p = problem("luxo_leap");
-        let motion = sample(&p, &vec![0.0; 3 * 14], 0.1).unwrap();
+        let parameters = p.model.actuators.len() * p.knot_grid().per_actuator();
+        let motion = sample(&p, &vec![0.0; parameters], 0.1).unwrap();
         for frame in &motion.poses {
             for x in frame {
                 let (q, r) = pose(x);
