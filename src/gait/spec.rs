@@ -383,6 +383,10 @@ pub struct TaskSpec {
     pub max: Option<f64>,
     /// Equality target (quantity's unit); excludes `min` and `max`.
     pub value: Option<f64>,
+    /// A shaping row: part of each trial's first solve only, a guide towards the kind of
+    /// motion the task implies (e.g. "land flat"), not part of the task or its success test.
+    #[serde(default)]
+    pub shaping: bool,
 }
 
 /// A box of states `(lower, upper)`, each `q` then `v` (the model's units).
@@ -416,6 +420,9 @@ pub struct Problem {
     pub start: Vec<Vec<f64>>,
     /// Pose constraints, ordered by time.
     pub constraints: Vec<PoseConstraint>,
+    /// Shaping rows (`[[task]] shaping = true`), ordered by time: added to the constraints in
+    /// each trial's first solve only ([`Problem::shaped`]).
+    pub shaping: Vec<PoseConstraint>,
     /// Trial settings.
     pub trials: TrialSettings,
     /// Solver options table.
@@ -423,6 +430,15 @@ pub struct Problem {
 }
 
 impl Problem {
+    /// The problem whose constraints are the task's and the shaping rows together (ordered by
+    /// time), without shaping rows of its own.
+    pub fn shaped(&self) -> Problem {
+        let mut p = self.clone();
+        p.constraints.extend(p.shaping.drain(..));
+        p.constraints.sort_by(|a, b| a.time.total_cmp(&b.time));
+        p
+    }
+
     /// The control splines' knot grid: `knots` knots spread evenly over the horizon (s).
     pub fn knot_grid(&self) -> KnotGrid {
         KnotGrid {
@@ -767,8 +783,12 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
         }
         start.push(s);
     }
-    let constraints = build_tasks(source, &file, &model, &index)?;
-    let last = constraints.iter().map(|c| c.time).fold(0.0, f64::max);
+    let (constraints, shaping) = build_tasks(source, &file, &model, &index)?;
+    let last = constraints
+        .iter()
+        .chain(&shaping)
+        .map(|c| c.time)
+        .fold(0.0, f64::max);
     let horizon = file.controls.horizon.unwrap_or(last);
     let hat = path(&["controls".into(), "horizon".into()]);
     if !(horizon > 0.0 && horizon.is_finite()) {
@@ -820,6 +840,7 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
         initial_box,
         start,
         constraints,
+        shaping,
         trials,
         solver: file.solver,
     })
@@ -1184,9 +1205,10 @@ fn build_tasks(
     file: &FileSpec,
     model: &Model,
     index: &HashMap<&str, usize>,
-) -> Result<Vec<PoseConstraint>, InputError> {
-    let mut out = Vec::new();
+) -> Result<(Vec<PoseConstraint>, Vec<PoseConstraint>), InputError> {
+    let (mut tasks, mut shaping) = (Vec::new(), Vec::new());
     for (k, t) in file.task.iter().enumerate() {
+        let out = if t.shaping { &mut shaping } else { &mut tasks };
         let at = |key: &'static str| vec![Key::Name("task"), Key::Index(k), Key::Name(key)];
         let steps = t.time / file.dt;
         if !(t.time > 0.0 && t.time.is_finite())
@@ -1361,8 +1383,9 @@ fn build_tasks(
             }
         }
     }
-    out.sort_by(|a, b| a.time.total_cmp(&b.time));
-    Ok(out)
+    tasks.sort_by(|a, b| a.time.total_cmp(&b.time));
+    shaping.sort_by(|a, b| a.time.total_cmp(&b.time));
+    Ok((tasks, shaping))
 }
 
 #[cfg(test)]
@@ -1422,6 +1445,20 @@ min = 0.1
         );
         // Inertia from the capsule shape: centre of mass at its middle.
         assert_eq!(p.model.links[1].inertia.com.0, [0.15, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn shaping_rows_are_kept_apart_and_merged_in_time_order() {
+        let text = BASE.to_string()
+            + "[[task]]\ntime = 0.2\nquantity = \"com_position\"\naxis = \"y\"\nmin = 0.4\nshaping = true\n";
+        let p = load(&text).unwrap();
+        assert_eq!(p.constraints.len(), 1);
+        assert_eq!(p.shaping.len(), 1);
+        assert_eq!(p.horizon, 0.5);
+        let shaped = p.shaped();
+        assert!(shaped.shaping.is_empty());
+        let times: Vec<f64> = shaped.constraints.iter().map(|c| c.time).collect();
+        assert_eq!(times, vec![0.2, 0.5]);
     }
 
     #[test]

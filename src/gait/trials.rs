@@ -21,6 +21,9 @@
 //! tolerance over one that does not, then the lower cost among such points, else the lower
 //! violation sum. The phase's point is replaced only by a better one.
 //!
+//! Shaping rows (`[[task]] shaping = true`) join the task's rows in one first SQP solve; the
+//! solves above start from its end point, and the trial is judged on the task's rows only.
+//!
 //! Classification, with `tol` = `[trials] tolerance` in each constraint's unit and the violation
 //! of row `r` = `max(lower − c, c − upper, 0)`:
 //! - Success: every violation ≤ tol; Marginal: every violation ≤ 10·tol;
@@ -310,6 +313,23 @@ pub fn solve_trial(
     }
     let mut remaining = options.clone();
     let mut log: Vec<IterationRecord> = Vec::new();
+    if !problem.shaping.is_empty() {
+        // The shaping solve: the task's rows and the shaping rows together; the SQP solves
+        // below start from its end point.
+        let shaped_problem = problem.shaped();
+        let shaped = Formulation::new(&shaped_problem);
+        let params = f.reduced().parameters();
+        let snlp = shaped.starting_at(&x[..params]);
+        let solution = solve(&snlp, options);
+        iterations += solution.iterations;
+        evaluations.functions += solution.evaluations.functions;
+        evaluations.derivatives += solution.evaluations.derivatives;
+        evaluations.hessians += solution.evaluations.hessians;
+        log = solution.log;
+        let mut current = snlp.physical(&solution.x);
+        current.truncate(params);
+        nlp = f.starting_at(&current);
+    }
     let mut last: Option<Solution> = None;
     let mut unproductive = 0;
     for attempt in 0..MAX_SOLVES {
@@ -575,6 +595,37 @@ mod tests {
         assert!(!improves(Some(&less), Some(&unmet), tol));
         assert!(improves(None, Some(&unmet), tol));
         assert!(!improves(Some(&unmet), None, tol));
+    }
+
+    /// Shaping rows add a first solve but are not part of the trial's assessment: an
+    /// unreachable one (the head 100 m up) leaves the trial judged on the task's rows.
+    #[test]
+    fn shaping_rows_guide_the_first_solve_only() {
+        let plain = golden("pogo_crouch_short");
+        let mut shaped = plain.clone();
+        let mut row = plain.constraints[0].clone();
+        row.time = 0.25;
+        row.step /= 2;
+        row.lower = 100.0;
+        row.upper = f64::INFINITY;
+        shaped.shaping.push(row);
+        let options = Options {
+            max_iterations: 4,
+            verbosity: 0,
+            ..Options::default()
+        };
+        let a = &run_trials(&plain, 8, Some(1), &options)[0];
+        let b = &run_trials(&shaped, 8, Some(1), &options)[0];
+        let rows = |r: &TrialResult| r.end.as_ref().map(|e| e.violations.len());
+        assert_eq!(rows(b), Some(plain.constraints.len()));
+        assert_eq!(rows(a), rows(b));
+        assert!(
+            b.iterations > a.iterations,
+            "{} vs {}",
+            b.iterations,
+            a.iterations
+        );
+        assert_ne!(a.x, b.x);
     }
 
     /// A restart is productive only if both points miss the tolerance and the violation sum
