@@ -458,16 +458,8 @@ fn prune(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::truss::model::{Joint, JointKind, Support, Vec3};
-
-    fn joint(x: f64, y: f64, kind: JointKind) -> Joint {
-        Joint {
-            position: Vec3::new(x, y, 0.0),
-            kind,
-            name: None,
-            loads: vec![Vec3::zeros()],
-        }
-    }
+    use crate::truss::model::{JointKind, Support};
+    use crate::truss::testing::planar_joint as joint;
 
     /// Anchors 0 and 1 at x = 0 and 4; free joints 2, 3, 4 on the tie at x = 1, 2, 3 and a load
     /// joint 5 above x = 2. Beams: the tie 0–2–3–4–1, a hanger 5–3, and a compression run
