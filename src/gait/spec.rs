@@ -434,7 +434,7 @@ impl Problem {
     /// time), without shaping rows of its own.
     pub fn shaped(&self) -> Problem {
         let mut p = self.clone();
-        p.constraints.extend(p.shaping.drain(..));
+        p.constraints.append(&mut p.shaping);
         p.constraints.sort_by(|a, b| a.time.total_cmp(&b.time));
         p
     }

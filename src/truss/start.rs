@@ -45,6 +45,18 @@
 //! members off the optimal face end with forces of the order of the solver tolerance (1e-10
 //! relative), far below `IDLE_FRACTION`.
 //!
+//! Tension runs: a free joint without load on a straight tie (two collinear tension members,
+//! plus at most hangers carrying `RUN_SIDE_FRACTION` of the tie force, which the self-weight LP
+//! adds to hold up the joint's own lumped weight) adds nothing to the design: tension mass
+//! k_T·t·L is linear in length, so the run weighs the same as one member between its far ends,
+//! and the joint can slide along the tie at no cost, a flat direction of the geometry problem
+//! (and chains of such joints on a line collapse pairwise to l_min during the solve). Such joints
+//! are removed: one member joining the run's far ends is added to the ground structure and the
+//! LP solved again, which then needs no hangers (roof trusses on a 1 m lattice: 9–11 joints on
+//! the tie, each a flat direction, gone). Compression runs are kept:
+//! the Euler mass k_C·√c·L² of two halves is half that of the whole member, so an intermediate
+//! joint is a real design choice there.
+//!
 //! Symmetry: the LP is solved on the whole ground structure; with mirror planes the forces are
 //! averaged with their mirror images plane by plane (the average of two balanced force sets is
 //! balanced when the loads are symmetric), so that pruning keeps mirror pairs together; the
@@ -60,6 +72,14 @@ use super::plastic::{self, LpMethod};
 
 /// Beams carrying at most this fraction of the largest |λ| in every case are idle.
 pub const IDLE_FRACTION: f64 = 1e-6;
+
+/// A joint on a straight tie is merged away when its other members together carry at most
+/// this fraction of the tie's force: hangers that only hold up the joint's own lumped weight
+/// (module header, "Tension runs").
+pub const RUN_SIDE_FRACTION: f64 = 1e-3;
+
+/// Layout LP re-solves after tension runs were replaced.
+const RUN_PASSES: usize = 3;
 
 /// The result of stage 1.
 #[derive(Debug, Clone, PartialEq)]
@@ -151,13 +171,37 @@ fn clears_spheres(structure: &Structure, beam: &Beam, obstacles: &[Obstacle]) ->
 }
 
 /// Solves the LP on the beams marked `usable` (with the beams' estimated weight lumped on their
-/// ends if `self_weight`), symmetrizes, prunes.
+/// ends if `self_weight`), symmetrizes, replaces tension runs by single members and solves
+/// again on the ground structure with those members added (at most `RUN_PASSES` times: the new
+/// members need no hangers, which the LP then drops), prunes.
 fn solve_on(
     structure: &Structure,
     settings: &Settings,
     usable: &[bool],
     self_weight: bool,
 ) -> Result<LayoutStart, LpError> {
+    let mut ground = structure.clone();
+    let mut usable = usable.to_vec();
+    let (mut forces, mut cost) = lp_forces(&ground, settings, &usable, self_weight)?;
+    for _ in 0..RUN_PASSES {
+        let Some((merged, _)) = merge_tension_runs(&ground, forces.clone(), settings.max_length)
+        else {
+            break;
+        };
+        usable.resize(merged.beams.len(), true);
+        ground = merged;
+        (forces, cost) = lp_forces(&ground, settings, &usable, self_weight)?;
+    }
+    Ok(prune(&ground, forces, cost, &settings.symmetry))
+}
+
+/// The LP forces (N, `[case][beam]`, symmetrized) and cost per case of [`solve_on`].
+fn lp_forces(
+    structure: &Structure,
+    settings: &Settings,
+    usable: &[bool],
+    self_weight: bool,
+) -> Result<(Vec<Vec<f64>>, Vec<f64>), LpError> {
     let kept: Vec<usize> = (0..structure.beams.len()).filter(|&j| usable[j]).collect();
     let force_scale = (structure.joints.iter())
         .flat_map(|j| j.loads.iter())
@@ -214,7 +258,86 @@ fn solve_on(
             }
         }
     }
-    Ok(prune(structure, forces, cost, &settings.symmetry))
+    Ok((forces, cost))
+}
+
+/// Replaces every tension run through a free joint by one member (module header, "Tension
+/// runs"): a free joint without external load whose two strongest members are collinear and
+/// in tension in every case, the others together carrying at most [`RUN_SIDE_FRACTION`] of
+/// them, loses all its members; a member joining the far ends of the two carries their mean
+/// force (added to the ground-structure member there, if any). Repeated until no joint
+/// qualifies, so a chain of such joints becomes one member. Not where the merged member would
+/// exceed `max_length` (m). Forces in N, `[case][beam]`; returns the structure with the added
+/// members and the forces (the replaced members keep zero force), or None when no joint
+/// qualifies.
+fn merge_tension_runs(
+    structure: &Structure,
+    mut forces: Vec<Vec<f64>>,
+    max_length: Option<f64>,
+) -> Option<(Structure, Vec<Vec<f64>>)> {
+    let largest = (forces.iter().flatten())
+        .map(|f| f.abs())
+        .fold(0.0, f64::max);
+    let idle = IDLE_FRACTION * largest;
+    let mut beams = structure.beams.clone();
+    let mut index: std::collections::HashMap<Beam, usize> =
+        beams.iter().enumerate().map(|(j, b)| (*b, j)).collect();
+    let joints = &structure.joints;
+    let unloaded = |i: usize| joints[i].loads.iter().all(|f| f.norm() == 0.0);
+    let mut changed = false;
+    loop {
+        let mut incident = vec![Vec::new(); joints.len()];
+        for (j, b) in beams.iter().enumerate() {
+            if forces.iter().any(|f| f[j].abs() > idle) {
+                for e in b.ends {
+                    incident[e].push(j);
+                }
+            }
+        }
+        let peak = |j: usize| forces.iter().map(|f| f[j].abs()).fold(0.0, f64::max);
+        let run = (0..joints.len()).find_map(|i| {
+            if !joints[i].is_free() || !unloaded(i) || incident[i].len() < 2 {
+                return None;
+            }
+            let mut members = incident[i].clone();
+            members.sort_by(|&p, &q| peak(q).total_cmp(&peak(p)));
+            let (j1, j2, side) = (members[0], members[1], &members[2..]);
+            let tension = |j: usize| forces.iter().all(|f| f[j] < -idle);
+            let side_force: f64 = side.iter().map(|&j| peak(j)).sum();
+            if !tension(j1) || !tension(j2) || side_force > RUN_SIDE_FRACTION * peak(j2) {
+                return None;
+            }
+            let far = |j: usize| beams[j].ends[0] + beams[j].ends[1] - i;
+            let (a, b) = (far(j1), far(j2));
+            let p = joints[i].position;
+            let (u, v) = (joints[a].position - p, joints[b].position - p);
+            let straight = u.cross(&v).norm() <= 1e-9 * u.norm() * v.norm() && u.dot(&v) < 0.0;
+            let fits = max_length.is_none_or(|l| (u - v).norm() <= l);
+            (a != b && straight && fits).then(|| (members, Beam::new(a, b)))
+        });
+        let Some((members, merged)) = run else {
+            break;
+        };
+        changed = true;
+        let target = *index.entry(merged).or_insert_with(|| {
+            beams.push(merged);
+            for f in forces.iter_mut() {
+                f.push(0.0);
+            }
+            beams.len() - 1
+        });
+        for f in forces.iter_mut() {
+            f[target] += 0.5 * (f[members[0]] + f[members[1]]);
+            for &j in &members {
+                f[j] = 0.0;
+            }
+        }
+    }
+    let merged = Structure {
+        joints: joints.clone(),
+        beams,
+    };
+    changed.then_some((merged, forces))
 }
 
 /// Marks the mirror images (under every plane, repeatedly) of the kept joints as kept. Generated
@@ -329,5 +452,80 @@ fn prune(
         forces: start,
         parts,
         cost,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::truss::model::{JointKind, Support};
+    use crate::truss::testing::planar_joint as joint;
+
+    /// Anchors 0 and 1 at x = 0 and 4; free joints 2, 3, 4 on the tie at x = 1, 2, 3 and a load
+    /// joint 5 above x = 2. Beams: the tie 0–2–3–4–1, a hanger 5–3, and a compression run
+    /// 0–6–5 through free joint 6.
+    fn tie() -> Structure {
+        let free = || JointKind::Free;
+        let pinned = || JointKind::Anchor(Support::Pinned);
+        Structure {
+            joints: vec![
+                joint(0.0, 0.0, pinned()),
+                joint(4.0, 0.0, pinned()),
+                joint(1.0, 0.0, free()),
+                joint(2.0, 0.0, free()),
+                joint(3.0, 0.0, free()),
+                joint(2.0, 2.0, JointKind::Load),
+                joint(1.0, 1.0, free()),
+            ],
+            beams: vec![
+                Beam::new(0, 2),
+                Beam::new(2, 3),
+                Beam::new(3, 4),
+                Beam::new(4, 1),
+                Beam::new(5, 3),
+                Beam::new(0, 6),
+                Beam::new(6, 5),
+            ],
+        }
+    }
+
+    #[test]
+    fn a_tie_through_free_joints_becomes_one_member_and_compression_runs_stay() {
+        let s = tie();
+        // Tie forces (tension) differing by the joints' weight; a hanger of 1e-4 of the tie.
+        let forces = vec![vec![-1000.0, -1000.2, -1000.2, -1000.0, -0.1, 700.0, 700.0]];
+        let (merged, f) = merge_tension_runs(&s, forces, None).expect("a run to merge");
+        // Joint by joint (0–3, then 0–4, then 0–1): the last member, 0–1, carries the tie;
+        // every other member of the run and the hanger is emptied.
+        let last = merged.beams.len() - 1;
+        assert_eq!(merged.beams[last], Beam::new(0, 1));
+        assert!((f[0][last] + 1000.0).abs() < 0.2, "{}", f[0][last]);
+        for j in (0..last).filter(|&j| j != 5 && j != 6) {
+            assert_eq!(f[0][j], 0.0, "beam {j}");
+        }
+        // The compression run through joint 6 is kept as it was.
+        assert_eq!((f[0][5], f[0][6]), (700.0, 700.0));
+        // A hanger carrying more than RUN_SIDE_FRACTION of the tie keeps joint 3; the joints
+        // on either side still go, joined to 3.
+        let forces = vec![vec![-1000.0, -1000.0, -1000.0, -1000.0, -5.0, 700.0, 700.0]];
+        let (merged, f) = merge_tension_runs(&s, forces, None).unwrap();
+        let carried = |a: usize, b: usize| {
+            let j = merged
+                .beams
+                .iter()
+                .position(|&x| x == Beam::new(a, b))
+                .unwrap();
+            f[0][j]
+        };
+        assert_eq!(
+            (carried(0, 3), carried(1, 3), carried(3, 5)),
+            (-1000.0, -1000.0, -5.0)
+        );
+        // A merged member longer than l_max is not formed: 0–3 is 2 m.
+        let forces = vec![vec![-1000.0, -1000.0, -1000.0, -1000.0, -5.0, 700.0, 700.0]];
+        assert!(merge_tension_runs(&s, forces, Some(1.5)).is_none());
+        // Nothing to merge in compression.
+        let forces = vec![vec![1000.0, 1000.0, 1000.0, 1000.0, 0.0, 700.0, 700.0]];
+        assert!(merge_tension_runs(&s, forces, None).is_none());
     }
 }

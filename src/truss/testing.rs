@@ -6,6 +6,18 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::solver::Nlp;
 
+use super::model::{Joint, JointKind, Vec3};
+
+/// A joint at (x, y, 0) m of the given kind, without name, with one zero load case.
+pub fn planar_joint(x: f64, y: f64, kind: JointKind) -> Joint {
+    Joint {
+        position: Vec3::new(x, y, 0.0),
+        kind,
+        name: None,
+        loads: vec![Vec3::zeros()],
+    }
+}
+
 /// Largest scaled discrepancies found by [`compare_derivatives`].
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Discrepancy {

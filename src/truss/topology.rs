@@ -257,16 +257,8 @@ pub fn clean(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::truss::model::{Joint, JointKind, Support};
-
-    fn joint(x: f64, y: f64, kind: JointKind) -> Joint {
-        Joint {
-            position: Vec3::new(x, y, 0.0),
-            kind,
-            name: None,
-            loads: vec![Vec3::zeros()],
-        }
-    }
+    use crate::truss::model::{JointKind, Support};
+    use crate::truss::testing::planar_joint as joint;
 
     fn settings() -> RoundSettings {
         RoundSettings {

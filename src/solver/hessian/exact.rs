@@ -17,13 +17,19 @@
 //! the one of the unmodified H and the fast local convergence of the exact Hessian is kept.
 //! (The SQP first decouples the variables held at a bound, see `held`, so that this test
 //! concerns the free variables only, as the second-order conditions do.) When no γ succeeds,
-//! the shift δI is added to `H + γA_EᵀA_E` over the equality rows E with
-//! γ = 1e2 (relative): as γ → ∞ this is IPOPT's inertia correction of the KKT matrix with those
-//! rows, so δ corrects the reduced Hessian only, where a shift of H alone must also overcome
-//! the indefiniteness across the rows (truss: reduced eigenvalues ≥ −0.8 against a shift of
-//! ~6e3 for H alone, at a Hessian scale of 6e3). Inequality rows are left out of that base: an
-//! inequality the QP should leave would be held by the γ term (HS108 and HS116 then ended at
-//! other points).
+//! the shift δI is added to `H + γA_EᵀA_E` over the equality rows E with γ = [`FALLBACK_GAMMA`]
+//! (relative): as γ → ∞ this is IPOPT's inertia correction of the KKT matrix with those rows,
+//! so δ corrects the reduced Hessian only, where a shift of H alone must also overcome the
+//! indefiniteness across the rows (truss: reduced eigenvalues ≥ −0.8 against a shift of ~6e3
+//! for H alone, at a Hessian scale of 6e3). γ must be large: the indefiniteness across the
+//! rows leaks through the term as −(coupling)²/(γ·σ²), σ the rows' singular values, and a
+//! truss's balance rows are ill-conditioned (σ_min below 1e-3 of σ_max): with γ = 1e2 a roof
+//! truss needed shifts of 0.3–0.6 × the Hessian scale where its reduced Hessian needed 7e-3
+//! (steps of 1e-4 for thousands of iterations); γ = 1e4 (the largest of `GAMMAS`) cut that
+//! 20-fold. 1e6 came within 2% of the reduced shift on the truss, but two octahedral films
+//! (golden `cmc_octahedron_square_short`, `_hexagon_short`) then ended Infeasible / Stalled
+//! instead of Optimal. Inequality rows are left out of that base: an inequality the QP should
+//! leave would be held by the γ term (with them HS108 ends at another KKT point).
 //!
 //! Multipliers: the QP with `H + γΣuₖuₖᵀ` returns row multipliers offset by `γ·uₖᵀd/‖aₖ‖`,
 //! nonzero where the linearized residual is (see [`Convexified::row_weight`]); the SQP adds
@@ -90,8 +96,9 @@ const DELTA_MAX: f64 = 1e40;
 const PIVOT_MIN: f64 = 1e-10;
 /// Augmentation weights tried, relative to the Hessian scale over the row scale.
 const GAMMAS: [f64; 3] = [1.0, 1e2, 1e4];
-/// Augmentation weight under the shift when none of `GAMMAS` suffices (relative).
-pub const FALLBACK_GAMMA: f64 = 1e2;
+/// Augmentation weight under the shift when none of `GAMMAS` suffices (relative; see the
+/// module header for why it is large, and not larger).
+pub const FALLBACK_GAMMA: f64 = 1e4;
 
 /// `max(1, maxᵢ|Hᵢᵢ|)`.
 fn scale_of(h: &DMatrix<f64>) -> f64 {
@@ -234,6 +241,25 @@ mod tests {
         }
         assert!(on_rows.last() < 0.05 && on_rows.last() > 0.0);
         assert!(alone.last() > 1.0);
+    }
+
+    #[test]
+    fn the_shift_follows_the_reduced_hessian_despite_a_strong_coupling_across_the_row() {
+        // h = [[0, 100], [100, −0.01]] with the row (1, 0): the reduced Hessian is −0.01, but
+        // the coupling 100 across the row leaks through the term γ·e₀e₀ᵀ as −100²/γ, so that
+        // with γ = 1e2 a shift of ~1e2 was needed; with γ = FALLBACK_GAMMA it is 0.01 + 1e4/γ.
+        let h = assemble_dense(2, &[0, 1, 1], &[0, 0, 1], &[0.0, 100.0, -0.01]);
+        let rows = DMatrix::from_row_slice(1, 2, &[1.0, 0.0]);
+        let mut shift = InertiaShift::default();
+        for _ in 0..12 {
+            let c = shift.convexify_with_rows(&h, &rows, 1).unwrap();
+            assert!(c.matrix.cholesky().is_some());
+        }
+        // The schedule settles within its factor 8 of the least shift, 0.01 + 1e4/γ.
+        // (Hessian scale 1, so shifts are absolute here.)
+        let least = 0.01 + 1e4 / FALLBACK_GAMMA;
+        let last = shift.last();
+        assert!(last >= least && last < 8.0 * least, "{last} vs {least}");
     }
 
     #[test]
