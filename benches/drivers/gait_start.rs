@@ -7,7 +7,7 @@
 //! symmetric gait: the biped's right leg copies its left). The other knots keep the file's `start`,
 //! all slopes are zero, and every value is clamped into the spline box the solver uses
 //! ([`optimize::gait::formulation::Formulation::physical_bounds`]). The score is the sum of squared
-//! pose-constraint violations (m², rad², m²/s², rad²/s²) of one rollout plus 1e-6 × the effort
+//! pose-constraint violations (task and shaping rows; m², rad², m²/s², rad²/s²) of one rollout plus 1e-6 × the effort
 //! `∫ΣF²dt` (N²·s), minimized by a (1+1) evolution strategy (Gaussian steps from a `ChaCha8Rng`,
 //! step size ×1.5 after a success and ×0.975 after a failure, within [0.02, 3] N·m). With
 //! `--until T` only the pose constraints at times ≤ T s are scored (and simulated), e.g. a take-off searched
@@ -51,10 +51,13 @@ fn main() {
     if args.len() < 3 {
         usage();
     }
-    let mut problem = optimize::gait::load(std::path::Path::new(&args[2])).unwrap_or_else(|e| {
-        eprintln!("{e}");
-        std::process::exit(2)
-    });
+    // The file's shaping rows (`[[task]] shaping = true`) are scored like its task rows.
+    let mut problem = optimize::gait::load(std::path::Path::new(&args[2]))
+        .unwrap_or_else(|e| {
+            eprintln!("{e}");
+            std::process::exit(2)
+        })
+        .shaped();
     match args[1].as_str() {
         "show" => show(&problem),
         _ if args.len() < 5 => usage(),
