@@ -1400,6 +1400,13 @@ mod tests {
         })
     }
 
+    /// The error of a file that must fail, and the line of `text` it points at.
+    fn error_and_line(text: &str) -> (String, String) {
+        let e = load(text).unwrap_err();
+        let (line, _) = e.position.unwrap();
+        (e.message, text.lines().nth(line - 1).unwrap().to_string())
+    }
+
     const BASE: &str = r#"
 dt = 1e-3
 [[link]]
@@ -1481,14 +1488,12 @@ min = 0.1
         ];
         for (from, to, msg) in cases {
             let text = BASE.replacen(from, to, 1);
-            let e = load(&text).unwrap_err();
-            assert!(e.message.contains(msg), "{}: {}", to, e.message);
-            let (line, _) = e.position.unwrap();
-            let bad = text.lines().nth(line - 1).unwrap();
+            let (message, bad) = error_and_line(&text);
+            assert!(message.contains(msg), "{to}: {message}");
             let key = to.split([' ', '=']).next().unwrap();
             assert!(
                 bad.contains(key) || bad.contains("[[task]]") || bad.contains("quantity"),
-                "{to}: line {line} `{bad}`"
+                "{to}: `{bad}`"
             );
         }
     }
@@ -1501,15 +1506,12 @@ min = 0.1
                 &format!("[controls]\nshooting_segments = {bad}\n[[task]]"),
                 1,
             );
-            let e = load(&text).unwrap_err();
+            let (message, at) = error_and_line(&text);
             assert!(
-                e.message.contains("`shooting_segments` must be in 1..=500"),
-                "{}",
-                e.message
+                message.contains("`shooting_segments` must be in 1..=500"),
+                "{message}"
             );
-            let (line, _) = e.position.unwrap();
-            let at = text.lines().nth(line - 1).unwrap();
-            assert!(at.contains("shooting_segments"), "line {line} `{at}`");
+            assert!(at.contains("shooting_segments"), "`{at}`");
         }
     }
 
@@ -1536,11 +1538,9 @@ min = 0.1
             ("shooting_segments = 2\nshooting_times = [0.1]", "not both"),
         ] {
             let text = BASE.replacen("[[task]]", &format!("[controls]\n{bad}\n[[task]]"), 1);
-            let e = load(&text).unwrap_err();
-            assert!(e.message.contains(says), "{bad}: {}", e.message);
-            let (line, _) = e.position.unwrap();
-            let at = text.lines().nth(line - 1).unwrap();
-            assert!(at.contains("shooting_times"), "line {line} `{at}`");
+            let (message, at) = error_and_line(&text);
+            assert!(message.contains(says), "{bad}: {message}");
+            assert!(at.contains("shooting_times"), "`{at}`");
         }
     }
 

@@ -756,12 +756,17 @@ impl<'a> Sqp<'a> {
     /// `tolerance·v` (invariant under scaling of c; near a stationary point the reduction
     /// vanishes to first order). Also returns the least linearized violation.
     fn violation_stationary(&self, point: &Point, jac: &CsrMatrix<f64>) -> (bool, f64) {
-        let radius = point.x.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
-        let (now, least) = self.least_violation(point, jac, radius);
+        let (now, least) = self.least_violation(point, jac, Self::stationarity_radius(point));
         match least {
             Some(least) => (now - least <= self.options.tolerance * now, least),
             None => (false, now),
         }
+    }
+
+    /// Radius of the box in which [`Self::violation_stationary`] looks for a lower violation:
+    /// max(1, ‖x‖∞).
+    fn stationarity_radius(point: &Point) -> f64 {
+        point.x.iter().fold(1.0_f64, |a, v| a.max(v.abs()))
     }
 
     /// The current linearized ℓ1 violation and the least one reachable within `|d|∞ ≤
@@ -850,9 +855,9 @@ impl<'a> Sqp<'a> {
             .map(|w| w.clamp(floor, ELASTIC_WEIGHT.max(floor)))
             .collect();
         // Steering asks for a tenth of what the linearization can reach: within the trust
-        // region, if there is one.
+        // region, if it is tighter than the stationarity test's box.
         let radius = self.effective_radius(point);
-        let least = if radius.is_finite() {
+        let least = if radius < Self::stationarity_radius(point) {
             self.least_violation(point, jac, radius).1.unwrap_or(least)
         } else {
             least

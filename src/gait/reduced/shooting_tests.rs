@@ -27,6 +27,19 @@ fn random_parameters(nlp: &Reduced<'_>, seed: u64) -> Vec<f64> {
         .collect()
 }
 
+/// The exact Jacobian values at `x` (pattern order), asserted equal to the dual-number
+/// oracle's to 1e-9 (relative, see `gap_to_oracle`).
+fn jacobian_matching_the_oracle(nlp: &Reduced<'_>, x: &[f64], what: &str) -> Vec<f64> {
+    let d = nlp.dims();
+    let (mut grad, mut fast, mut oracle) =
+        (vec![0.0; d.n], vec![0.0; d.jac_nnz], vec![0.0; d.jac_nnz]);
+    nlp.eval_derivatives(x, &mut grad, &mut fast).unwrap();
+    nlp.jacobian_by_parameter_duals(x, &mut oracle).unwrap();
+    let gap = gap_to_oracle(&fast, &oracle);
+    assert!(gap < 1e-9, "{what}: sensitivities vs duals {gap}");
+    fast
+}
+
 /// Fills the segment start states of `x` from the rollout, then moves each by up to ±1e-6
 /// (seeded), so the continuity rows have nonzero defects.
 fn start_states_off_the_rollout(nlp: &Reduced<'_>, x: &mut [f64], seed: u64) {
@@ -110,12 +123,7 @@ fn multiple_shooting_derivatives_match_central_differences() {
         let mut x = random_parameters(&nlp, 3);
         x.resize(d.n, 0.0);
         start_states_off_the_rollout(&nlp, &mut x, 4);
-        let (mut grad, mut fast, mut oracle) =
-            (vec![0.0; d.n], vec![0.0; d.jac_nnz], vec![0.0; d.jac_nnz]);
-        nlp.eval_derivatives(&x, &mut grad, &mut fast).unwrap();
-        nlp.jacobian_by_parameter_duals(&x, &mut oracle).unwrap();
-        let gap = gap_to_oracle(&fast, &oracle);
-        assert!(gap < 1e-9, "{name}: sensitivities vs duals {gap}");
+        jacobian_matching_the_oracle(&nlp, &x, name);
         let report = check_derivatives(&nlp, &x, &crate::gait::check_options()).unwrap();
         println!(
             "{name}, S = {segments}: n = {}, m = {}, max error {:.2e} (checked {}, failed {})",
@@ -226,12 +234,7 @@ fn initial_state_derivatives_match_central_differences() {
         let mut x = random_motion(&nlp, 7);
         x.resize(d.n, 0.0);
         start_states_off_the_rollout(&nlp, &mut x, 8);
-        let (mut grad, mut fast, mut oracle) =
-            (vec![0.0; d.n], vec![0.0; d.jac_nnz], vec![0.0; d.jac_nnz]);
-        nlp.eval_derivatives(&x, &mut grad, &mut fast).unwrap();
-        nlp.jacobian_by_parameter_duals(&x, &mut oracle).unwrap();
-        let gap = gap_to_oracle(&fast, &oracle);
-        assert!(gap < 1e-9, "{interior:?}: sensitivities vs duals {gap}");
+        let fast = jacobian_matching_the_oracle(&nlp, &x, &format!("{interior:?}"));
         let (mut rows, mut cols) = (vec![0; d.jac_nnz], vec![0; d.jac_nnz]);
         nlp.jacobian_structure(&mut rows, &mut cols);
         let mut dense = vec![0.0; d.m * d.n];
