@@ -185,6 +185,7 @@ impl Problem {
             merge_tolerance: self.spec.rounds.merge_tolerance,
             prune: self.spec.rounds.prune,
             remove_crossings: self.spec.rounds.remove_crossings,
+            max_length: self.spec.max_length,
         }
     }
 }

@@ -12,7 +12,19 @@
 //! 3. crossings (optional): of two beams that cross (segments closer than 1e-9 of the structure
 //!    size, meeting inside both, sharing no joint) the one with the smaller peak |λ| is dropped;
 //! 4. dangling: free joints left with at most one beam are removed with that beam (such a beam
-//!    carries no force in balance), repeatedly;
+//!    carries no force in balance), repeatedly; and tension runs: a free joint left with exactly
+//!    two beams, both in tension in every case and collinear within [`RUN_ANGLE`], is removed
+//!    and the two become one beam between their far ends carrying their mean force (added to a
+//!    beam already there), unless that beam would exceed l_max. Such a joint is a flat
+//!    direction of the next solve: tension mass k_T·t·L is linear in length, so it can slide
+//!    along the run at no cost (the layout start removes the runs of its LP, see
+//!    [`super::start`]; these are the runs a solve leaves when a joint's other members go
+//!    idle). The singular reduced Hessian along the slide makes the exact Hessian's
+//!    convexification shift every direction (`solver::hessian::exact`: a direction of zero
+//!    reduced curvature coupled across the rows needs δ ≈ 1/`FALLBACK_GAMMA` of the Hessian
+//!    scale), and the solve crawls. The joint's own lumped weight kinks the run by about
+//!    k_T·L·g (≤ 1e-3 rad in the examples); only that justifies a kink at a joint without
+//!    other members, so the angle allowance is loose;
 //! 5. joints are renumbered in their original order.
 //!
 //! The forces returned are the start of the next round (N, case-major).
@@ -22,7 +34,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use super::geometry::segment_segment_distance;
-use super::model::{Beam, Structure, Vec3};
+use super::model::{Beam, Joint, Structure, Vec3};
 
 /// Settings of a round.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -35,7 +47,13 @@ pub struct RoundSettings {
     pub prune: f64,
     /// Remove crossings.
     pub remove_crossings: bool,
+    /// l_max, m (a tension run is not merged into a longer beam).
+    pub max_length: Option<f64>,
 }
+
+/// Largest angle (rad) between the two members of a tension run that is merged (module header,
+/// step 4): well above the kink the joint's own weight explains, well below a real bend.
+pub const RUN_ANGLE: f64 = 0.05;
 
 /// What a round changed.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
@@ -52,6 +70,8 @@ pub struct RoundReport {
     pub crossings_removed: usize,
     /// Dangling free joints removed.
     pub dangling_joints: usize,
+    /// Free joints on straight tension runs merged away.
+    pub tension_runs: usize,
     /// Joints after.
     pub joints_after: usize,
     /// Beams after.
@@ -204,7 +224,7 @@ pub fn clean(
         beams = kept.into_iter().map(|k| beams[k].clone()).collect();
     }
 
-    // 4. Dangling free joints and joints no longer used.
+    // 4. Dangling free joints, tension runs, and joints no longer used.
     let mut alive: Vec<bool> = (0..n).map(|i| roots[i] == i).collect();
     loop {
         let mut degree = vec![0usize; n];
@@ -216,6 +236,11 @@ pub fn clean(
             .filter(|&i| alive[i] && joints[i].is_free() && degree[i] <= 1)
             .collect();
         if dangling.is_empty() {
+            if let Some(i) = merge_tension_run(&joints, &alive, &mut beams, settings.max_length) {
+                alive[i] = false;
+                report.tension_runs += 1;
+                continue;
+            }
             break;
         }
         for &i in &dangling {
@@ -254,6 +279,52 @@ pub fn clean(
     (out, start, report)
 }
 
+/// Merges the first tension run (module header, step 4) among the `alive` joints: removes
+/// its joint's two beams from `beams` and adds (or adds to) the beam between their far ends.
+/// Returns the joint merged away.
+fn merge_tension_run(
+    joints: &[Joint],
+    alive: &[bool],
+    beams: &mut Vec<(Beam, Vec<f64>)>,
+    max_length: Option<f64>,
+) -> Option<usize> {
+    let tension = |f: &[f64]| f.iter().all(|&v| v < 0.0);
+    let run = (0..joints.len()).find_map(|i| {
+        let joint = &joints[i];
+        if !alive[i] || !joint.is_free() || joint.loads.iter().any(|f| f.norm() != 0.0) {
+            return None;
+        }
+        let members: Vec<usize> = (0..beams.len())
+            .filter(|&k| beams[k].0.ends.contains(&i))
+            .collect();
+        let &[k1, k2] = members.as_slice() else {
+            return None;
+        };
+        let far = |k: usize| beams[k].0.ends[0] + beams[k].0.ends[1] - i;
+        let (a, b) = (far(k1), far(k2));
+        let (u, v) = (
+            joints[a].position - joint.position,
+            joints[b].position - joint.position,
+        );
+        let bent = u.cross(&v).norm() > RUN_ANGLE.sin() * u.norm() * v.norm() || u.dot(&v) >= 0.0;
+        let too_long = max_length.is_some_and(|l| (u - v).norm() > l);
+        (a != b && tension(&beams[k1].1) && tension(&beams[k2].1) && !bent && !too_long)
+            .then_some((i, k1, k2, Beam::new(a, b)))
+    });
+    let (joint, k1, k2, merged) = run?;
+    let force: Vec<f64> = (beams[k1].1.iter().zip(&beams[k2].1))
+        .map(|(p, q)| 0.5 * (p + q))
+        .collect();
+    let (first, second) = (k1.min(k2), k1.max(k2));
+    beams.remove(second);
+    beams.remove(first);
+    match beams.iter_mut().find(|(b, _)| *b == merged) {
+        Some((_, f)) => f.iter_mut().zip(&force).for_each(|(f, g)| *f += g),
+        None => beams.push((merged, force)),
+    }
+    Some(joint)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -266,6 +337,7 @@ mod tests {
             merge_tolerance: 1e-3,
             prune: 0.0,
             remove_crossings: false,
+            max_length: None,
         }
     }
 
@@ -369,5 +441,53 @@ mod tests {
         assert_eq!(report.dangling_joints, 1);
         assert_eq!(out.beams.len(), 4);
         assert!(start.iter().all(|f| f.abs() >= 1e-2));
+    }
+
+    #[test]
+    fn a_joint_left_on_a_straight_tie_becomes_one_member() {
+        // Anchors 0 and 1; free joint 2 on the tie between them (kinked by 1e-4 rad, its own
+        // weight), free joint 3 on a bent tension path 0–3–1, free joint 4 on a compression run
+        // 0–4–1 (kept: two Euler halves weigh half the whole), and the pair 0–1 in tension.
+        let free = || JointKind::Free;
+        let pinned = || JointKind::Anchor(Support::Pinned);
+        let s = Structure {
+            joints: vec![
+                joint(0.0, 0.0, pinned()),
+                joint(4.0, 0.0, pinned()),
+                joint(2.0, 2e-4, free()),
+                joint(2.0, 1.0, free()),
+                joint(2.0, -2e-4, free()),
+            ],
+            beams: vec![
+                Beam::new(0, 1),
+                Beam::new(0, 2),
+                Beam::new(1, 2),
+                Beam::new(0, 3),
+                Beam::new(1, 3),
+                Beam::new(0, 4),
+                Beam::new(1, 4),
+            ],
+        };
+        let forces = vec![vec![-1.0, -10.0, -12.0, -5.0, -5.0, 7.0, 7.0]];
+        let (out, start, report) = clean(&s, &positions(&s), &forces, &settings());
+        assert_eq!(report.tension_runs, 1);
+        assert_eq!(out.joints.len(), 4);
+        // Joint 2's mean force (−11) joins the beam already between the anchors.
+        assert_eq!(
+            out.beams,
+            vec![
+                Beam::new(0, 1),
+                Beam::new(0, 2),
+                Beam::new(0, 3),
+                Beam::new(1, 2),
+                Beam::new(1, 3)
+            ]
+        );
+        assert_eq!(start, vec![-12.0, -5.0, 7.0, -5.0, 7.0]);
+        // Not into a beam longer than l_max.
+        let mut set = settings();
+        set.max_length = Some(3.0);
+        let (_, _, report) = clean(&s, &positions(&s), &forces, &set);
+        assert_eq!(report.tension_runs, 0);
     }
 }
