@@ -10,7 +10,7 @@ use optimize::run::RunOptions;
 use optimize::truss::{load, start};
 
 /// Examples timed as whole runs: warren_bridge (the sub-second target), michell (a
-/// sphere obstacle) and the two cranes (random ground structures, three pruning rounds). The
+/// sphere obstacle) and the two cranes (random ground structures, seven pruning rounds). The
 /// other large examples take minutes per run or do not converge yet (BENCHMARKS.md, truss), too
 /// long for ten criterion samples; their single CLI runs are tabulated instead.
 const RUNS: [&str; 4] = ["warren_bridge", "michell", "crane_tripod", "crane_derrick"];
