@@ -12,8 +12,8 @@ use optimize::truss::{load, start};
 
 /// Examples timed as whole runs: warren_bridge (the sub-second target), michell (a
 /// sphere obstacle) and the two cranes (random ground structures, three pruning rounds). The
-/// other large examples take minutes per run or do not converge yet (BENCHMARKS.md, truss), too
-/// long for ten criterion samples; their single CLI runs are tabulated instead.
+/// largest example has its own flat-sampled case ([`cooling_tower`]); the other large ones are
+/// tabulated from single CLI runs (BENCHMARKS.md, truss).
 const RUNS: [&str; 4] = ["warren_bridge", "michell", "crane_tripod", "crane_derrick"];
 
 fn path(name: &str) -> std::path::PathBuf {

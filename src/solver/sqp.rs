@@ -39,7 +39,7 @@
 //!    dense path the variables held at a bound by the Lagrangian gradient are decoupled from
 //!    the exact Hessian before it is convexified (see `hessian::held`), so that a negative
 //!    curvature along them (which the bound blocks) does not shift the whole Hessian. On the
-//!    sparse path only at points violating no constraint by more than [`HELD_VIOLATION`]: far
+//!    sparse path only at points violating no constraint by more than `HELD_VIOLATION`: far
 //!    from feasibility the held set predicts little (the gait ball collocation's QPs failed).
 //!    The QP multipliers of void rows (no Jacobian entry above `multipliers::VOID_ROW`) are
 //!    set to 0 (see `multipliers::clear_void_rows`).
