@@ -6,16 +6,38 @@
 //! set to 0. They give an exact Hessian its constraint curvature from the first iteration on.
 //! All quantities are those of the scaled problem.
 //!
+//! The QP multipliers of void rows (every Jacobian entry at most [`VOID_ROW`] in magnitude) are
+//! set to 0 by [`clear_void_rows`]: any value satisfies stationarity on such a row, and 0 is the
+//! least-norm choice. The QP solvers do not make that choice: the sparse method's KKT
+//! equilibration scales a row of entries 1e-27 (a truss joint whose members all went idle, the
+//! balance row across their plane) up to unit norm and returns multipliers of 1e27, which then
+//! weight that row's constraint curvature in the exact Hessian and its penalty in the merit.
+//!
 //! Small problems form the normal equations `J Jᵀ λ = −J ∇f` densely; when `rows × n` exceeds
 //! [`DENSE_ENTRIES`] the equivalent augmented system is factored sparse instead (J stays
 //! sparse; no rows×n matrix and no J Jᵀ).
 
 use nalgebra::{DMatrix, DVector};
+use nalgebra_sparse::CsrMatrix;
 
 use super::kkt::{KktSolver, Regularization};
 
 /// Largest initial least-squares multiplier kept (IPOPT's `constr_mult_init_max`).
 pub const MAX_INITIAL_MULTIPLIER: f64 = 1e3;
+
+/// Largest Jacobian entry (scaled problem, whose rows start with gradients of O(1)) of a row
+/// that counts as void: rounding of terms that are zero (a force that is exactly 0 times a
+/// direction), ten orders below any row the problem means.
+pub const VOID_ROW: f64 = 1e-12;
+
+/// Sets to 0 the multipliers of the void rows of `jac` (see the module header).
+pub fn clear_void_rows(jac: &CsrMatrix<f64>, lambda: &mut [f64]) {
+    for (row, l) in jac.row_iter().zip(lambda.iter_mut()) {
+        if row.values().iter().all(|v| v.abs() <= VOID_ROW) {
+            *l = 0.0;
+        }
+    }
+}
 
 /// Largest `rows × n` for which J is formed densely.
 const DENSE_ENTRIES: usize = 4_000_000;
@@ -130,6 +152,24 @@ const REFINEMENT_STEPS: usize = 10;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn void_rows_lose_their_multipliers() {
+        use nalgebra_sparse::CooMatrix;
+        // Row 0 is a real row, row 1 has only rounding-level entries, row 2 is empty.
+        let coo = CooMatrix::try_from_triplets(
+            3,
+            2,
+            vec![0, 0, 1, 1],
+            vec![0, 1, 0, 1],
+            vec![1.0, -2e-13, 5e-27, -3e-13],
+        )
+        .unwrap();
+        let jac = CsrMatrix::from(&coo);
+        let mut lambda = vec![2.0, 5e27, -7.0];
+        clear_void_rows(&jac, &mut lambda);
+        assert_eq!(lambda, vec![2.0, 0.0, 0.0]);
+    }
 
     #[test]
     fn recovers_the_multipliers_of_a_kkt_point() {

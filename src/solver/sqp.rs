@@ -38,9 +38,11 @@
 //!    multipliers freezes the steps), continues with the quasi-Newton model instead. On the
 //!    dense path the variables held at a bound by the Lagrangian gradient are decoupled from
 //!    the exact Hessian before it is convexified (see `hessian::held`), so that a negative
-//!    curvature along them (which the bound blocks) does not shift the whole Hessian. (Not on
-//!    the sparse path: there the decoupling made the ball collocation's QPs fail, not yet
-//!    understood.)
+//!    curvature along them (which the bound blocks) does not shift the whole Hessian. On the
+//!    sparse path only at points violating no constraint by more than `HELD_VIOLATION`: far
+//!    from feasibility the held set predicts little (the gait ball collocation's QPs failed).
+//!    The QP multipliers of void rows (no Jacobian entry above `multipliers::VOID_ROW`) are
+//!    set to 0 (see `multipliers::clear_void_rows`).
 //!
 //! Hessian choice in `HessianMode::Auto`: the exact Hessian when the problem has one; else
 //! dense BFGS for n ≤ [`DENSE_BFGS_LIMIT`] (an n×n update costs O(n²) per iteration and the
@@ -108,6 +110,14 @@ const STEP_LIMIT: f64 = 2.0;
 /// while the true constraint forces far from x are much larger (truss: a step from violation
 /// 0.05 to 2.6 lowered φ, after which the weights diverged). Backtracking cuts such steps.
 const VIOLATION_GROWTH: f64 = 10.0;
+/// Largest scaled constraint violation (∞-norm) at which the sparse path decouples the
+/// variables held at a bound from the exact Hessian (see `hessian::held`): the held set
+/// predicts the active bounds near a feasible point only. Far from it (the gait ball
+/// collocation at violation 2.2e2) a held variable may have to leave its bound by a long step,
+/// and the model without its couplings then gave QP multipliers of 9e7 (forces beyond
+/// `ELASTIC_WEIGHT`: elastic mode, Stalled) where the coupled one gave 1e3. The truss layout
+/// starts are within 2e-2.
+const HELD_VIOLATION: f64 = 1.0;
 /// Scaled ℓ1 violation below which the growth cap does not apply.
 const VIOLATION_FLOOR: f64 = 0.1;
 /// An objective below this on a feasible point ends the solve `Unbounded` (SNOPT's
@@ -808,6 +818,7 @@ impl<'a> Sqp<'a> {
         };
         let mut qp = qp::solve(&problem, &mut self.warm, tol);
         self.model.restore_multipliers(&mut qp.lambda, jac, &qp.d);
+        multipliers::clear_void_rows(jac, &mut qp.lambda);
         let lin = Linearization {
             a: jac,
             dl: &dl,
@@ -865,6 +876,7 @@ impl<'a> Sqp<'a> {
         let best_reduction = (now - least).max(0.0);
         let mut sol = elastic::solve_elastic(h, g, &lin, &rho, &mut self.elastic_warm, tol);
         self.model.restore_multipliers(&mut sol.lambda, jac, &sol.d);
+        multipliers::clear_void_rows(jac, &mut sol.lambda);
         iterations += sol.iterations;
         for _ in 0..MAX_STEERING {
             let after = lin.violation_after(&sol.d);
@@ -877,6 +889,7 @@ impl<'a> Sqp<'a> {
             }
             sol = elastic::solve_elastic(h, g, &lin, &rho, &mut self.elastic_warm, tol);
             self.model.restore_multipliers(&mut sol.lambda, jac, &sol.d);
+            multipliers::clear_void_rows(jac, &mut sol.lambda);
             iterations += sol.iterations;
         }
         // A failed subproblem keeps the weights (steering raised them in vain).
@@ -1329,7 +1342,22 @@ impl<'a> Sqp<'a> {
                 .collect();
             *dense = Some(convexified.matrix);
         } else {
-            *sparse = Some(hessian::assemble_sparse_lower(n, rows, cols, &values));
+            let worst = point
+                .values
+                .c
+                .iter()
+                .zip(self.ev.cl.iter().zip(&self.ev.cu))
+                .fold(0.0_f64, |a, (&c, (&l, &u))| a.max(l - c).max(c - u));
+            let held = if worst > HELD_VIOLATION {
+                Vec::new()
+            } else {
+                held
+            };
+            if self.options.verbosity >= 2 {
+                let _ = writeln!(std::io::stderr(), "      held at bounds: {}", held.len());
+            }
+            let (r, c, v) = hessian::decouple_triplets(n, rows, cols, &values, &held);
+            *sparse = Some(hessian::assemble_sparse_lower(n, &r, &c, &v));
         }
         Ok(())
     }

@@ -25,9 +25,12 @@
 //! term `(H_BF d_F)`, an O(‖d‖) error that vanishes at a solution; a variable the QP releases
 //! nonetheless moves with curvature s (a cautious step), and is free at the next iterate.
 //!
-//! Used on the dense QP path only: the sparse QP's inertia test sees the same blocked
-//! curvature, but decoupling there made the QPs of the gait ball collocation fail (not yet
-//! understood), so that path is unchanged.
+//! The sparse QP path uses [`decouple_triplets`] (the same, on the triplets, with each held
+//! variable's own curvature scale), and only near a feasible point (`sqp::HELD_VIOLATION`):
+//! at the gait ball collocation's fourth iterate (violation 2.2e2) eight variables held at
+//! their bounds had to leave them by long steps, and the model without their couplings gave
+//! QP multipliers of 9e7 where the coupled one gave 1e3 (the solve then Stalled instead of
+//! Optimal in 6 iterations).
 
 use nalgebra::DMatrix;
 
@@ -71,6 +74,46 @@ pub fn decouple_dense(h: &DMatrix<f64>, held: &[usize]) -> DMatrix<f64> {
     out
 }
 
+/// The Hessian triplets (lower or upper, as [`super::assemble_sparse_lower`] takes them) with
+/// the rows and columns of the held variables replaced by `sᵢ·eᵢeᵢᵀ`, for the sparse QP path.
+/// The entries removed stay as explicit zeros, so the pattern changes with the held set only
+/// by the held diagonals. `sᵢ = max(1, largest |entry| of row i)`: the variable's own curvature
+/// scale, rather than the whole Hessian's of [`decouple_dense`], so that a variable the QP
+/// releases is not stiffened by the largest curvature of another part of the problem.
+pub fn decouple_triplets(
+    n: usize,
+    rows: &[usize],
+    cols: &[usize],
+    values: &[f64],
+    held: &[usize],
+) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
+    let (mut r2, mut c2) = (rows.to_vec(), cols.to_vec());
+    if held.is_empty() {
+        return (r2, c2, values.to_vec());
+    }
+    let mut is_held = vec![false; n];
+    for &i in held {
+        is_held[i] = true;
+    }
+    let mut local = vec![1.0_f64; n];
+    for ((&r, &c), &v) in rows.iter().zip(cols).zip(values) {
+        local[r] = local[r].max(v.abs());
+        local[c] = local[c].max(v.abs());
+    }
+    let mut v2: Vec<f64> = rows
+        .iter()
+        .zip(cols)
+        .zip(values)
+        .map(|((&r, &c), &v)| if is_held[r] || is_held[c] { 0.0 } else { v })
+        .collect();
+    for &i in held {
+        r2.push(i);
+        c2.push(i);
+        v2.push(local[i]);
+    }
+    (r2, c2, v2)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -89,6 +132,22 @@ mod tests {
         // Weakly active (a multiplier below WEAK_GRADIENT): held; pulled off by more: free.
         let weak = [-1e-6, -1e-2, 1e-6, 1e-2, 0.0, 0.0];
         assert_eq!(held_at_bounds(&x, &xl, &xu, &weak), vec![0, 2]);
+    }
+
+    #[test]
+    fn decoupled_triplets_match_the_dense_decoupling_up_to_the_held_scale() {
+        let (r, c) = ([0, 1, 2, 1, 2, 2], [0, 0, 0, 1, 1, 2]);
+        let v = [-5.0, 2.0, 1.0, 1.0, 0.5, 3.0];
+        let (r2, c2, v2) = decouple_triplets(3, &r, &c, &v, &[0]);
+        let sparse = assemble_dense(3, &r2, &c2, &v2);
+        // Variable 0's own scale is its largest entry, |−5|; the free block is kept.
+        let expected =
+            DMatrix::from_row_slice(3, 3, &[5.0, 0.0, 0.0, 0.0, 1.0, 0.5, 0.0, 0.5, 3.0]);
+        assert_eq!(sparse, expected);
+        // The removed entries stay in the pattern (explicit zeros).
+        assert_eq!(r2.len(), r.len() + 1);
+        let (_, _, same) = decouple_triplets(3, &r, &c, &v, &[]);
+        assert_eq!(same, v.to_vec());
     }
 
     #[test]

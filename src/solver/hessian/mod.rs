@@ -18,8 +18,8 @@ mod lbfgs;
 mod model;
 
 pub use bfgs::DenseBfgs;
-pub use exact::{Convexified, InertiaShift, assemble_dense, assemble_sparse_lower};
-pub use held::{decouple_dense, held_at_bounds};
+pub use exact::{Convexified, FALLBACK_GAMMA, InertiaShift, assemble_dense, assemble_sparse_lower};
+pub use held::{decouple_dense, decouple_triplets, held_at_bounds};
 pub use lbfgs::Lbfgs;
 pub use model::Model;
 
