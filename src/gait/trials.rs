@@ -43,6 +43,7 @@ use serde::Serialize;
 use super::continuation::stage_problems;
 use super::feasibility::{FeasibilitySettings, restore};
 use super::formulation::Formulation;
+use super::shaping::shape;
 use super::spec::Problem;
 use crate::solver::{Evaluations, IterationRecord, Nlp, Options, Solution, Status, solve};
 
@@ -313,22 +314,26 @@ pub fn solve_trial(
     }
     let mut remaining = options.clone();
     let mut log: Vec<IterationRecord> = Vec::new();
+    let mut shaped_candidate = false;
     if !problem.shaping.is_empty() {
-        // The shaping solve: the task's rows and the shaping rows together; the SQP solves
-        // below start from its end point.
-        let shaped_problem = problem.shaped();
-        let shaped = Formulation::new(&shaped_problem);
-        let params = f.reduced().parameters();
-        let snlp = shaped.starting_at(&x[..params]);
-        let solution = solve(&snlp, options);
-        iterations += solution.iterations;
-        evaluations.functions += solution.evaluations.functions;
-        evaluations.derivatives += solution.evaluations.derivatives;
-        evaluations.hessians += solution.evaluations.hessians;
-        log = solution.log;
-        let mut current = snlp.physical(&solution.x);
-        current.truncate(params);
-        nlp = f.starting_at(&current);
+        // The shaping solves (`crate::gait::shaping`); the SQP solves below start from their
+        // end point.
+        let shaped = shape(problem, &x[..f.reduced().parameters()], tol, options);
+        iterations += shaped.iterations;
+        evaluations.functions += shaped.evaluations.functions;
+        evaluations.derivatives += shaped.evaluations.derivatives;
+        evaluations.hessians += shaped.evaluations.hessians;
+        log = shaped.log;
+        nlp = f.starting_at(&shaped.x);
+        if problem.trials.shaping_stages > 0 {
+            // The staged shaping's end point meets the task's rows when its last stage is
+            // met: a candidate like the feasibility phase's, replaced only by a better one.
+            shaped_candidate = true;
+            (x, end) = (
+                nlp.hand_made_start().to_vec(),
+                assess(f, nlp.hand_made_start()),
+            );
+        }
     }
     let mut last: Option<Solution> = None;
     let mut unproductive = 0;
@@ -341,18 +346,12 @@ pub fn solve_trial(
         evaluations.functions += solution.evaluations.functions;
         evaluations.derivatives += solution.evaluations.derivatives;
         evaluations.hessians += solution.evaluations.hessians;
-        let offset = log.last().map_or(0, |r| r.iter + 1);
-        let elapsed = log.last().map_or(0.0, |r| r.elapsed);
-        log.extend(solution.log.iter().cloned().map(|mut r| {
-            r.iter += offset;
-            r.elapsed += elapsed;
-            r
-        }));
+        append_log(&mut log, &solution.log);
         let x_solved = nlp.physical(&solution.x);
         let end_solved = assess(f, &x_solved);
         // Without a feasibility phase the first solve's end point is the trial's result even
         // if it is worse than the start (classified Unimproved); later points must improve.
-        let first = attempt == 0 && !problem.trials.feasibility_first;
+        let first = attempt == 0 && !problem.trials.feasibility_first && !shaped_candidate;
         let productive = attempt > 0 && halves_violation(end.as_ref(), end_solved.as_ref(), tol);
         if first || improves(end.as_ref(), end_solved.as_ref(), tol) {
             (x, end) = (x_solved, end_solved);
@@ -394,6 +393,17 @@ pub fn solve_trial(
         evaluations,
         solution,
     }
+}
+
+/// Appends a solve's iteration log to a trial's, numbering and timing it on from the end.
+pub(super) fn append_log(log: &mut Vec<IterationRecord>, more: &[IterationRecord]) {
+    let offset = log.last().map_or(0, |r| r.iter + 1);
+    let elapsed = log.last().map_or(0.0, |r| r.elapsed);
+    log.extend(more.iter().cloned().map(|mut r| {
+        r.iter += offset;
+        r.elapsed += elapsed;
+        r
+    }));
 }
 
 /// Solves trials `which` (1-based; all when `None`) in parallel.

@@ -1,0 +1,152 @@
+//! The shaping solves that open each trial (`[[task]] shaping = true` rows, `[trials]
+//! shaping_stages`): they lead the start to the kind of motion the task implies before the
+//! trial's own solves, which use the task's rows alone.
+//!
+//! Without `shaping_stages` (0) there is one shaped solve: the task's rows and the shaping
+//! rows together, minimizing the effort `∫ΣF²dt` (seed eq. 3.1).
+//!
+//! With `shaping_stages = N ≥ 1` the rows are met in stages of growing horizon: stage `k`
+//! holds every row (task or shaping) at times up to `t_k`, the `k`-th distinct shaping time
+//! before the task's last row, and the last stage holds all rows. A stage is simulated only to
+//! its last row's time. Each stage is a feasibility problem (zero objective: any point meeting
+//! its rows is optimal, and the SQP's steps are the least changes that meet their
+//! linearization), so the effort plays no part until the trial's own solves. Within a stage
+//! the rows' bounds move in `N` steps from the stage's start to the rows' own: with `v` a row's
+//! value at the stage's start and `[ℓ, u]` its bounds, step `s = 1…N` asks for
+//! ```text
+//!   [ℓ + (1 − s/N)·min(v − ℓ, 0),  u + (1 − s/N)·max(v − u, 0)]
+//! ```
+//! (a homotopy in the bounds, so each step's target is near what the previous step reached;
+//! step `N` is the stage itself). A row already met keeps its bounds. A step whose rows are not
+//! met within the trial's tolerance is discarded and retried at half the step (twice at most,
+//! down to a quarter of `1/N`); if that fails too, the stage ends at the failed step's end
+//! point and the next stage starts from there.
+
+use super::formulation::Formulation;
+use super::spec::Problem;
+use super::trials::{append_log, assess};
+use crate::solver::{Evaluations, IterationRecord, Nlp, Options, solve};
+
+/// What the shaping solves leave: the end point and the work done.
+#[derive(Debug, Clone, Default)]
+pub struct Shaped {
+    /// Spline parameters (physical units) at the end of the last solve.
+    pub x: Vec<f64>,
+    /// Solver iterations.
+    pub iterations: usize,
+    /// Evaluation counts.
+    pub evaluations: Evaluations,
+    /// The solves' iteration log, numbered on.
+    pub log: Vec<IterationRecord>,
+}
+
+/// `problem` with the bounds of each row moved towards its value `values[i]` by the fraction
+/// `1 − w` of its violation there (module header); `w = 1` is `problem` itself.
+pub fn relaxed(problem: &Problem, values: &[f64], w: f64) -> Problem {
+    let mut p = problem.clone();
+    for (c, &v) in p.constraints.iter_mut().zip(values) {
+        let keep = 1.0 - w;
+        if v < c.lower {
+            c.lower += keep * (v - c.lower);
+        }
+        if v > c.upper {
+            c.upper += keep * (v - c.upper);
+        }
+    }
+    p
+}
+
+/// Runs the shaping solves (module header) from spline parameters `x0` (physical units);
+/// `tol` is the trial's tolerance, by which a step's rows count as met.
+pub fn shape(problem: &Problem, x0: &[f64], tol: f64, options: &Options) -> Shaped {
+    let mut out = Shaped {
+        x: x0.to_vec(),
+        ..Shaped::default()
+    };
+    let steps = problem.trials.shaping_stages;
+    if steps == 0 {
+        out.x = solve_into(&mut out, &problem.shaped(), true, options);
+        return out;
+    }
+    let horizons = problem.shaping_horizons();
+    for horizon in horizons.iter().copied().chain([f64::INFINITY]) {
+        let stage = problem.shaped_until(horizon);
+        let Some(values) = constraint_values(&Formulation::new(&stage), &out.x) else {
+            out.x = solve_into(&mut out, &stage, false, options);
+            continue;
+        };
+        // The homotopy in the bounds, its step halved (twice at most) when a step's rows are
+        // not met; a step that still fails ends the stage at its end point.
+        let (mut w, mut dw) = (0.0, 1.0 / steps as f64);
+        while w < 1.0 {
+            let target = (w + dw).min(1.0);
+            let sub = relaxed(&stage, &values, target);
+            let x = solve_into(&mut out, &sub, false, options);
+            let met = assess(&Formulation::new(&sub), &x).is_some_and(|a| a.max() <= tol);
+            if met || dw <= 0.25 / steps as f64 {
+                out.x = x;
+                if !met {
+                    break;
+                }
+                w = target;
+            } else {
+                dw *= 0.5;
+            }
+        }
+    }
+    out
+}
+
+/// Solves `problem` (with the effort or without) from `out.x`, adding the work to `out`;
+/// returns the end point's spline parameters (physical units).
+fn solve_into(out: &mut Shaped, problem: &Problem, effort: bool, options: &Options) -> Vec<f64> {
+    let f = Formulation::new(problem).starting_at(&out.x);
+    let nlp = if effort { f } else { f.without_effort() };
+    let solution = solve(&nlp, options);
+    out.iterations += solution.iterations;
+    out.evaluations.functions += solution.evaluations.functions;
+    out.evaluations.derivatives += solution.evaluations.derivatives;
+    out.evaluations.hessians += solution.evaluations.hessians;
+    append_log(&mut out.log, &solution.log);
+    let mut x = nlp.physical(&solution.x);
+    x.truncate(out.x.len());
+    x
+}
+
+/// The constraint values of the motion of spline parameters `x`, `None` if it cannot be
+/// simulated.
+fn constraint_values(f: &Formulation<'_>, x: &[f64]) -> Option<Vec<f64>> {
+    let nlp = f.reduced();
+    let d = nlp.dims();
+    let (mut effort, mut c) = (0.0, vec![0.0; d.m]);
+    nlp.eval(&x[..d.n], &mut effort, &mut c).ok()?;
+    Some(c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn golden(name: &str) -> Problem {
+        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join(format!("tests/golden/problems/gait/{name}.toml"));
+        crate::gait::load(&path).unwrap()
+    }
+
+    /// Violated bounds move towards the value by the fraction 1 − w; met ones stay.
+    #[test]
+    fn relaxed_bounds_interpolate_from_the_value_to_the_row() {
+        let mut p = golden("pogo_crouch_short");
+        let mut row = p.constraints[0].clone();
+        (row.lower, row.upper) = (0.3, 0.5);
+        p.constraints = vec![row.clone(), row.clone(), row];
+        let r = relaxed(&p, &[0.1, 0.9, 0.4], 0.25);
+        let b: Vec<(f64, f64)> = r.constraints.iter().map(|c| (c.lower, c.upper)).collect();
+        assert!((b[0].0 - 0.15).abs() < 1e-12 && b[0].1 == 0.5, "{b:?}");
+        assert!(b[1].0 == 0.3 && (b[1].1 - 0.8).abs() < 1e-12, "{b:?}");
+        assert_eq!(b[2], (0.3, 0.5));
+        let same = relaxed(&p, &[0.1, 0.9, 0.4], 1.0);
+        assert_eq!(same.constraints[0].lower, 0.3);
+        assert_eq!(same.constraints[1].upper, 0.5);
+    }
+}
