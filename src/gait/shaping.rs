@@ -149,4 +149,73 @@ mod tests {
         assert_eq!(same.constraints[0].lower, 0.3);
         assert_eq!(same.constraints[1].upper, 0.5);
     }
+
+    /// Stage horizons are the shaping times before the task's last row, only when staged.
+    #[test]
+    fn horizons_are_the_shaping_times_before_the_last_row() {
+        let mut p = golden("pogo_crouch_short");
+        let row = |t: f64| {
+            let mut r = p.constraints[0].clone();
+            (r.time, r.step) = (t, (t / p.dt).round() as usize);
+            r
+        };
+        p.shaping = vec![row(0.1), row(0.25), row(0.25), row(0.5)];
+        assert!(p.shaping_horizons().is_empty());
+        p.trials.shaping_stages = 2;
+        assert_eq!(p.shaping_horizons(), vec![0.1, 0.25]);
+        let stage = p.shaped_until(0.25);
+        assert_eq!(stage.constraints.len(), 3);
+        assert!(stage.shaping.is_empty());
+        assert_eq!(p.shaped_until(f64::INFINITY).constraints.len(), 7);
+    }
+
+    /// Without the effort the objective and its gradient are zero; the constraints are kept.
+    #[test]
+    fn a_problem_without_effort_has_a_zero_objective() {
+        let p = golden("pogo_crouch_short");
+        let f = Formulation::new(&p);
+        let d = f.dims();
+        let mut z = vec![0.0; d.n];
+        f.start(&mut z);
+        let g = |nlp: &Formulation<'_>| {
+            let (mut obj, mut c) = (0.0, vec![0.0; d.m]);
+            nlp.eval(&z, &mut obj, &mut c).unwrap();
+            let (mut grad, mut jac) = (vec![0.0; d.n], vec![0.0; d.jac_nnz]);
+            nlp.eval_derivatives(&z, &mut grad, &mut jac).unwrap();
+            (obj, c, grad, jac)
+        };
+        let (a, b) = (g(&f), g(&f.clone().without_effort()));
+        assert!(a.0 > 0.0 && a.2.iter().any(|v| *v != 0.0));
+        assert_eq!(b.0, 0.0);
+        assert!(b.2.iter().all(|v| *v == 0.0));
+        assert_eq!((a.1, a.3), (b.1, b.3));
+    }
+
+    /// Staged shaping on the short pogo crouch with a shaping row 2 cm above the start's head
+    /// height at t = 0.25 s ends at a point meeting the shaping row and the task's rows.
+    #[test]
+    fn staged_shaping_meets_every_row() {
+        let mut p = golden("pogo_crouch_short");
+        let f = Formulation::new(&p);
+        let x0 = f.hand_made_start()[..f.reduced().parameters()].to_vec();
+        let mut row = p.constraints[0].clone();
+        (row.time, row.step) = (0.25, (0.25 / p.dt).round() as usize);
+        let mut probe = p.clone();
+        probe.constraints = vec![row.clone()];
+        let v = constraint_values(&Formulation::new(&probe), &x0).unwrap()[0];
+        (row.lower, row.upper) = (v + 0.02, f64::INFINITY);
+        p.shaping = vec![row];
+        p.trials.shaping_stages = 2;
+        let options = Options {
+            max_iterations: 40,
+            verbosity: 0,
+            ..Options::default()
+        };
+        let tol = p.trials.tolerance;
+        let out = shape(&p, &x0, tol, &options);
+        let all = p.shaped();
+        let a = assess(&Formulation::new(&all), &out.x).unwrap();
+        assert!(a.max() <= tol, "{:?}", a.violations);
+        assert!(out.iterations > 0 && !out.log.is_empty());
+    }
 }
