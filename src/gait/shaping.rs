@@ -20,7 +20,9 @@
 //! step `N` is the stage itself). A row already met keeps its bounds. A step whose rows are not
 //! met within the trial's tolerance is discarded and retried at half the step (twice at most,
 //! down to a quarter of `1/N`); if that fails too, the stage ends at the failed step's end
-//! point and the next stage starts from there.
+//! point and the next stage starts from there. If the last stage is not met, the stages are
+//! run once more from the trial's start with `2N` steps per stage ([`ATTEMPTS`]), and the
+//! attempt with the lower violation sum over all rows is kept.
 
 use super::formulation::Formulation;
 use super::spec::Problem;
@@ -56,6 +58,10 @@ pub fn relaxed(problem: &Problem, values: &[f64], w: f64) -> Problem {
     p
 }
 
+/// Staged shaping attempts per trial: an attempt whose last stage is not met is followed by
+/// one from the trial's start with twice the steps per stage (module header).
+pub const ATTEMPTS: usize = 2;
+
 /// Runs the shaping solves (module header) from spline parameters `x0` (physical units);
 /// `tol` is the trial's tolerance, by which a step's rows count as met.
 pub fn shape(problem: &Problem, x0: &[f64], tol: f64, options: &Options) -> Shaped {
@@ -65,14 +71,46 @@ pub fn shape(problem: &Problem, x0: &[f64], tol: f64, options: &Options) -> Shap
     };
     let steps = problem.trials.shaping_stages;
     if steps == 0 {
-        out.x = solve_into(&mut out, &problem.shaped(), true, options);
+        out.x = solve_into(&mut out, &problem.shaped(), x0, true, options);
         return out;
     }
+    let shaped = problem.shaped();
+    let all = Formulation::new(&shaped);
+    let mut best: Option<(Vec<f64>, f64)> = None;
+    for attempt in 0..ATTEMPTS {
+        let x = staged(problem, x0, steps << attempt, tol, options, &mut out);
+        let Some(a) = assess(&all, &x) else {
+            continue;
+        };
+        if best.as_ref().is_none_or(|(_, sum)| a.sum() < *sum) {
+            best = Some((x, a.sum()));
+        }
+        if a.max() <= tol {
+            break;
+        }
+    }
+    if let Some((x, _)) = best {
+        out.x = x;
+    }
+    out
+}
+
+/// One staged attempt from `x0` with `steps` steps per stage (module header), adding the work
+/// to `out`; returns its end point.
+fn staged(
+    problem: &Problem,
+    x0: &[f64],
+    steps: usize,
+    tol: f64,
+    options: &Options,
+    out: &mut Shaped,
+) -> Vec<f64> {
+    let mut x = x0.to_vec();
     let horizons = problem.shaping_horizons();
     for horizon in horizons.iter().copied().chain([f64::INFINITY]) {
         let stage = problem.shaped_until(horizon);
-        let Some(values) = constraint_values(&Formulation::new(&stage), &out.x) else {
-            out.x = solve_into(&mut out, &stage, false, options);
+        let Some(values) = constraint_values(&Formulation::new(&stage), &x) else {
+            x = solve_into(out, &stage, &x, false, options);
             continue;
         };
         // The homotopy in the bounds, its step halved (twice at most) when a step's rows are
@@ -81,10 +119,10 @@ pub fn shape(problem: &Problem, x0: &[f64], tol: f64, options: &Options) -> Shap
         while w < 1.0 {
             let target = (w + dw).min(1.0);
             let sub = relaxed(&stage, &values, target);
-            let x = solve_into(&mut out, &sub, false, options);
-            let met = assess(&Formulation::new(&sub), &x).is_some_and(|a| a.max() <= tol);
+            let next = solve_into(out, &sub, &x, false, options);
+            let met = assess(&Formulation::new(&sub), &next).is_some_and(|a| a.max() <= tol);
             if met || dw <= 0.25 / steps as f64 {
-                out.x = x;
+                x = next;
                 if !met {
                     break;
                 }
@@ -94,13 +132,19 @@ pub fn shape(problem: &Problem, x0: &[f64], tol: f64, options: &Options) -> Shap
             }
         }
     }
-    out
+    x
 }
 
-/// Solves `problem` (with the effort or without) from `out.x`, adding the work to `out`;
-/// returns the end point's spline parameters (physical units).
-fn solve_into(out: &mut Shaped, problem: &Problem, effort: bool, options: &Options) -> Vec<f64> {
-    let f = Formulation::new(problem).starting_at(&out.x);
+/// Solves `problem` (with the effort or without) from spline parameters `x0`, adding the work
+/// to `out`; returns the end point's spline parameters (physical units).
+fn solve_into(
+    out: &mut Shaped,
+    problem: &Problem,
+    x0: &[f64],
+    effort: bool,
+    options: &Options,
+) -> Vec<f64> {
+    let f = Formulation::new(problem).starting_at(x0);
     let nlp = if effort { f } else { f.without_effort() };
     let solution = solve(&nlp, options);
     out.iterations += solution.iterations;
@@ -109,7 +153,7 @@ fn solve_into(out: &mut Shaped, problem: &Problem, effort: bool, options: &Optio
     out.evaluations.hessians += solution.evaluations.hessians;
     append_log(&mut out.log, &solution.log);
     let mut x = nlp.physical(&solution.x);
-    x.truncate(out.x.len());
+    x.truncate(x0.len());
     x
 }
 

@@ -21,8 +21,12 @@
 //! tolerance over one that does not, then the lower cost among such points, else the lower
 //! violation sum. The phase's point is replaced only by a better one.
 //!
-//! Shaping rows (`[[task]] shaping = true`) join the task's rows in one first SQP solve; the
-//! solves above start from its end point, and the trial is judged on the task's rows only.
+//! Shaping rows (`[[task]] shaping = true`) guide the trial's first solves
+//! ([`crate::gait::shaping`]): one shaped solve with the task's rows, or with `[trials]
+//! shaping_stages` staged feasibility solves. The solves above start from their end point, and
+//! the trial is judged on the task's rows only. The end point of staged shaping is a candidate
+//! like the feasibility phase's (it meets the task's rows when its last stage is met, and the
+//! effort solves that follow may end short of them); that of one shaped solve is not.
 //!
 //! Classification, with `tol` = `[trials] tolerance` in each constraint's unit and the violation
 //! of row `r` = `max(lower − c, c − upper, 0)`:
