@@ -319,6 +319,7 @@ pub fn solve_trial(
     let mut remaining = options.clone();
     let mut log: Vec<IterationRecord> = Vec::new();
     let mut shaped_candidate = false;
+    let mut polished = false;
     if !problem.shaping.is_empty() {
         // The shaping solves (`crate::gait::shaping`); the SQP solves below start from their
         // end point.
@@ -356,6 +357,18 @@ pub fn solve_trial(
         // Without a feasibility phase the first solve's end point is the trial's result even
         // if it is worse than the start (classified Unimproved); later points must improve.
         let first = attempt == 0 && !problem.trials.feasibility_first && !shaped_candidate;
+        // A solve that ends short of the tolerance at a lower effort than a kept point that
+        // meets it is re-solved once from its own end point (a fresh quasi-Newton model often
+        // brings such a point back onto the rows); the kept point stays unless beaten.
+        let cheaper_unmet = match (end.as_ref(), end_solved.as_ref()) {
+            (Some(a), Some(b)) => a.max() <= tol && b.max() > tol && b.cost < a.cost,
+            _ => false,
+        };
+        let polish = (!polished
+            && !first
+            && cheaper_unmet
+            && !matches!(solution.status, Status::TimeLimit | Status::Interrupted))
+        .then(|| x_solved.clone());
         let productive = attempt > 0 && halves_violation(end.as_ref(), end_solved.as_ref(), tol);
         if first || improves(end.as_ref(), end_solved.as_ref(), tol) {
             (x, end) = (x_solved, end_solved);
@@ -371,6 +384,11 @@ pub fn solve_trial(
             Status::IterationLimit | Status::TimeLimit | Status::Interrupted
         );
         last = Some(solution);
+        if let Some(from) = polish {
+            polished = true;
+            nlp = f.starting_at(&from);
+            continue;
+        }
         if budget
             || unproductive >= problem.trials.restarts
             || end.as_ref().is_some_and(|a| a.max() <= tol)
