@@ -19,7 +19,10 @@
 //! is still converging and is not counted; [`MAX_SOLVES`] solves at most); the better end
 //! point is kept: one meeting every constraint within the
 //! tolerance over one that does not, then the lower cost among such points, else the lower
-//! violation sum. The phase's point is replaced only by a better one.
+//! violation sum. The phase's point is replaced only by a better one. A later solve that ends
+//! short of the tolerance at a lower cost than a kept point meeting it is re-solved once from
+//! its own end point (whatever stopped it, but a time limit or an interrupt): a fresh
+//! quasi-Newton model often brings such a point back onto the rows at the lower effort.
 //!
 //! Shaping rows (`[[task]] shaping = true`) guide the trial's first solves
 //! ([`crate::gait::shaping`]): one shaped solve with the task's rows, or with `[trials]
