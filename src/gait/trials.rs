@@ -663,6 +663,27 @@ mod tests {
         assert_ne!(a.x, b.x);
     }
 
+    /// With staged shaping the trial ends at a point meeting the task's rows (the staged
+    /// end point is kept unless a later one is better), judged on the task's rows alone.
+    #[test]
+    fn staged_shaping_trial_meets_the_task() {
+        let mut p = golden("pogo_crouch_short");
+        let mut row = p.constraints[0].clone();
+        (row.time, row.step) = (0.25, (0.25 / p.dt).round() as usize);
+        (row.lower, row.upper) = (0.2, 0.3);
+        p.shaping = vec![row];
+        p.trials.shaping_stages = 2;
+        let options = Options {
+            max_iterations: 40,
+            verbosity: 0,
+            ..Options::default()
+        };
+        let r = &run_trials(&p, 8, Some(2), &options)[0];
+        let end = r.end.as_ref().unwrap();
+        assert_eq!(end.violations.len(), p.constraints.len());
+        assert_eq!(r.status, TrialStatus::Success, "{:?}", end.violations);
+    }
+
     /// A restart is productive only if both points miss the tolerance and the violation sum
     /// at least halves (trial 7 of pogo_jump at seed 8: 0.2258 → 0.0225 m).
     #[test]
