@@ -35,6 +35,8 @@ pub struct Formulation<'p> {
     upper: Vec<f64>,
     /// Divides the objective (N²·s).
     objective_scale: f64,
+    /// Whether the objective is the effort (else zero: a feasibility problem).
+    effort: bool,
     /// Column of each Jacobian entry.
     columns: Vec<usize>,
     /// Hand-made start in physical units (clamped into the bounds).
@@ -91,9 +93,18 @@ impl<'p> Formulation<'p> {
             lower,
             upper,
             objective_scale,
+            effort: true,
             columns,
             start,
         }
+    }
+
+    /// The same problem with a zero objective: any point meeting the constraints is optimal,
+    /// and the SQP's steps are the least changes (in its quasi-Newton metric) that meet their
+    /// linearization.
+    pub fn without_effort(mut self) -> Self {
+        self.effort = false;
+        self
     }
 
     /// The same problem starting from `x` (physical units), clamped into the bounds: all
@@ -172,7 +183,11 @@ impl Nlp for Formulation<'_> {
 
     fn eval(&self, z: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
         self.inner.eval(&self.physical(z), f, c)?;
-        *f /= self.objective_scale;
+        *f = if self.effort {
+            *f / self.objective_scale
+        } else {
+            0.0
+        };
         Ok(())
     }
 
@@ -183,8 +198,9 @@ impl Nlp for Formulation<'_> {
         jac: &mut [f64],
     ) -> Result<(), EvalError> {
         self.inner.eval_derivatives(&self.physical(z), grad, jac)?;
+        let weight = if self.effort { 1.0 } else { 0.0 };
         for (g, s) in grad.iter_mut().zip(&self.scale) {
-            *g *= s / self.objective_scale;
+            *g *= weight * s / self.objective_scale;
         }
         for (v, &j) in jac.iter_mut().zip(&self.columns) {
             *v *= self.scale[j];

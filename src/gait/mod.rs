@@ -8,7 +8,8 @@
 //!   constraints; [`reduced`]: the reduced-gradient NLP with exact dual-number derivatives;
 //! - [`feasibility`]: a Levenberg–Marquardt phase on the constraint violations, and
 //!   [`continuation`]: key-time continuation of unmet lower bounds, both run before the SQP
-//!   solve of a trial when the file asks ([`trials`]);
+//!   solve of a trial when the file asks ([`trials`]); [`shaping`]: the shaping solves that
+//!   open each trial;
 //! - [`spec`]: the problem file.
 
 pub mod aba;
@@ -20,6 +21,7 @@ pub mod export;
 pub mod feasibility;
 pub mod formulation;
 pub mod reduced;
+pub mod shaping;
 pub mod sim;
 pub mod spatial;
 pub mod spec;

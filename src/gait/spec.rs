@@ -103,6 +103,10 @@ pub struct TrialsSpec {
     /// Key-time continuation stages before the feasibility phase
     /// ([`crate::gait::continuation`]); default 0 (none), at most 50.
     pub continuation_stages: Option<usize>,
+    /// Steps per shaping stage ([`crate::gait::shaping`]): with N ≥ 1 the shaping rows are
+    /// met in stages of growing horizon, each stage's rows approached in N steps of their
+    /// bounds, without the effort; default 0 (one shaped solve with the effort).
+    pub shaping_stages: Option<usize>,
 }
 
 /// Validated `[trials]` settings.
@@ -123,6 +127,9 @@ pub struct TrialSettings {
     pub feasibility_first: bool,
     /// Key-time continuation stages run by the feasibility phase (0: none).
     pub continuation_stages: usize,
+    /// Steps per shaping stage (0: one shaped solve with the effort;
+    /// [`crate::gait::shaping`]).
+    pub shaping_stages: usize,
 }
 
 fn default_gravity() -> [f64; 3] {
@@ -433,10 +440,37 @@ impl Problem {
     /// The problem whose constraints are the task's and the shaping rows together (ordered by
     /// time), without shaping rows of its own.
     pub fn shaped(&self) -> Problem {
+        self.shaped_until(f64::INFINITY)
+    }
+
+    /// The problem whose constraints are the task's and the shaping rows at times up to
+    /// `time` (s), ordered by time, without shaping rows of its own; it is simulated only to
+    /// its last row's time.
+    pub fn shaped_until(&self, time: f64) -> Problem {
         let mut p = self.clone();
         p.constraints.append(&mut p.shaping);
+        p.constraints.retain(|c| c.time <= time);
         p.constraints.sort_by(|a, b| a.time.total_cmp(&b.time));
         p
+    }
+
+    /// The horizons (s) of the shaping stages before the last (`[trials] shaping_stages`): the
+    /// distinct times of the shaping rows before the task's last row, ascending; empty
+    /// without the setting.
+    pub fn shaping_horizons(&self) -> Vec<f64> {
+        let last = self.constraints.last().map_or(0.0, |c| c.time);
+        let mut times: Vec<f64> = if self.trials.shaping_stages > 0 {
+            self.shaping
+                .iter()
+                .map(|c| c.time)
+                .filter(|&t| t < last)
+                .collect()
+        } else {
+            Vec::new()
+        };
+        times.sort_by(f64::total_cmp);
+        times.dedup();
+        times
     }
 
     /// The control splines' knot grid: `knots` knots spread evenly over the horizon (s).
@@ -988,6 +1022,13 @@ fn build_trials(source: &Source, t: &TrialsSpec) -> Result<TrialSettings, InputE
             format!("`continuation_stages` must be in 0..=50, got {continuation_stages}"),
         ));
     }
+    let shaping_stages = t.shaping_stages.unwrap_or(0);
+    if shaping_stages > 20 {
+        return Err(at(
+            "shaping_stages",
+            format!("`shaping_stages` must be in 0..=20, got {shaping_stages}"),
+        ));
+    }
     Ok(TrialSettings {
         count,
         tolerance,
@@ -996,6 +1037,7 @@ fn build_trials(source: &Source, t: &TrialsSpec) -> Result<TrialSettings, InputE
         restarts,
         feasibility_first: t.feasibility_first.unwrap_or(false),
         continuation_stages,
+        shaping_stages,
     })
 }
 

@@ -19,10 +19,17 @@
 //! is still converging and is not counted; [`MAX_SOLVES`] solves at most); the better end
 //! point is kept: one meeting every constraint within the
 //! tolerance over one that does not, then the lower cost among such points, else the lower
-//! violation sum. The phase's point is replaced only by a better one.
+//! violation sum. The phase's point is replaced only by a better one. A later solve that ends
+//! short of the tolerance at a lower cost than a kept point meeting it is re-solved once from
+//! its own end point (whatever stopped it, but a time limit or an interrupt): a fresh
+//! quasi-Newton model often brings such a point back onto the rows at the lower effort.
 //!
-//! Shaping rows (`[[task]] shaping = true`) join the task's rows in one first SQP solve; the
-//! solves above start from its end point, and the trial is judged on the task's rows only.
+//! Shaping rows (`[[task]] shaping = true`) guide the trial's first solves
+//! ([`crate::gait::shaping`]): one shaped solve with the task's rows, or with `[trials]
+//! shaping_stages` staged feasibility solves. The solves above start from their end point, and
+//! the trial is judged on the task's rows only. The end point of staged shaping is a candidate
+//! like the feasibility phase's (it meets the task's rows when its last stage is met, and the
+//! effort solves that follow may end short of them); that of one shaped solve is not.
 //!
 //! Classification, with `tol` = `[trials] tolerance` in each constraint's unit and the violation
 //! of row `r` = `max(lower − c, c − upper, 0)`:
@@ -43,6 +50,7 @@ use serde::Serialize;
 use super::continuation::stage_problems;
 use super::feasibility::{FeasibilitySettings, restore};
 use super::formulation::Formulation;
+use super::shaping::shape;
 use super::spec::Problem;
 use crate::solver::{Evaluations, IterationRecord, Nlp, Options, Solution, Status, solve};
 
@@ -313,22 +321,27 @@ pub fn solve_trial(
     }
     let mut remaining = options.clone();
     let mut log: Vec<IterationRecord> = Vec::new();
+    let mut shaped_candidate = false;
+    let mut polished = false;
     if !problem.shaping.is_empty() {
-        // The shaping solve: the task's rows and the shaping rows together; the SQP solves
-        // below start from its end point.
-        let shaped_problem = problem.shaped();
-        let shaped = Formulation::new(&shaped_problem);
-        let params = f.reduced().parameters();
-        let snlp = shaped.starting_at(&x[..params]);
-        let solution = solve(&snlp, options);
-        iterations += solution.iterations;
-        evaluations.functions += solution.evaluations.functions;
-        evaluations.derivatives += solution.evaluations.derivatives;
-        evaluations.hessians += solution.evaluations.hessians;
-        log = solution.log;
-        let mut current = snlp.physical(&solution.x);
-        current.truncate(params);
-        nlp = f.starting_at(&current);
+        // The shaping solves (`crate::gait::shaping`); the SQP solves below start from their
+        // end point.
+        let shaped = shape(problem, &x[..f.reduced().parameters()], tol, options);
+        iterations += shaped.iterations;
+        evaluations.functions += shaped.evaluations.functions;
+        evaluations.derivatives += shaped.evaluations.derivatives;
+        evaluations.hessians += shaped.evaluations.hessians;
+        log = shaped.log;
+        nlp = f.starting_at(&shaped.x);
+        if problem.trials.shaping_stages > 0 {
+            // The staged shaping's end point meets the task's rows when its last stage is
+            // met: a candidate like the feasibility phase's, replaced only by a better one.
+            shaped_candidate = true;
+            (x, end) = (
+                nlp.hand_made_start().to_vec(),
+                assess(f, nlp.hand_made_start()),
+            );
+        }
     }
     let mut last: Option<Solution> = None;
     let mut unproductive = 0;
@@ -341,18 +354,24 @@ pub fn solve_trial(
         evaluations.functions += solution.evaluations.functions;
         evaluations.derivatives += solution.evaluations.derivatives;
         evaluations.hessians += solution.evaluations.hessians;
-        let offset = log.last().map_or(0, |r| r.iter + 1);
-        let elapsed = log.last().map_or(0.0, |r| r.elapsed);
-        log.extend(solution.log.iter().cloned().map(|mut r| {
-            r.iter += offset;
-            r.elapsed += elapsed;
-            r
-        }));
+        append_log(&mut log, &solution.log);
         let x_solved = nlp.physical(&solution.x);
         let end_solved = assess(f, &x_solved);
         // Without a feasibility phase the first solve's end point is the trial's result even
         // if it is worse than the start (classified Unimproved); later points must improve.
-        let first = attempt == 0 && !problem.trials.feasibility_first;
+        let first = attempt == 0 && !problem.trials.feasibility_first && !shaped_candidate;
+        // A solve that ends short of the tolerance at a lower effort than a kept point that
+        // meets it is re-solved once from its own end point (a fresh quasi-Newton model often
+        // brings such a point back onto the rows); the kept point stays unless beaten.
+        let cheaper_unmet = match (end.as_ref(), end_solved.as_ref()) {
+            (Some(a), Some(b)) => a.max() <= tol && b.max() > tol && b.cost < a.cost,
+            _ => false,
+        };
+        let polish = (!polished
+            && !first
+            && cheaper_unmet
+            && !matches!(solution.status, Status::TimeLimit | Status::Interrupted))
+        .then(|| x_solved.clone());
         let productive = attempt > 0 && halves_violation(end.as_ref(), end_solved.as_ref(), tol);
         if first || improves(end.as_ref(), end_solved.as_ref(), tol) {
             (x, end) = (x_solved, end_solved);
@@ -368,6 +387,11 @@ pub fn solve_trial(
             Status::IterationLimit | Status::TimeLimit | Status::Interrupted
         );
         last = Some(solution);
+        if let Some(from) = polish {
+            polished = true;
+            nlp = f.starting_at(&from);
+            continue;
+        }
         if budget
             || unproductive >= problem.trials.restarts
             || end.as_ref().is_some_and(|a| a.max() <= tol)
@@ -394,6 +418,17 @@ pub fn solve_trial(
         evaluations,
         solution,
     }
+}
+
+/// Appends a solve's iteration log to a trial's, numbering and timing it on from the end.
+pub(super) fn append_log(log: &mut Vec<IterationRecord>, more: &[IterationRecord]) {
+    let offset = log.last().map_or(0, |r| r.iter + 1);
+    let elapsed = log.last().map_or(0.0, |r| r.elapsed);
+    log.extend(more.iter().cloned().map(|mut r| {
+        r.iter += offset;
+        r.elapsed += elapsed;
+        r
+    }));
 }
 
 /// Solves trials `which` (1-based; all when `None`) in parallel.
@@ -626,6 +661,27 @@ mod tests {
             a.iterations
         );
         assert_ne!(a.x, b.x);
+    }
+
+    /// With staged shaping the trial ends at a point meeting the task's rows (the staged
+    /// end point is kept unless a later one is better), judged on the task's rows alone.
+    #[test]
+    fn staged_shaping_trial_meets_the_task() {
+        let mut p = golden("pogo_crouch_short");
+        let mut row = p.constraints[0].clone();
+        (row.time, row.step) = (0.25, (0.25 / p.dt).round() as usize);
+        (row.lower, row.upper) = (0.2, 0.3);
+        p.shaping = vec![row];
+        p.trials.shaping_stages = 2;
+        let options = Options {
+            max_iterations: 40,
+            verbosity: 0,
+            ..Options::default()
+        };
+        let r = &run_trials(&p, 8, Some(2), &options)[0];
+        let end = r.end.as_ref().unwrap();
+        assert_eq!(end.violations.len(), p.constraints.len());
+        assert_eq!(r.status, TrialStatus::Success, "{:?}", end.violations);
     }
 
     /// A restart is productive only if both points miss the tolerance and the violation sum
