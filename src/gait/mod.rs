@@ -32,6 +32,14 @@ pub mod trials;
 #[cfg(test)]
 mod truth_tests;
 
+/// The golden-test problem file `tests/golden/problems/gait/{name}.toml`, loaded (tests only).
+#[cfg(test)]
+pub(crate) fn golden_problem(name: &str) -> Problem {
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join(format!("tests/golden/problems/gait/{name}.toml"));
+    load(&path).unwrap()
+}
+
 use std::path::Path;
 use std::time::Instant;
 

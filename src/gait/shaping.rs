@@ -170,12 +170,7 @@ fn constraint_values(f: &Formulation<'_>, x: &[f64]) -> Option<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn golden(name: &str) -> Problem {
-        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join(format!("tests/golden/problems/gait/{name}.toml"));
-        crate::gait::load(&path).unwrap()
-    }
+    use crate::gait::golden_problem as golden;
 
     /// Violated bounds move towards the value by the fraction 1 − w; met ones stay.
     #[test]

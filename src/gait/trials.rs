@@ -530,18 +530,13 @@ pub fn table_json(results: &[TrialResult], tol: f64) -> serde_json::Value {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gait::golden_problem as golden;
 
     fn a(v: &[f64]) -> Assessment {
         Assessment {
             cost: 1.0,
             violations: v.to_vec(),
         }
-    }
-
-    fn golden(name: &str) -> Problem {
-        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join(format!("tests/golden/problems/gait/{name}.toml"));
-        crate::gait::load(&path).unwrap()
     }
 
     /// Starts are reproducible, distinct and within the spline box; trial 1 is the hand-made one.
