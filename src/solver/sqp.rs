@@ -331,6 +331,13 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
 }
 
 impl<'a> Sqp<'a> {
+    /// A subproblem's multipliers in the problem's terms: the exact model's row weights
+    /// undone, and void rows' multipliers set to 0 (`multipliers::clear_void_rows`).
+    fn subproblem_multipliers(&self, lambda: &mut [f64], jac: &CsrMatrix<f64>, d: &[f64]) {
+        self.model.restore_multipliers(lambda, jac, d);
+        multipliers::clear_void_rows(jac, lambda);
+    }
+
     /// Relative tolerance handed to the QP method (the sparse one stops at it; two orders
     /// tighter than the outer test so that QP multipliers do not limit the final accuracy).
     fn qp_tolerance(&self) -> f64 {
@@ -817,8 +824,7 @@ impl<'a> Sqp<'a> {
             bu: &bu,
         };
         let mut qp = qp::solve(&problem, &mut self.warm, tol);
-        self.model.restore_multipliers(&mut qp.lambda, jac, &qp.d);
-        multipliers::clear_void_rows(jac, &mut qp.lambda);
+        self.subproblem_multipliers(&mut qp.lambda, jac, &qp.d);
         let lin = Linearization {
             a: jac,
             dl: &dl,
@@ -875,8 +881,7 @@ impl<'a> Sqp<'a> {
         };
         let best_reduction = (now - least).max(0.0);
         let mut sol = elastic::solve_elastic(h, g, &lin, &rho, &mut self.elastic_warm, tol);
-        self.model.restore_multipliers(&mut sol.lambda, jac, &sol.d);
-        multipliers::clear_void_rows(jac, &mut sol.lambda);
+        self.subproblem_multipliers(&mut sol.lambda, jac, &sol.d);
         iterations += sol.iterations;
         for _ in 0..MAX_STEERING {
             let after = lin.violation_after(&sol.d);
@@ -888,8 +893,7 @@ impl<'a> Sqp<'a> {
                 *w *= 10.0;
             }
             sol = elastic::solve_elastic(h, g, &lin, &rho, &mut self.elastic_warm, tol);
-            self.model.restore_multipliers(&mut sol.lambda, jac, &sol.d);
-            multipliers::clear_void_rows(jac, &mut sol.lambda);
+            self.subproblem_multipliers(&mut sol.lambda, jac, &sol.d);
             iterations += sol.iterations;
         }
         // A failed subproblem keeps the weights (steering raised them in vain).
