@@ -214,6 +214,8 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let solve_start = Instant::now();
     let mut solution: Solution;
     let mut round = 0;
+    // The last round that ended Optimal: its model, solution and number.
+    let mut converged: Option<(TrussNlp, Solution, usize)> = None;
     loop {
         solution = crate::solver::solve(&nlp, &options);
         iterations += solution.iterations;
@@ -222,6 +224,10 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         evaluations.hessians += solution.evaluations.hessians;
         logs.push(solution.log.clone());
         round += 1;
+        let optimal = solution.status == crate::solver::Status::Optimal;
+        if optimal {
+            converged = Some((nlp.clone(), solution.clone(), round));
+        }
         let interrupted = solution.status == crate::solver::Status::Interrupted;
         if round == rounds || interrupted {
             break;
@@ -232,10 +238,26 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             &nlp.forces(&solution.x),
             &problem.round_settings(),
         );
+        if optimal && report.changes_nothing() {
+            // Another solve would start at this optimum of the same model.
+            break;
+        }
         reports.push(report);
         nlp = TrussNlp::new(structure, model.settings.clone(), forces)
             .map_err(|e| Error::Runtime(format!("round {round}: {e}")))?;
     }
+    let rounds_run = round;
+    // A clean-up round that does not converge does not replace a design that did.
+    let result_round = match converged {
+        Some((converged_nlp, converged_solution, converged_round))
+            if solution.status != crate::solver::Status::Optimal =>
+        {
+            nlp = converged_nlp;
+            solution = converged_solution;
+            converged_round
+        }
+        _ => rounds_run,
+    };
     timings.insert("solve".to_string(), solve_start.elapsed().as_secs_f64());
 
     let export_start = Instant::now();
@@ -258,6 +280,8 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         "load_cases": nlp.settings().load_cases,
         "start": start_report,
         "rounds": reports,
+        "rounds_run": rounds_run,
+        "result_round": result_round,
     });
     let glb = export::model_glb(&design).map_err(|e| Error::Runtime(e.to_string()))?;
     let mut artifacts = vec![

@@ -298,3 +298,22 @@ fn with_linear_mass_the_layout_start_balances_self_weight() {
     let off = nlp.max_balance_residual(&x).unwrap() / nlp.force_scale();
     assert!(off > 1e3 * residual.max(1e-12), "{off:e} vs {residual:e}");
 }
+
+#[test]
+fn rounds_stop_once_an_optimal_round_leaves_nothing_to_clean() {
+    // michell solves to Optimal in its first round and its clean-up (no pruning, nothing at
+    // minimum length, no dangling joint) changes nothing: a second solve would start at the
+    // optimum, so four requested rounds run one.
+    let p = problem("michell");
+    let opts = RunOptions {
+        quiet: true,
+        rounds: Some(4),
+        ..Default::default()
+    };
+    let outcome = super::run(&p, &opts).unwrap();
+    assert_eq!(outcome.summary.status, "Optimal");
+    let figures = &outcome.summary.figures;
+    assert_eq!(figures["rounds_run"], 1);
+    assert_eq!(figures["result_round"], 1);
+    assert!(figures["rounds"].as_array().unwrap().is_empty());
+}

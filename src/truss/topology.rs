@@ -78,6 +78,18 @@ pub struct RoundReport {
     pub beams_after: usize,
 }
 
+impl RoundReport {
+    /// True when the clean-up left the structure as it was: nothing merged, pruned, crossed or
+    /// dangling.
+    pub fn changes_nothing(&self) -> bool {
+        self.merged_joints == 0
+            && self.pruned_beams == 0
+            && self.crossings_removed == 0
+            && self.dangling_joints == 0
+            && self.tension_runs == 0
+    }
+}
+
 /// Union–find over joint indices.
 struct Groups {
     parent: Vec<usize>,
