@@ -95,6 +95,11 @@ const QP_RETRY_RADIUS: f64 = 1e-8;
 const ARMIJO: f64 = 1e-4;
 /// Smallest step length tried before the line search gives up.
 const MIN_STEP: f64 = 1e-12;
+/// Smallest trust-region radius, relative to `1 + ‖x‖∞`: below it a trial fails. Steps of that
+/// size change the iterate in its tenth digit; the merit differences they produce are rounding,
+/// and a truss round accepted steps of 1e-11 for hundreds of iterations (30 s each) at a point
+/// already feasible to 3e-14.
+const MIN_RADIUS: f64 = 1e-10;
 /// Largest constraint force `|λᵢ|·‖∇cᵢ‖∞`, relative to `max(1, ‖∇f‖∞)`, accepted from the
 /// ordinary QP; beyond it the linearization is treated as nearly inconsistent and the elastic
 /// subproblem is solved instead (SNOPT switches on large multipliers likewise). At a regular
@@ -1138,7 +1143,7 @@ impl<'a> Sqp<'a> {
     /// the step when it is below 0.25. A rejected step shrinks the radius to the minimizer of
     /// the quadratic through φ(0), its slope and φ(x + d), within [0.1, 0.5]·‖d‖∞, and the
     /// iteration is repeated at the same point; `Failed` once the radius falls below
-    /// [`MIN_STEP`]·(1 + ‖x‖∞). With the exact Hessian the violation cap of the line search
+    /// [`MIN_RADIUS`]·(1 + ‖x‖∞). With the exact Hessian the violation cap of the line search
     /// applies too.
     fn trust_region_step(
         &mut self,
@@ -1154,6 +1159,9 @@ impl<'a> Sqp<'a> {
             return LineSearch::Failed;
         }
         let radius = self.effective_radius(point);
+        if radius < MIN_RADIUS * xnorm {
+            return LineSearch::Failed;
+        }
         let predicted = -(slope + 0.5 * dhd.max(0.0));
         let phi0 = self.merit(&point.values);
         let v0 = merit::l1_violation(&point.values.c, &self.ev.cl, &self.ev.cu);
@@ -1218,7 +1226,7 @@ impl<'a> Sqp<'a> {
         };
         self.radius = shrink.clamp(0.1, 0.5) * dnorm;
         self.log_radius((phi0 - phi) / predicted);
-        if self.radius < MIN_STEP * xnorm {
+        if self.radius < MIN_RADIUS * xnorm {
             return LineSearch::Failed;
         }
         LineSearch::Rejected
