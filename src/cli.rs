@@ -82,9 +82,10 @@ pub struct Common {
     /// Major-iteration limit (overrides [solver] max_iterations).
     #[arg(long, value_name = "N")]
     pub max_iter: Option<usize>,
-    /// Seed for every random choice; the same file and seed give the same result.
-    #[arg(long, value_name = "N", default_value_t = 0)]
-    pub seed: u64,
+    /// Seed for every random choice [default: 0, or a truss file's `seed`]; the same file and
+    /// seed give the same result. Given, it overrides the file's `seed`.
+    #[arg(long, value_name = "N")]
+    pub seed: Option<u64>,
     /// Worker threads [default: all cores]; results do not depend on it.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     pub threads: Option<u64>,
@@ -104,7 +105,8 @@ impl Command {
             verbose: common.verbose,
             check: common.check,
             max_iter: common.max_iter,
-            seed: common.seed,
+            seed: common.seed.unwrap_or(0),
+            seed_given: common.seed.is_some(),
             threads: common.threads.map(|t| t as usize),
             ..RunOptions::default()
         };
@@ -146,9 +148,20 @@ mod tests {
         assert_eq!(kind, Kind::Truss);
         assert_eq!(common.file, PathBuf::from("p.toml"));
         assert_eq!(
-            (opts.rounds, opts.seed, opts.quiet, opts.max_iter),
-            (Some(3), 9, true, Some(5))
+            (
+                opts.rounds,
+                opts.seed,
+                opts.seed_given,
+                opts.quiet,
+                opts.max_iter
+            ),
+            (Some(3), 9, true, true, Some(5))
         );
+        let (_, _, opts) = Cli::try_parse_from(["optimize", "truss", "p.toml"])
+            .unwrap()
+            .command
+            .resolve();
+        assert_eq!((opts.seed, opts.seed_given), (0, false));
         assert!(Cli::try_parse_from(["optimize", "gait", "p.toml", "--trial", "0"]).is_err());
         assert!(Cli::try_parse_from(["optimize", "cmc", "p.toml", "-q", "-v"]).is_err());
     }

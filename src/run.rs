@@ -55,6 +55,8 @@ pub struct RunOptions {
     pub max_iter: Option<usize>,
     /// Seed for every random choice (ground structures, random starts, annealing).
     pub seed: u64,
+    /// `seed` was given explicitly (`--seed`): it overrides a problem file's own `seed`.
+    pub seed_given: bool,
     /// Worker threads for parallel parts (trials, multistart); `None` = all cores.
     pub threads: Option<usize>,
     /// Gait: run only this trial (1-based).

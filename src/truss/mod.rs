@@ -97,9 +97,12 @@ impl Problem {
         &self.model
     }
 
-    /// The seed a run uses: the file's `seed`, else the run's.
+    /// The seed a run uses: an explicit `--seed`, else the file's `seed`, else the run's (0).
     pub fn seed(&self, opts: &RunOptions) -> u64 {
-        self.spec.seed.unwrap_or(opts.seed)
+        match self.spec.seed {
+            Some(seed) if !opts.seed_given => seed,
+            _ => opts.seed,
+        }
     }
 
     /// The model for a seed (rebuilt only when random generation depends on it).

@@ -317,3 +317,18 @@ fn rounds_stop_once_an_optimal_round_leaves_nothing_to_clean() {
     assert_eq!(figures["result_round"], 1);
     assert!(figures["rounds"].as_array().unwrap().is_empty());
 }
+
+#[test]
+fn an_explicit_seed_overrides_the_files_seed() {
+    let pinned = problem("crane_tripod");
+    let unpinned = problem("warren_bridge");
+    let run = |seed, seed_given| RunOptions {
+        seed,
+        seed_given,
+        ..Default::default()
+    };
+    assert_eq!(pinned.seed(&run(0, false)), 16);
+    assert_eq!(pinned.seed(&run(13, true)), 13);
+    assert_eq!(pinned.seed(&run(0, true)), 0);
+    assert_eq!(unpinned.seed(&run(7, false)), 7);
+}
