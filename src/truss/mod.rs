@@ -250,17 +250,17 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             .map_err(|e| Error::Runtime(format!("round {round}: {e}")))?;
     }
     let rounds_run = round;
-    // A clean-up round that does not converge does not replace a design that did.
-    let result_round = match converged {
-        Some((converged_nlp, converged_solution, converged_round))
-            if solution.status != crate::solver::Status::Optimal =>
-        {
-            nlp = converged_nlp;
-            solution = converged_solution;
-            converged_round
-        }
-        _ => rounds_run,
-    };
+    let result_round = reported_round(
+        rounds_run,
+        solution.status == crate::solver::Status::Optimal,
+        converged.as_ref().map(|c| c.2),
+    );
+    if let Some((converged_nlp, converged_solution, converged_round)) = converged
+        && converged_round == result_round
+    {
+        nlp = converged_nlp;
+        solution = converged_solution;
+    }
     timings.insert("solve".to_string(), solve_start.elapsed().as_secs_f64());
 
     let export_start = Instant::now();
@@ -318,6 +318,16 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         check_passed: None,
         artifacts,
     })
+}
+
+/// The round whose design a run reports: the last one, unless it did not end Optimal while an
+/// earlier one did (`last_converged`, the last such round) — a clean-up that the next solve
+/// cannot settle does not discard a converged design.
+fn reported_round(last: usize, last_optimal: bool, last_converged: Option<usize>) -> usize {
+    match last_converged {
+        Some(round) if !last_optimal => round,
+        _ => last,
+    }
 }
 
 /// The point a derivative check uses: the start, with every free-joint coordinate moved by a
