@@ -49,6 +49,8 @@ pub struct RoundSettings {
     pub remove_crossings: bool,
     /// l_max, m (a tension run is not merged into a longer beam).
     pub max_length: Option<f64>,
+    /// Whether joints may be merged (step 1) and tension runs joined (step 4).
+    pub merge: bool,
 }
 
 /// Largest angle (rad) between the two members of a tension run that is merged (module header,
@@ -156,7 +158,7 @@ pub fn clean(
     };
     let limit = settings.min_length * (1.0 + settings.merge_tolerance);
     for b in &structure.beams {
-        if length(b) <= limit && groups.union(b.ends[0], b.ends[1]) {
+        if settings.merge && length(b) <= limit && groups.union(b.ends[0], b.ends[1]) {
             report.merged_joints += 1;
         }
     }
@@ -248,6 +250,9 @@ pub fn clean(
             .filter(|&i| alive[i] && joints[i].is_free() && degree[i] <= 1)
             .collect();
         if dangling.is_empty() {
+            if !settings.merge {
+                break;
+            }
             if let Some(i) = merge_tension_run(&joints, &alive, &mut beams, settings.max_length) {
                 alive[i] = false;
                 report.tension_runs += 1;
@@ -350,6 +355,7 @@ mod tests {
             prune: 0.0,
             remove_crossings: false,
             max_length: None,
+            merge: true,
         }
     }
 
@@ -455,21 +461,42 @@ mod tests {
         assert!(start.iter().all(|f| f.abs() >= 1e-2));
     }
 
+    /// Pinned anchors 0 at (0, 0) and 1 at (4, 0), then free joints at `free` (x, y).
+    fn tie_with_free_joints(free: &[(f64, f64)]) -> Vec<Joint> {
+        let pinned = || JointKind::Anchor(Support::Pinned);
+        let mut joints = vec![joint(0.0, 0.0, pinned()), joint(4.0, 0.0, pinned())];
+        joints.extend(free.iter().map(|&(x, y)| joint(x, y, JointKind::Free)));
+        joints
+    }
+
+    #[test]
+    fn without_merging_short_beams_and_straight_ties_stay() {
+        // Free joints 2 and 3 at l_min on a straight tie between anchors 0 and 1: merging
+        // would join 2 and 3 and then the tie; with `merge` off nothing changes.
+        let s = Structure {
+            joints: tie_with_free_joints(&[(2.0, 0.0), (2.1, 0.0)]),
+            beams: vec![Beam::new(0, 2), Beam::new(1, 3), Beam::new(2, 3)],
+        };
+        let forces = vec![vec![-3.0, -3.0, -3.0]];
+        let merging = clean(&s, &positions(&s), &forces, &settings()).2;
+        assert_eq!((merging.merged_joints, merging.tension_runs), (1, 1));
+        let kept = RoundSettings {
+            merge: false,
+            ..settings()
+        };
+        let (out, start, report) = clean(&s, &positions(&s), &forces, &kept);
+        assert!(report.changes_nothing());
+        assert_eq!(out, s);
+        assert_eq!(start, vec![-3.0, -3.0, -3.0]);
+    }
+
     #[test]
     fn a_joint_left_on_a_straight_tie_becomes_one_member() {
         // Anchors 0 and 1; free joint 2 on the tie between them (kinked by 1e-4 rad, its own
         // weight), free joint 3 on a bent tension path 0–3–1, free joint 4 on a compression run
         // 0–4–1 (kept: two Euler halves weigh half the whole), and the pair 0–1 in tension.
-        let free = || JointKind::Free;
-        let pinned = || JointKind::Anchor(Support::Pinned);
         let s = Structure {
-            joints: vec![
-                joint(0.0, 0.0, pinned()),
-                joint(4.0, 0.0, pinned()),
-                joint(2.0, 2e-4, free()),
-                joint(2.0, 1.0, free()),
-                joint(2.0, -2e-4, free()),
-            ],
+            joints: tie_with_free_joints(&[(2.0, 2e-4), (2.0, 1.0), (2.0, -2e-4)]),
             beams: vec![
                 Beam::new(0, 1),
                 Beam::new(0, 2),
