@@ -76,9 +76,11 @@ mod solution;
 mod sqp;
 mod status;
 mod termination;
+mod tuning;
 
 pub use nlp::{Bounds, Dims, EvalError, Nlp};
 pub use options::{Globalization, HessianMode, Options};
 pub use solution::{Evaluations, IterationRecord, Solution};
 pub use sqp::solve;
 pub use status::Status;
+pub use tuning::Tuning;

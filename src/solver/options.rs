@@ -5,6 +5,7 @@ use std::sync::atomic::AtomicBool;
 
 use serde::{Deserialize, Serialize};
 
+use super::Tuning;
 use super::qp::QpMethod;
 
 /// How the solver obtains second-order information.
@@ -61,6 +62,8 @@ pub struct Options {
     /// Set from outside (Ctrl-C) to stop at the end of the current iteration with status
     /// `Interrupted`, returning the best point so far.
     pub interrupt: Option<Arc<AtomicBool>>,
+    /// The SQP method's tuning constants (tests vary them; problem files cannot).
+    pub tuning: Tuning,
 }
 
 impl Default for Options {
@@ -76,6 +79,7 @@ impl Default for Options {
             globalization: Globalization::LineSearch,
             verbosity: 1,
             interrupt: None,
+            tuning: Tuning::default(),
         }
     }
 }

@@ -26,7 +26,7 @@
 //! nonetheless moves with curvature s (a cautious step), and is free at the next iterate.
 //!
 //! The sparse QP path uses [`decouple_triplets`] (the same, on the triplets, with each held
-//! variable's own curvature scale), and only near a feasible point (`sqp::HELD_VIOLATION`):
+//! variable's own curvature scale), and only near a feasible point (`Tuning::held_violation`):
 //! at the gait ball collocation's fourth iterate (violation 2.2e2) eight variables held at
 //! their bounds had to leave them by long steps, and the model without their couplings gave
 //! QP multipliers of 9e7 where the coupled one gave 1e3 (the solve then Stalled instead of
