@@ -16,7 +16,6 @@ use serde::Serialize;
 use crate::error::Error;
 use crate::solver::derivatives::DerivativeReport;
 use crate::solver::{EvalError, Evaluations, Nlp, Options, Solution, Status};
-use crate::spec::SolverSpec;
 
 /// The problem kinds, one per module.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -70,8 +69,8 @@ pub struct RunOptions {
 impl RunOptions {
     /// Solver options for one solve: the problem file's `[solver]` table, then the command
     /// line on top (`--max-iter`, `--quiet` → silent log, `--verbose` → detailed log, Ctrl-C).
-    pub fn solver_options(&self, spec: &SolverSpec) -> Options {
-        let mut options = spec.options();
+    pub fn solver_options(&self, file: &Options) -> Options {
+        let mut options = file.clone();
         if let Some(n) = self.max_iter {
             options.max_iterations = n;
         }

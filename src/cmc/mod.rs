@@ -133,7 +133,7 @@ impl Problem {
     /// silently with the file's `[solver]` options). Used to hand the same start to other
     /// programs (Surface Evolver).
     pub fn start(&self) -> Result<CmcNlp, Error> {
-        let mut options = self.spec.file.solver.options();
+        let mut options = self.spec.file.solver.clone();
         options.verbosity = 0;
         match multilevel::coarse_to_fine(self, &options)? {
             Some(staged) => Ok(staged.nlp),

@@ -184,7 +184,7 @@ mod tests {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("problems/cmc/octahedron_quadrilateral.toml");
         let problem = crate::cmc::load(&path).unwrap().with_resolution(2);
-        let mut options = problem.spec.file.solver.options();
+        let mut options = problem.spec.file.solver.clone();
         options.verbosity = 0;
         let staged = coarse_to_fine(&problem, &options).unwrap().unwrap();
         assert_eq!(staged.stages.len(), 1);

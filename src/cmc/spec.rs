@@ -34,7 +34,8 @@ use super::nlp::Chord;
 use super::octahedron::{self, OctahedronTopology};
 use super::volume::Region;
 use crate::error::InputError;
-use crate::spec::{Key, SolverSpec, Source};
+use crate::solver::Options;
+use crate::spec::{Key, Source, validate_solver};
 
 /// The whole file.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -54,7 +55,7 @@ pub struct CmcFile {
     pub chord: Vec<ChordSpec>,
     /// Solver options.
     #[serde(default)]
-    pub solver: SolverSpec,
+    pub solver: Options,
 }
 
 /// `[quality]`.
@@ -327,7 +328,7 @@ impl CmcSpec {
 
     fn validate(&self) -> Result<(), InputError> {
         let f = &self.file;
-        f.solver.validate(&self.source, &[Key::Name("solver")])?;
+        validate_solver(&f.solver, &self.source, &[Key::Name("solver")])?;
         if let Some(r) = f.resolution
             && !(1..=64).contains(&r)
         {

@@ -41,7 +41,8 @@ use super::spatial::{Mat3, RigidInertia, Vec3};
 use super::spline::KnotGrid;
 use super::task::{PoseConstraint, Quantity};
 use crate::error::InputError;
-use crate::spec::{Key, SolverSpec, Source};
+use crate::solver::Options;
+use crate::spec::{Key, Source, validate_solver};
 
 /// The whole file.
 #[derive(Debug, Clone, Deserialize)]
@@ -75,7 +76,7 @@ pub struct FileSpec {
     pub trials: TrialsSpec,
     /// Solver options.
     #[serde(default)]
-    pub solver: SolverSpec,
+    pub solver: Options,
 }
 
 /// The `[trials]` table: how many starts are solved, how random starts are drawn, how force
@@ -433,7 +434,7 @@ pub struct Problem {
     /// Trial settings.
     pub trials: TrialSettings,
     /// Solver options table.
-    pub solver: SolverSpec,
+    pub solver: Options,
 }
 
 impl Problem {
@@ -536,7 +537,7 @@ fn unit(v: [f64; 3]) -> Option<[f64; 3]> {
 
 fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
     let err = |p: Path<'_>, msg: String| source.error_at(&p, msg);
-    file.solver.validate(source, &[Key::Name("solver")])?;
+    validate_solver(&file.solver, source, &[Key::Name("solver")])?;
     if !(file.dt > 0.0 && file.dt <= 0.01) {
         return Err(err(
             path(&["dt".into()]),

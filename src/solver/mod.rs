@@ -79,7 +79,7 @@ mod termination;
 mod tuning;
 
 pub use nlp::{Bounds, Dims, EvalError, Nlp};
-pub use options::{Globalization, HessianMode, Options};
+pub use options::{Globalization, HessianMode, InvalidSetting, Options};
 pub use solution::{Evaluations, IterationRecord, Solution};
 pub use sqp::solve;
 pub use status::Status;

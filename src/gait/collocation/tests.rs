@@ -130,7 +130,7 @@ fn the_solved_ball_is_physically_valid() {
     let nlp = Collocation::new(&p);
     let options = Options {
         verbosity: 0,
-        ..p.solver.options()
+        ..p.solver.clone()
     };
     let sol = solve(&nlp, &options);
     assert_eq!(sol.status, Status::Optimal, "{:?}", sol.status);
