@@ -297,7 +297,7 @@ fn figures_json(nlp: &CmcNlp, mesh: &mesh::Mesh, x: &[f64]) -> Result<serde_json
     Ok(value)
 }
 
-/// The `--check` comparison: [`CHECK_COLUMNS`] variables spread over the mesh, central steps of
+/// The `--check` comparison: `CHECK_COLUMNS` variables spread over the mesh, central steps of
 /// about 3e-6 in scaled units (edges are 0.1–0.5), and re-estimation with 10× and 100× smaller
 /// steps wherever forward and backward differences disagree by more than a tenth of the
 /// tolerance: the mixed-area rule of Meyer et al. has kinks at right angles (which grid-made

@@ -232,7 +232,7 @@ fn improves(a: Option<&Assessment>, b: Option<&Assessment>, tol: f64) -> bool {
 
 /// Solves one trial from physical start `x0`: the feasibility phase first when the problem asks
 /// for it ([`crate::gait::feasibility`]), then the SQP solve (and restarts) from its end point;
-/// the best point met (by [`improves`]) is the trial's result.
+/// the best point met (by `improves`) is the trial's result.
 pub fn solve_trial(
     problem: &Problem,
     f: &Formulation<'_>,

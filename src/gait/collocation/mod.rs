@@ -6,7 +6,7 @@
 //! - [`spec`]: the problem file (`formulation = "collocation"`), the seed's "actuated rubber
 //!   ball" (a point mass that can push on the floor only during its contact phases);
 //! - [`nlp`]: knots, variables, constraints and their constant exact derivatives;
-//! - [`validate`]: the physical checks of a solution (Newtonian residual between knots, RK4
+//! - [`validate`](mod@validate): the physical checks of a solution (Newtonian residual between knots, RK4
 //!   re-simulation, impulse balance, floor, friction, wall clearance).
 //!
 //! Selected by a gait problem file with a top-level `formulation = "collocation"`
@@ -35,7 +35,7 @@ pub fn load_source(source: &Source) -> Result<Problem, InputError> {
 }
 
 /// Solves the problem (or, with `opts.check`, compares its derivatives with central
-/// differences at the start point) and reports the physical checks of [`validate`] in the
+/// differences at the start point) and reports the physical checks of [`validate`](mod@validate) in the
 /// `result.json` figures; writes `trajectory.csv` (knots) and `iterations.csv`.
 pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let nlp = Collocation::new(problem);

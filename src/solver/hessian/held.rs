@@ -47,7 +47,7 @@ pub const WEAK_GRADIENT: f64 = 1e-4;
 
 /// Indices of the variables held at a bound: at it to within `1e-10·(1 + |bound|)` and pushed
 /// into it by the Lagrangian gradient `grad_l`, or not pulled off it by more than
-/// [`WEAK_GRADIENT`] (see the module header). Scaled units.
+/// `WEAK_GRADIENT` (see the module header). Scaled units.
 pub fn held_at_bounds(x: &[f64], xl: &[f64], xu: &[f64], grad_l: &[f64]) -> Vec<usize> {
     let near = |a: f64, b: f64| (a - b).abs() <= 1e-10 * (1.0 + b.abs());
     (0..x.len())
