@@ -390,7 +390,7 @@ impl<'p> Reduced<'p> {
     /// `S_{n+1} = Φ·S_n + Σ_s G_s·W_s` with `W_s` the spline weights at stage time `s`, and a
     /// constraint row is `∂C/∂x · S` at its sample. The cost per step does not grow with the
     /// number of parameters (apart from the small product); on the Luxo leap it takes about as
-    /// long as the chunked method on one thread (BENCHMARKS.md), which also runs its chunks in
+    /// long as the chunked method on one thread (docs/notes/gait.md), which also runs its chunks in
     /// parallel, so this is the independent cross-check rather than the default. Single
     /// shooting only (one segment).
     pub fn jacobian_by_tangents<const N: usize>(

@@ -283,7 +283,7 @@ pub fn solve_trial(
         nlp = f.starting_at(&x);
         if !phase.reached {
             // The SQP solve lowers the effort from a feasible point; from a stationary point
-            // of the violation it stalls as before (BENCHMARKS.md).
+            // of the violation it stalls as before (docs/notes/gait.md, feasibility phase).
             let solver_status = if phase.iterations >= options.max_iterations {
                 Status::IterationLimit
             } else {

@@ -15,7 +15,7 @@ pub struct Tuning {
     /// Hessian to the sparse QP method, below [`super::qp::DENSE_LIMIT`]: the dense method's
     /// O(m·n²) work per QP dominates from a few hundred variables (double bubble, n ≈ 600 and 1668:
     /// sparse 15–22× faster, same optimum to 3e-12; hanging chain of 100 links: 15×; see
-    /// BENCHMARKS.md). Kept at 1000, not lower, because a small octahedral film (the
+    /// docs/notes/solver.md). Kept at 1000, not lower, because a small octahedral film (the
     /// `cmc_octahedron_square_short` golden case) still reaches its iteration limit on the sparse
     /// path where the dense one converges.
     pub exact_sparse_limit: usize,

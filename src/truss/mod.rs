@@ -328,7 +328,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
 /// Largest violation (the solver's scaled measure) of a round's end point after which its
 /// clean-up may merge joints and tension runs. Merging moves joints and adds forces; at a point
 /// that does not balance, inside a self-stressed knot of short beams, it turned crane seed 4's
-/// violation of 2.3e-3 into 4.6 (BENCHMARKS.md). Pruning and dangling joints are unaffected.
+/// violation of 2.3e-3 into 4.6 (docs/notes/truss.md). Pruning and dangling joints are unaffected.
 const MERGE_VIOLATION: f64 = 1e-3;
 
 /// The round whose design a run reports: the last one, unless it did not end Optimal while an
