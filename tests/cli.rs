@@ -152,7 +152,7 @@ fn check_on_a_valid_file_exits_0() {
         let out = optimize(&[kind, file, "--check", "-q", "-o", out_dir]);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(0), "{kind} {file}: {stderr}");
-        let summary = std::fs::read_to_string(scratch.0.join("result.json")).unwrap();
+        let summary = std::fs::read_to_string(scratch.0.join("check").join("result.json")).unwrap();
         assert!(summary.contains("\"status\": \"Checked\""), "{summary}");
     }
 }

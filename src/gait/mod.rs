@@ -43,15 +43,16 @@ pub(crate) fn golden_problem(name: &str) -> Problem {
 use std::path::Path;
 use std::time::Instant;
 
+use crate::application::{Application, CheckCase};
 use crate::error::{Error, InputError};
-use crate::run::{Outcome, ResultSummary, RunOptions};
-use crate::solver::derivatives::{CheckOptions, check_derivatives};
+use crate::outcome::{Kind, Outcome, ResultSummary, RunOptions};
+use crate::solver::derivatives::CheckOptions;
 use crate::solver::{Evaluations, Nlp};
 use crate::spec::Source;
 
 pub use spec::Problem;
 
-/// Reads, parses and validates a gait problem file.
+/// Reads, parses and validates a gait problem file of the reduced-gradient formulation.
 pub fn load(path: &Path) -> Result<Problem, InputError> {
     spec::load_source(&Source::read(path)?)
 }
@@ -63,19 +64,64 @@ impl Problem {
     }
 }
 
-/// Loads and runs a gait problem file: the traditional collocation formulation when the file
-/// says `formulation = "collocation"` ([`collocation`]), else the reduced-gradient one
-/// ([`load`], [`run`]). Returns the problem's name and the outcome.
-pub fn execute(path: &Path, opts: &RunOptions) -> Result<(String, Outcome), Error> {
-    let source = Source::read(path)?;
-    if collocation::spec::selects_collocation(&source) {
-        let problem = collocation::load_source(&source)?;
-        let outcome = collocation::run(&problem, opts)?;
-        return Ok((problem.name.clone(), outcome));
+/// A loaded gait problem in either formulation: the reduced-gradient one, or the traditional
+/// collocation one when the file says `formulation = "collocation"` ([`collocation`]).
+#[derive(Debug, Clone)]
+pub enum GaitProblem {
+    /// [`reduced`], solved in trials ([`trials`]).
+    Reduced(Box<Problem>),
+    /// [`collocation`].
+    Collocation(Box<collocation::Problem>),
+}
+
+/// Gait problems as an [`Application`].
+pub struct Gait;
+
+impl Application for Gait {
+    const KIND: Kind = Kind::Gait;
+    type Problem = GaitProblem;
+
+    fn load(path: &Path) -> Result<GaitProblem, Error> {
+        let source = Source::read(path)?;
+        Ok(if collocation::spec::selects_collocation(&source) {
+            GaitProblem::Collocation(Box::new(collocation::load_source(&source)?))
+        } else {
+            GaitProblem::Reduced(Box::new(spec::load_source(&source)?))
+        })
     }
-    let problem = spec::load_source(&source)?;
-    let outcome = run(&problem, opts)?;
-    Ok((problem.name().to_string(), outcome))
+
+    fn name(problem: &GaitProblem) -> &str {
+        match problem {
+            GaitProblem::Reduced(p) => &p.name,
+            GaitProblem::Collocation(p) => &p.name,
+        }
+    }
+
+    /// Reduced gradient: the NLP at the start point with [`check_options`]. Collocation: the
+    /// NLP at its initial guess, every variable by plain central differences.
+    fn check_case<'p>(problem: &'p GaitProblem, opts: &RunOptions) -> Result<CheckCase<'p>, Error> {
+        Ok(match problem {
+            GaitProblem::Reduced(p) => {
+                let nlp = reduced::Reduced::new(p);
+                let mut x = vec![0.0; nlp.dims().n];
+                nlp.start(&mut x);
+                CheckCase::new(Box::new(nlp), x, check_options(), opts.seed)
+            }
+            GaitProblem::Collocation(p) => {
+                let nlp = collocation::Collocation::new(p);
+                let x = nlp.initial_guess();
+                CheckCase::new(Box::new(nlp), x, collocation::check_options(), opts.seed)
+                    .figure("formulation", "collocation")
+            }
+        })
+    }
+
+    fn run(problem: &GaitProblem, opts: &RunOptions) -> Result<Outcome, Error> {
+        match problem {
+            GaitProblem::Reduced(p) => solve_trials(p, opts),
+            GaitProblem::Collocation(p) => collocation::run(p, opts),
+        }
+    }
 }
 
 /// Relative agreement required of exact derivatives and central differences in `--check` runs.
@@ -92,38 +138,6 @@ pub fn check_options() -> CheckOptions {
         kink_threshold: Some(CHECK_TOLERANCE),
         ..CheckOptions::default()
     }
-}
-
-/// Runs a gait problem. With `opts.check`: builds the reduced-gradient NLP, evaluates it at the
-/// start point and compares its exact derivatives with extrapolated central differences by the
-/// shared checker ([`check_options`]; the report goes to `result.json` figures). Otherwise
-/// solves the trials ([`trials`]; `opts.trial` picks one) and returns the best motion
-/// ([`solve_trials`]).
-pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
-    if !opts.check {
-        return solve_trials(problem, opts);
-    }
-    let t0 = Instant::now();
-    let nlp = reduced::Reduced::new(problem);
-    let d = nlp.dims();
-    let mut x = vec![0.0; d.n];
-    nlp.start(&mut x);
-    let failed = |e: crate::solver::EvalError| Error::Runtime(format!("{}: {e}", problem.name));
-    let report = check_derivatives(&nlp, &x, &check_options()).map_err(failed)?;
-    let mut summary = ResultSummary::checked(&problem.name, "gait", opts.seed, &nlp, &x, &report)
-        .map_err(failed)?;
-    summary
-        .timings
-        .insert("check".to_string(), t0.elapsed().as_secs_f64());
-    summary.set_figure("variables", d.n);
-    summary.set_figure("constraints", d.m);
-    summary.set_figure("jacobian_nonzeros", d.jac_nnz);
-    Ok(Outcome {
-        summary,
-        status: None,
-        check_passed: Some(report.passed()),
-        artifacts: vec![],
-    })
 }
 
 /// Solves the trials in parallel, prints the trial table (unless `opts.quiet`) and returns the
@@ -178,7 +192,7 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     let end = chosen.end.as_ref();
     let summary = ResultSummary {
         problem: problem.name.clone(),
-        kind: "gait".into(),
+        kind: Kind::Gait,
         status: format!("{:?}", chosen.solver_status),
         status_message: format!(
             "Best of {} trial(s): trial {} ({:?}). {}",

@@ -748,11 +748,15 @@ mod tests {
     #[test]
     fn check_run_passes_on_a_short_pogo_jump() {
         let p = shortened("pogo_jump", 0.2);
-        let opts = crate::run::RunOptions {
+        let opts = crate::outcome::RunOptions {
             check: true,
             ..Default::default()
         };
-        let out = crate::gait::run(&p, &opts).unwrap();
+        let out = crate::application::run_problem::<crate::gait::Gait>(
+            &crate::gait::GaitProblem::Reduced(Box::new(p)),
+            &opts,
+        )
+        .unwrap();
         assert_eq!(out.check_passed, Some(true), "{:?}", out.summary.figures);
         assert_eq!(out.summary.status, "Checked");
         // The shipped start (no force) leaves the pogo on the ground: the jump is violated by

@@ -64,6 +64,7 @@ mod elastic;
 mod evaluator;
 pub mod global;
 pub mod hessian;
+pub mod interrupt;
 pub mod kkt;
 mod log;
 mod merit;
@@ -77,6 +78,7 @@ mod sqp;
 mod status;
 mod termination;
 
+pub use interrupt::{Interrupt, Interruptible};
 pub use nlp::{Bounds, Dims, EvalError, Nlp};
 pub use options::{Globalization, HessianMode, Options};
 pub use solution::{Evaluations, IterationRecord, Solution};
