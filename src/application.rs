@@ -101,12 +101,16 @@ pub fn run_problem<A: Application>(
     problem: &A::Problem,
     opts: &RunOptions,
 ) -> Result<Outcome, Error> {
-    if opts.check {
+    let mut outcome = if opts.check {
         let case = A::check_case(problem, opts)?;
-        check(A::KIND, A::name(problem), case, &opts.interrupt)
+        check(A::KIND, A::name(problem), case, &opts.interrupt)?
     } else {
-        A::run(problem, opts)
+        A::run(problem, opts)?
+    };
+    if opts.interrupt.is_raised() {
+        outcome.mark_interrupted();
     }
+    Ok(outcome)
 }
 
 /// `--check`, the same for every kind: compares the case's exact derivatives with finite

@@ -190,6 +190,24 @@ pub struct Outcome {
 }
 
 impl Outcome {
+    /// Marks a run during which the interrupt flag was raised: status `Interrupted` (exit 130)
+    /// whatever its last solve reported (e.g. an earlier round's `Optimal` kept as the result),
+    /// the summary's message naming both.
+    pub fn mark_interrupted(&mut self) {
+        let status = Status::Interrupted;
+        if self.status == Some(status) && self.summary.status == format!("{status:?}") {
+            return;
+        }
+        self.summary.status_message = format!(
+            "{} Result so far: {}",
+            status.sentence(),
+            self.summary.status_message
+        );
+        self.summary.status = format!("{status:?}");
+        self.status = Some(status);
+        self.check_passed = None;
+    }
+
     /// The process exit code documented in README: 0 converged (or `--check` passed),
     /// 1 evaluation failure or failed derivative check, 3 stopped without converging,
     /// 130 interrupted.

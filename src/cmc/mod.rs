@@ -205,20 +205,30 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let coarse_seconds = solve_started.elapsed().as_secs_f64();
     let mut coarse_stages = Vec::new();
     let (mut iterations, mut evaluations, mut log) = (0, Evaluations::default(), Vec::new());
+    let mut stopped = None;
     if let Some(staged) = staged {
         nlp = staged.nlp;
         coarse_stages = staged.stages;
         iterations = staged.iterations;
         evaluations = staged.evaluations;
         log = staged.log;
+        stopped = staged.stopped;
     }
-    let mut solution = crate::solver::solve(&nlp, &options);
-    iterations += solution.iterations;
-    evaluations.functions += solution.evaluations.functions;
-    evaluations.derivatives += solution.evaluations.derivatives;
-    evaluations.hessians += solution.evaluations.hessians;
-    // The iteration log of every solve, one after the other (iteration numbers restart).
-    log.extend_from_slice(&solution.log);
+    // A coarse level that ended short is the run's result (cmc::multilevel).
+    let coarse_result = stopped.is_some();
+    let mut solution = match stopped {
+        Some(solution) => solution,
+        None => {
+            let solution = crate::solver::solve(&nlp, &options);
+            iterations += solution.iterations;
+            evaluations.functions += solution.evaluations.functions;
+            evaluations.derivatives += solution.evaluations.derivatives;
+            evaluations.hessians += solution.evaluations.hessians;
+            // The iteration log of every solve, one after the other (numbers restart).
+            log.extend_from_slice(&solution.log);
+            solution
+        }
+    };
     let mut rounds = Vec::new();
     let max_edge = problem
         .spec
@@ -229,7 +239,12 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     // Equiangulate (and refine) and re-solve (cmc::remesh); each round's areas show the
     // effect. A feasible point that stalled or ran out of iterations is remeshed too: such a
     // stall here is usually a sliver that flips or splits remove.
-    for _ in 0..problem.spec.file.quality.flip_rounds {
+    let flip_rounds = if coarse_result {
+        0
+    } else {
+        problem.spec.file.quality.flip_rounds
+    };
+    for _ in 0..flip_rounds {
         let feasible_stop = matches!(solution.status, Status::Stalled | Status::IterationLimit)
             && solution.max_violation <= options.constraint_tolerance;
         if !(solution.status.is_success() || feasible_stop) {

@@ -47,7 +47,7 @@ use crate::application::{Application, CheckCase};
 use crate::error::{Error, InputError};
 use crate::outcome::{Kind, Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::CheckOptions;
-use crate::solver::{Evaluations, Nlp};
+use crate::solver::{Evaluations, Nlp, Status};
 use crate::spec::Source;
 
 pub use spec::Problem;
@@ -158,7 +158,12 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
         options.verbosity = 0;
     }
     let clock = Instant::now();
-    let results = trials::run_trials(problem, opts.seed, opts.trial, &options);
+    // Every rollout of the trials polls the run's interrupt flag.
+    let polled = Problem {
+        interrupt: opts.interrupt.clone(),
+        ..problem.clone()
+    };
+    let results = trials::run_trials(&polled, opts.seed, opts.trial, &options);
     let solve_seconds = clock.elapsed().as_secs_f64();
     let tol = problem.trials.tolerance;
     let table = trials::table(&results, tol);
@@ -190,16 +195,18 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     timings.insert("export".to_string(), export_clock.elapsed().as_secs_f64());
     let counts = |s: trials::TrialStatus| results.iter().filter(|r| r.status == s).count();
     let end = chosen.end.as_ref();
+    let status = run_status(chosen);
     let summary = ResultSummary {
         problem: problem.name.clone(),
         kind: Kind::Gait,
-        status: format!("{:?}", chosen.solver_status),
+        status: format!("{status:?}"),
         status_message: format!(
-            "Best of {} trial(s): trial {} ({:?}). {}",
+            "Best of {} trial(s): trial {} ({:?}); its last solve ended {:?}. {}",
             results.len(),
             chosen.trial,
             chosen.status,
-            chosen.solver_status.sentence()
+            chosen.solver_status,
+            status_sentence(status, chosen.status)
         ),
         objective: chosen.cost(),
         max_violation: end.map_or(f64::INFINITY, |a| a.max()),
@@ -210,6 +217,7 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
         figures: serde_json::json!({
             "best_trial": chosen.trial,
             "best_status": format!("{:?}", chosen.status),
+            "best_solver_status": format!("{:?}", chosen.solver_status),
             "cost": chosen.cost(),
             "tolerance": tol,
             "successes": counts(trials::TrialStatus::Success),
@@ -222,10 +230,44 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     };
     Ok(Outcome {
         summary,
-        status: Some(chosen.solver_status),
+        status: Some(status),
         check_passed: None,
         artifacts,
     })
+}
+
+/// The status of a gait run, which decides its exit code (a raised interrupt flag makes any
+/// run `Interrupted`, [`crate::outcome::Outcome::mark_interrupted`]): the run converged
+/// (exit 0) exactly when its best trial is a Success (every pose constraint within `[trials] tolerance`), whatever
+/// stopped that trial's last effort-lowering solve: `Optimal` if that solve converged, else
+/// `Acceptable`. A best trial short of Success keeps its last solve's status, or `Stalled` if
+/// that solve converged to the solver's tolerances but not to the file's (exit 3).
+pub fn run_status(best: &trials::TrialResult) -> Status {
+    let success = best.status == trials::TrialStatus::Success;
+    match best.solver_status {
+        Status::Optimal if success => Status::Optimal,
+        _ if success => Status::Acceptable,
+        s if s.is_success() => Status::Stalled,
+        s => s,
+    }
+}
+
+/// The run's status in one sentence (the trial classes of [`trials`]).
+fn status_sentence(status: Status, best: trials::TrialStatus) -> &'static str {
+    match status {
+        Status::Interrupted => Status::Interrupted.sentence(),
+        Status::Optimal | Status::Acceptable => {
+            "Converged: the best motion meets every pose constraint within the file's tolerance."
+        }
+        _ if best == trials::TrialStatus::Marginal => {
+            "Not converged: the best motion meets every pose constraint only within 10× the \
+             file's tolerance; the best point is returned."
+        }
+        _ => {
+            "Not converged: the best motion violates a pose constraint by more than 10× the \
+             file's tolerance; the best point is returned."
+        }
+    }
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

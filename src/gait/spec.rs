@@ -41,6 +41,7 @@ use super::spatial::{Mat3, RigidInertia, Vec3};
 use super::spline::KnotGrid;
 use super::task::{PoseConstraint, Quantity};
 use crate::error::InputError;
+use crate::solver::Interrupt;
 use crate::spec::{Key, SolverSpec, Source};
 
 /// The whole file.
@@ -434,6 +435,9 @@ pub struct Problem {
     pub trials: TrialSettings,
     /// Solver options table.
     pub solver: SolverSpec,
+    /// The run's interrupt flag, polled by every rollout of this problem's NLPs (a run sets it
+    /// from its options; a loaded problem has a fresh, lowered one).
+    pub interrupt: Interrupt,
 }
 
 impl Problem {
@@ -877,6 +881,7 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
         shaping,
         trials,
         solver: file.solver,
+        interrupt: Interrupt::new(),
     })
 }
 
