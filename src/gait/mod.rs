@@ -30,6 +30,8 @@ pub mod task;
 pub mod trials;
 
 #[cfg(test)]
+mod interrupt_tests;
+#[cfg(test)]
 mod truth_tests;
 
 /// The golden-test problem file `tests/golden/problems/gait/{name}.toml`, loaded (tests only).
@@ -276,5 +278,68 @@ fn median(mut v: Vec<f64>) -> f64 {
         0 => f64::NAN,
         n if n % 2 == 1 => v[n / 2],
         n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::trials::{Assessment, TrialResult, TrialStatus};
+    use super::*;
+    use crate::solver::Solution;
+
+    fn trial(status: TrialStatus, solver_status: Status) -> TrialResult {
+        let end = Assessment {
+            cost: 1.0,
+            violations: vec![0.0],
+        };
+        TrialResult {
+            trial: 1,
+            origin: "hand-made",
+            x: vec![],
+            start: None,
+            end: Some(end),
+            status,
+            solver_status,
+            iterations: 0,
+            seconds: 0.0,
+            evaluations: Evaluations::default(),
+            solution: Solution {
+                status: solver_status,
+                x: vec![],
+                lambda: vec![],
+                z: vec![],
+                objective: 1.0,
+                constraints: vec![],
+                max_violation: 0.0,
+                optimality: 0.0,
+                iterations: 0,
+                evaluations: Evaluations::default(),
+                seconds: 0.0,
+                log: vec![],
+            },
+        }
+    }
+
+    /// The run converged (exit 0) exactly when its best trial is a Success.
+    #[test]
+    fn a_gait_run_converges_when_its_best_trial_is_a_success() {
+        use TrialStatus::*;
+        let cases = [
+            (Success, Status::Optimal, Status::Optimal),
+            (Success, Status::IterationLimit, Status::Acceptable),
+            (Success, Status::Stalled, Status::Acceptable),
+            (Marginal, Status::Optimal, Status::Stalled),
+            (Failure, Status::IterationLimit, Status::IterationLimit),
+            (Unimproved, Status::Interrupted, Status::Interrupted),
+        ];
+        for (class, solver, want) in cases {
+            let status = run_status(&trial(class, solver));
+            assert_eq!(status, want, "{class:?} {solver:?}");
+            assert_eq!(
+                status.is_success(),
+                class == Success,
+                "{class:?} {solver:?}"
+            );
+        }
     }
 }
