@@ -71,8 +71,10 @@ pub fn load(path: &Path) -> Result<Problem, InputError> {
     let source = Source::read(path)?;
     let spec = spec::parse(source)?;
     let name = spec.file.name.clone().unwrap_or_else(|| {
-        path.file_stem()
-            .map_or_else(|| "cmc".into(), |s| s.to_string_lossy().into_owned())
+        path.file_stem().map_or_else(
+            || Kind::Cmc.name().into(),
+            |s| s.to_string_lossy().into_owned(),
+        )
     });
     let resolution = spec
         .file

@@ -68,8 +68,10 @@ pub fn load(path: &Path) -> Result<Problem, InputError> {
     let spec: TrussSpec = source.parse()?;
     spec::validate(&spec, &source)?;
     let name = spec.name.clone().unwrap_or_else(|| {
-        path.file_stem()
-            .map_or_else(|| "truss".to_string(), |s| s.to_string_lossy().into_owned())
+        path.file_stem().map_or_else(
+            || Kind::Truss.name().into(),
+            |s| s.to_string_lossy().into_owned(),
+        )
     });
     let model = build::build(&spec, &source, spec.seed.unwrap_or(0))?;
     let problem = Problem {
