@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
-use crate::run::{Kind, RunOptions};
+use crate::outcome::{Kind, RunOptions};
 
 const EXAMPLES: &str = "\
 Examples:

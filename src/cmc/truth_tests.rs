@@ -24,7 +24,7 @@ use super::mesh::{Mesh, Point};
 use super::nlp::{CmcNlp, VolumeConstraint};
 use super::volume::Region;
 use super::{Problem, load, run};
-use crate::run::{Outcome, RunOptions};
+use crate::outcome::{Outcome, RunOptions};
 use crate::solver::Options;
 use nalgebra::{DMatrix, Vector3};
 

@@ -41,7 +41,7 @@ use super::spatial::{Mat3, RigidInertia, Vec3};
 use super::spline::KnotGrid;
 use super::task::{PoseConstraint, Quantity};
 use crate::error::InputError;
-use crate::solver::Options;
+use crate::solver::{Interrupt, Options};
 use crate::spec::{Key, Source, validate_solver};
 
 /// The whole file.
@@ -435,6 +435,9 @@ pub struct Problem {
     pub trials: TrialSettings,
     /// Solver options table.
     pub solver: Options,
+    /// The run's interrupt flag, polled by every rollout of this problem's NLPs (a run sets it
+    /// from its options; a loaded problem has a fresh, lowered one).
+    pub interrupt: Interrupt,
 }
 
 impl Problem {
@@ -878,6 +881,7 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
         shaping,
         trials,
         solver: file.solver,
+        interrupt: Interrupt::new(),
     })
 }
 

@@ -98,6 +98,8 @@ impl Assessment {
 
 /// Evaluates the motion of physical spline parameters `x` (the leading entries; segment start
 /// states after them are ignored) by one rollout; `None` if the simulation fails.
+/// After the run's interrupt flag is raised, a rollout stops early and the point is not
+/// assessed (`None`): a trial then keeps the last point it assessed.
 pub fn assess(f: &Formulation<'_>, x: &[f64]) -> Option<Assessment> {
     let nlp = f.reduced();
     let d = nlp.dims();
@@ -256,6 +258,9 @@ pub fn solve_trial(
         let params = &nlp.hand_made_start()[..f.reduced().parameters()];
         let mut current = params.to_vec();
         for stage in stage_problems(problem, params, problem.trials.continuation_stages) {
+            if problem.interrupt.is_raised() {
+                break;
+            }
             let staged = Formulation::new(&stage).starting_at(&current);
             let mut z0 = vec![0.0; staged.dims().n];
             staged.start(&mut z0);

@@ -64,6 +64,7 @@ mod elastic;
 mod evaluator;
 pub mod global;
 pub mod hessian;
+pub mod interrupt;
 pub mod kkt;
 mod log;
 mod merit;
@@ -78,6 +79,7 @@ mod status;
 mod termination;
 mod tuning;
 
+pub use interrupt::{Interrupt, Interruptible};
 pub use nlp::{Bounds, Dims, EvalError, Nlp};
 pub use options::{Globalization, HessianMode, InvalidSetting, Options};
 pub use solution::{Evaluations, IterationRecord, Solution};

@@ -58,6 +58,7 @@
 
 use std::cell::RefCell;
 use std::io::Write;
+use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
@@ -74,7 +75,8 @@ use super::noise;
 use super::qp::{self, QpHessian, QpMethod, QpProblem, QpSolution, QpStatus, WarmStart};
 use super::termination::{self, Kkt, KktInput};
 use super::{
-    EvalError, Globalization, HessianMode, IterationRecord, Nlp, Options, Solution, Status, Tuning,
+    EvalError, Globalization, HessianMode, Interrupt, Interruptible, IterationRecord, Nlp, Options,
+    Solution, Status, Tuning,
 };
 
 /// Consecutive iterations within 100× the tolerances (`Acceptable` level), in windows of
@@ -201,7 +203,22 @@ struct Sqp<'a> {
 }
 
 /// Solves `nlp` from its starting point (see the module documentation for the method).
+/// With [`Options::interrupt`] every evaluation polls the flag too
+/// ([`super::interrupt`]): a raised flag ends the solve with status `Interrupted` at the last
+/// accepted point, within one evaluation.
 pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
+    let Some(flag) = &options.interrupt else {
+        return solve_unguarded(nlp, options);
+    };
+    let interrupt = Interrupt::from(Arc::clone(flag));
+    let mut solution = solve_unguarded(&Interruptible::new(nlp, &interrupt), options);
+    if interrupt.is_raised() && solution.status == Status::EvaluationError {
+        solution.status = Status::Interrupted;
+    }
+    solution
+}
+
+fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
     let started = Instant::now();
     let ev = Evaluator::new(nlp);
     let n = ev.dims.n;
