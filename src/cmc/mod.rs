@@ -41,7 +41,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::error::{Error, InputError};
-use crate::run::{Artifact, Outcome, ResultSummary, RunOptions};
+use crate::run::{Artifact, Headline, Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::{
     CheckOptions, FiniteDifferenceOptions, check_derivatives, jittered_start, spread_columns,
 };
@@ -165,7 +165,8 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         evaluations = staged.evaluations;
         log = staged.log;
     }
-    let mut solution = crate::solver::solve(&nlp, &options);
+    let staged_run = !log.is_empty() || problem.spec.file.quality.flip_rounds > 0;
+    let mut solution = nlp.solve(&options, if staged_run { "full" } else { "" });
     iterations += solution.iterations;
     evaluations.functions += solution.evaluations.functions;
     evaluations.derivatives += solution.evaluations.derivatives;
@@ -182,7 +183,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     // Equiangulate (and refine) and re-solve (cmc::remesh); each round's areas show the
     // effect. A feasible point that stalled or ran out of iterations is remeshed too: such a
     // stall here is usually a sliver that flips or splits remove.
-    for _ in 0..problem.spec.file.quality.flip_rounds {
+    for round in 0..problem.spec.file.quality.flip_rounds {
         let feasible_stop = matches!(solution.status, Status::Stalled | Status::IterationLimit)
             && solution.max_violation <= options.constraint_tolerance;
         if !(solution.status.is_success() || feasible_stop) {
@@ -211,7 +212,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         nlp = nlp
             .remeshed(flipped)
             .map_err(|e| Error::Runtime(format!("{}: {e}", problem.name)))?;
-        solution = crate::solver::solve(&nlp, &options);
+        solution = nlp.solve(&options, &format!("remesh {}", round + 1));
         log.extend_from_slice(&solution.log);
         iterations += solution.iterations;
         evaluations.functions += solution.evaluations.functions;
@@ -234,6 +235,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     // The module's objective in SI units: the total area, m² (the solver saw it scaled by 1/L²
     // plus the tangential regularization, both reported under `figures`).
     summary.objective = area::total_area(&mesh);
+    summary.headline = Headline::new("area", summary.objective, "m²");
     summary.iterations = iterations;
     summary.evaluations = evaluations;
     summary.figures = figures_json(&nlp, &mesh, &solution.x)?;
@@ -344,6 +346,7 @@ fn check(
     }
     // The module's objective in SI units: the start's total area, m².
     summary.objective = area::total_area(&mesh);
+    summary.headline = Headline::new("area", summary.objective, "m²");
     summary.timings.insert("build".into(), build_seconds);
     summary
         .timings

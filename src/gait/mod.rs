@@ -44,7 +44,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::error::{Error, InputError};
-use crate::run::{Outcome, ResultSummary, RunOptions};
+use crate::run::{Headline, Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::{CheckOptions, check_derivatives};
 use crate::solver::{Evaluations, Nlp};
 use crate::spec::Source;
@@ -140,7 +140,8 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     }
     let mut options = opts.solver_options(&problem.solver);
     if opts.trial.is_none() && !opts.verbose {
-        // Parallel trials would interleave their logs.
+        // Parallel trials: one line per trial as it finishes; their solver logs (buffered and
+        // written in trial order) only with --verbose.
         options.verbosity = 0;
     }
     let clock = Instant::now();
@@ -148,13 +149,12 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     let solve_seconds = clock.elapsed().as_secs_f64();
     let tol = problem.trials.tolerance;
     let table = trials::table(&results, tol);
-    if !opts.quiet {
-        eprintln!(
-            "{}: {} trial(s), {solve_seconds:.1} s\n{table}",
-            problem.name,
-            results.len()
-        );
-    }
+    opts.say(&format!(
+        "{}: {} trial(s), {solve_seconds:.1} s\n{}",
+        problem.name,
+        results.len(),
+        table.trim_end()
+    ));
     let best = trials::best(&results)
         .ok_or_else(|| Error::Runtime(format!("{}: no trials were run", problem.name)))?;
     let chosen = &results[best];
@@ -179,6 +179,7 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     let summary = ResultSummary {
         problem: problem.name.clone(),
         kind: "gait".into(),
+        headline: Headline::new("effort", chosen.cost(), "N²·s"),
         status: format!("{:?}", chosen.solver_status),
         status_message: format!(
             "Best of {} trial(s): trial {} ({:?}). {}",

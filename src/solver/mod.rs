@@ -65,7 +65,7 @@ mod evaluator;
 pub mod global;
 pub mod hessian;
 pub mod kkt;
-mod log;
+pub mod log;
 mod merit;
 mod multipliers;
 mod nlp;

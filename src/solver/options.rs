@@ -5,6 +5,7 @@ use std::sync::atomic::AtomicBool;
 
 use serde::{Deserialize, Serialize};
 
+use super::log::LogTarget;
 use super::qp::QpMethod;
 
 /// How the solver obtains second-order information.
@@ -56,8 +57,11 @@ pub struct Options {
     pub qp_method: QpMethod,
     /// Line search (default) or trust region.
     pub globalization: Globalization,
-    /// 0 silent, 1 one line per iteration, 2 more detail. The log goes to stderr.
+    /// 0 silent, 1 one line per iteration, 2 more detail. The log goes to `log`.
     pub verbosity: u8,
+    /// Where the log goes, who observes the iterations, how the objective is shown (default:
+    /// nowhere; the command line passes stderr).
+    pub log: LogTarget,
     /// Set from outside (Ctrl-C) to stop at the end of the current iteration with status
     /// `Interrupted`, returning the best point so far.
     pub interrupt: Option<Arc<AtomicBool>>,
@@ -75,6 +79,7 @@ impl Default for Options {
             qp_method: QpMethod::Auto,
             globalization: Globalization::LineSearch,
             verbosity: 1,
+            log: LogTarget::default(),
             interrupt: None,
         }
     }

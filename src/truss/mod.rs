@@ -39,7 +39,7 @@ use std::time::Instant;
 use serde_json::json;
 
 use crate::error::{Error, InputError};
-use crate::run::{Artifact, Outcome, ResultSummary, RunOptions};
+use crate::run::{Artifact, Headline, Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::{CheckOptions, check_derivatives};
 use crate::solver::{Evaluations, Nlp, Solution};
 use crate::spec::{Key, Source};
@@ -221,6 +221,11 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     // The last round that ended Optimal: its model, solution and number.
     let mut converged: Option<(TrussNlp, Solution, usize)> = None;
     loop {
+        let mut options = options.clone();
+        options.log = options.log.with_objective(nlp.objective_unit());
+        if rounds > 1 {
+            options.log.stage = format!("round {}", round + 1);
+        }
         solution = crate::solver::solve(&nlp, &options);
         iterations += solution.iterations;
         evaluations.functions += solution.evaluations.functions;
@@ -272,6 +277,8 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let design = Design::from_point(&nlp, &solution.x);
     let figures = design.figures(nlp.settings());
     let mut summary = ResultSummary::from_solution(problem.name(), "truss", seed, &solution);
+    let unit = nlp.objective_unit();
+    summary.headline = Headline::of(&unit, solution.objective * unit.scale);
     summary.iterations = iterations;
     summary.evaluations = evaluations;
     summary.figures = json!({
@@ -306,15 +313,11 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             bytes: export::preview_svg(&design).into_bytes(),
         },
     ];
-    // One iteration log per round: iterations.csv, then iterations_round2.csv, ...
-    for (r, round_log) in logs.iter().enumerate() {
-        let file = if r == 0 {
-            "iterations.csv".to_string()
-        } else {
-            format!("iterations_round{}.csv", r + 1)
-        };
-        artifacts.push(crate::io::result::iterations_csv(&file, round_log));
-    }
+    // One iteration log for all rounds (its `stage` column names the round).
+    artifacts.push(crate::io::result::iterations_csv(
+        "iterations.csv",
+        &logs.concat(),
+    ));
     timings.insert("export".to_string(), export_start.elapsed().as_secs_f64());
     summary.timings = timings;
     Ok(Outcome {
