@@ -281,4 +281,9 @@ fn a_run_reports_its_answer_in_the_users_unit() {
     let last: Vec<&str> = csv.lines().last().unwrap().split(',').collect();
     let logged: f64 = last[3].parse().unwrap();
     assert!((logged / value - 1.0).abs() < 1e-9, "{logged} vs {value}");
+    let plot = std::fs::read_to_string(scratch.0.join("convergence.svg")).unwrap();
+    assert!(
+        plot.contains("mass [kg]") && plot.contains("<polyline"),
+        "{plot}"
+    );
 }

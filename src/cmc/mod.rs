@@ -264,12 +264,15 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     summary
         .timings
         .insert("export".into(), export_started.elapsed().as_secs_f64());
+    let [iterations, convergence] =
+        crate::io::result::iteration_files(&problem.name, &summary.headline, &log);
     Ok(Outcome {
         summary,
         status: Some(solution.status),
         check_passed: None,
         artifacts: vec![
-            crate::io::result::iterations_csv("iterations.csv", &log),
+            iterations,
+            convergence,
             Artifact {
                 name: "model.glb".into(),
                 bytes: model,
@@ -516,7 +519,15 @@ mod tests {
             assert!((got / want - 1.0).abs() < 1e-6);
         }
         let names: Vec<&str> = outcome.artifacts.iter().map(|a| a.name.as_str()).collect();
-        assert_eq!(names, ["iterations.csv", "model.glb", "preview.svg"]);
+        assert_eq!(
+            names,
+            [
+                "iterations.csv",
+                "convergence.svg",
+                "model.glb",
+                "preview.svg"
+            ]
+        );
     }
 
     #[test]

@@ -167,9 +167,16 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     let export_clock = Instant::now();
     let mut artifacts = export::artifacts(problem, &chosen.x)
         .map_err(|e| Error::Runtime(format!("{}: {e}", problem.name)))?;
-    artifacts.push(crate::io::result::iterations_csv(
-        "iterations.csv",
-        &chosen.solution.log,
+    // Every trial's records, in trial order (the stage column names the trial).
+    let log: Vec<_> = results
+        .iter()
+        .flat_map(|r| r.solution.log.iter().cloned())
+        .collect();
+    let headline = Headline::new("effort", chosen.cost(), "N²·s");
+    artifacts.extend(crate::io::result::iteration_files(
+        &problem.name,
+        &headline,
+        &log,
     ));
     let mut timings = std::collections::BTreeMap::new();
     timings.insert("solve".to_string(), solve_seconds);
@@ -179,7 +186,7 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     let summary = ResultSummary {
         problem: problem.name.clone(),
         kind: "gait".into(),
-        headline: Headline::new("effort", chosen.cost(), "N²·s"),
+        headline,
         status: format!("{:?}", chosen.solver_status),
         status_message: format!(
             "Best of {} trial(s): trial {} ({:?}). {}",

@@ -3,7 +3,7 @@
 
 use std::fmt::Write;
 
-use crate::run::{Artifact, ResultSummary};
+use crate::run::{Artifact, Headline, ResultSummary};
 use crate::solver::IterationRecord;
 
 /// `result.json`: the summary, pretty-printed.
@@ -95,6 +95,27 @@ pub fn iterations_csv(file_name: &str, log: &[IterationRecord]) -> Artifact {
         ]);
     }
     csv.into_artifact(file_name)
+}
+
+/// The run's iteration files: `iterations.csv` and `convergence.svg` (see [`super::plot`]),
+/// the objective panel named after the headline ("mass [kg]").
+pub fn iteration_files(
+    problem: &str,
+    headline: &Headline,
+    log: &[IterationRecord],
+) -> [Artifact; 2] {
+    let title = if headline.unit.is_empty() {
+        headline.name.clone()
+    } else {
+        format!("{} [{}]", headline.name, headline.unit)
+    };
+    [
+        iterations_csv("iterations.csv", log),
+        Artifact {
+            name: "convergence.svg".into(),
+            bytes: super::plot::convergence_svg(problem, &title, log).into_bytes(),
+        },
+    ]
 }
 
 /// The 1-based solve each record of a concatenated log belongs to: a new solve starts where

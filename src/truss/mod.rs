@@ -314,8 +314,9 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         },
     ];
     // One iteration log for all rounds (its `stage` column names the round).
-    artifacts.push(crate::io::result::iterations_csv(
-        "iterations.csv",
+    artifacts.extend(crate::io::result::iteration_files(
+        problem.name(),
+        &summary.headline,
         &logs.concat(),
     ));
     timings.insert("export".to_string(), export_start.elapsed().as_secs_f64());

@@ -93,10 +93,12 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             .wall_clearance
             .map_or("n/a".into(), |c| format!("{c:.4} m")),
     ));
-    let artifacts = vec![
-        trajectory_csv(&nlp.layout, &solution.x),
-        crate::io::result::iterations_csv("iterations.csv", &solution.log),
-    ];
+    let mut artifacts = vec![trajectory_csv(&nlp.layout, &solution.x)];
+    artifacts.extend(crate::io::result::iteration_files(
+        &problem.name,
+        &summary.headline,
+        &solution.log,
+    ));
     Ok(Outcome {
         summary,
         status: Some(solution.status),
