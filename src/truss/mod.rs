@@ -298,6 +298,13 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         "rounds_run": rounds_run,
         "result_round": result_round,
     });
+    let caption = format!(
+        "{}: {}, {} beams; {}",
+        problem.name(),
+        summary.headline.text(),
+        figures.active_beams,
+        solution.status.sentence()
+    );
     let glb = export::model_glb(&design).map_err(|e| Error::Runtime(e.to_string()))?;
     let mut artifacts = vec![
         Artifact {
@@ -310,7 +317,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         },
         Artifact {
             name: "preview.svg".into(),
-            bytes: export::preview_svg(&design).into_bytes(),
+            bytes: export::preview_svg(&design, &caption).into_bytes(),
         },
     ];
     // One iteration log for all rounds (its `stage` column names the round).
