@@ -14,7 +14,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::error::Error;
-use crate::outcome::{Artifact, Kind, Outcome, ResultSummary, RunOptions};
+use crate::outcome::{Artifact, Headline, Kind, Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::{CheckOptions, DerivativeReport, check_derivatives};
 use crate::solver::{Bounds, Evaluations, Interrupt, Interruptible, Nlp, Status};
 
@@ -53,8 +53,9 @@ pub struct CheckCase<'p> {
     pub seed: u64,
     /// The model's figures (sizes, start figures), merged into `result.json` figures.
     pub figures: serde_json::Map<String, serde_json::Value>,
-    /// Objective to report instead of the NLP's at `x` (a module's SI units), if any.
-    pub objective: Option<f64>,
+    /// Objective to report instead of the NLP's at `x`, in the module's units (e.g. the
+    /// start's area in m²), if any.
+    pub objective: Option<Headline>,
     /// Time spent building the model, s (`timings.build`).
     pub build_seconds: Option<f64>,
     /// Files the check writes besides `result.json` (e.g. a preview of the start).
@@ -135,7 +136,11 @@ pub fn check(
     let check_seconds = clock.elapsed().as_secs_f64();
     let (objective, max_violation) = value_at(&*case.nlp, &case.x).map_err(failed)?;
     let mut summary = ResultSummary {
-        objective: case.objective.unwrap_or(objective),
+        objective: case.objective.as_ref().map_or(objective, |h| h.value),
+        headline: case
+            .objective
+            .clone()
+            .unwrap_or_else(|| Headline::new("objective", objective, "")),
         max_violation,
         evaluations: Evaluations {
             functions: 1 + report.evaluations,

@@ -2,18 +2,21 @@
 //! (README: 0 converged, 1 runtime failure, 2 usage or problem-file error, 3 not converged,
 //! 130 interrupted).
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::{Arc, Mutex};
 
 use clap::Parser;
 use optimize::cli::Cli;
 use optimize::io::atomic::CHECK_FOLDER;
 use optimize::outcome::Outcome;
 use optimize::run::execute;
+use optimize::solver::log::LogTarget;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let (kind, common, opts) = cli.command.resolve();
+    let (kind, common, mut opts) = cli.command.resolve();
     if let Some(n) = opts.threads
         && let Err(e) = rayon::ThreadPoolBuilder::new()
             .num_threads(n)
@@ -30,6 +33,11 @@ fn main() -> ExitCode {
             std::process::exit(130);
         }
     });
+    // The command line owns stderr: the library's log goes where this target says.
+    opts.log = LogTarget::to(
+        Arc::new(Mutex::new(std::io::stderr())),
+        std::io::stderr().is_terminal(),
+    );
 
     let (name, outcome) = match execute(kind, &common.file, &opts) {
         Ok(done) => done,
@@ -53,6 +61,9 @@ fn main() -> ExitCode {
             return ExitCode::from(e.exit_code());
         }
     };
+    if !opts.quiet && outcome.check_passed.is_none() {
+        opts.log.line(&statistics(&outcome));
+    }
     if common.json {
         match serde_json::to_string_pretty(&outcome.summary) {
             Ok(text) => println!("{text}"),
@@ -70,8 +81,8 @@ fn report(outcome: &Outcome, written: &[PathBuf]) {
     println!("{} ({}): {}", s.problem, s.kind, s.status_message);
     if outcome.check_passed.is_none() {
         println!(
-            "objective {:.9e}   max violation {:.2e}   iterations {}   time {:.2} s",
-            s.objective,
+            "{}   max violation {:.2e}   iterations {}   time {:.2} s",
+            s.headline.text(),
             s.max_violation,
             s.iterations,
             s.timings.values().sum::<f64>()
@@ -84,4 +95,38 @@ fn report(outcome: &Outcome, written: &[PathBuf]) {
             .collect();
         println!("wrote {}: {}", dir.display(), names.join(", "));
     }
+}
+
+/// The closing block of the log, in the style of IPOPT's: iterations, evaluations, time per
+/// phase, the answer in its unit, the largest violation and the status.
+fn statistics(outcome: &Outcome) -> String {
+    let s = &outcome.summary;
+    let phases: Vec<String> = s
+        .timings
+        .iter()
+        .map(|(phase, t)| format!("{phase} {t:.3}"))
+        .collect();
+    let rows = [
+        ("Iterations", s.iterations.to_string()),
+        (
+            "Evaluations f, ∇, ∇²",
+            format!(
+                "{}, {}, {}",
+                s.evaluations.functions, s.evaluations.derivatives, s.evaluations.hessians
+            ),
+        ),
+        ("Time [s]", phases.join(", ")),
+        (
+            &format!("Final {}", s.headline.name),
+            format!("{:.9e} {}", s.headline.value, s.headline.unit),
+        ),
+        ("Largest violation", format!("{:.3e}", s.max_violation)),
+        ("Status", s.status.clone()),
+    ];
+    let mut text = String::new();
+    for (name, value) in rows {
+        let dots = ".".repeat(26usize.saturating_sub(name.chars().count()));
+        text.push_str(&format!("\n{name} {dots}: {}", value.trim_end()));
+    }
+    text
 }

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 
+use crate::solver::log::{LogTarget, ObjectiveUnit};
 use crate::solver::{Evaluations, Interrupt, Options, Solution, Status};
 
 /// The problem kinds, one per module.
@@ -72,6 +73,8 @@ pub struct RunOptions {
     /// Raised by Ctrl-C: every solve, evaluation, rollout and check polls it
     /// ([`crate::solver::interrupt`]) and the run ends with the best point so far.
     pub interrupt: Interrupt,
+    /// Where the live log goes (the command line passes stderr; default: nowhere).
+    pub log: LogTarget,
 }
 
 impl RunOptions {
@@ -79,16 +82,63 @@ impl RunOptions {
     /// line on top (`--max-iter`, `--quiet` → silent log, `--verbose` → detailed log, Ctrl-C).
     pub fn solver_options(&self, file: &Options) -> Options {
         let mut options = file.clone();
+        options.log = self.log.clone();
         if let Some(n) = self.max_iter {
             options.max_iterations = n;
         }
         if self.quiet {
             options.verbosity = 0;
+            options.log.out = None;
         } else if self.verbose {
             options.verbosity = options.verbosity.max(2);
         }
         options.interrupt = Some(self.interrupt.flag());
         options
+    }
+
+    /// A line of the module's own log (round and trial reports), unless `--quiet`.
+    pub fn say(&self, text: &str) {
+        if !self.quiet {
+            self.log.line(text);
+        }
+    }
+}
+
+/// The answer in the user's units: what the objective is, its value and unit (e.g. mass
+/// 9673.4 kg; area 854.2 m²; effort 31.5 N²·s).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Headline {
+    /// What the number is, e.g. "mass".
+    pub name: String,
+    /// The value in `unit`.
+    pub value: f64,
+    /// Its unit, e.g. "kg" (empty for dimensionless).
+    pub unit: String,
+}
+
+impl Headline {
+    /// The headline `name = value unit`.
+    pub fn new(name: &str, value: f64, unit: &str) -> Self {
+        Headline {
+            name: name.into(),
+            value,
+            unit: unit.into(),
+        }
+    }
+
+    /// `value` shown in `unit`.
+    pub fn of(unit: &ObjectiveUnit, value: f64) -> Self {
+        Headline::new(&unit.name, value, &unit.unit)
+    }
+
+    /// "mass 9.673e3 kg".
+    pub fn text(&self) -> String {
+        let value = format!("{:.6e}", self.value);
+        if self.unit.is_empty() {
+            format!("{} {value}", self.name)
+        } else {
+            format!("{} {value} {}", self.name, self.unit)
+        }
     }
 }
 
@@ -103,7 +153,10 @@ pub struct ResultSummary {
     pub status: String,
     /// The status explained in one sentence.
     pub status_message: String,
-    /// Final objective value (module units, see `figures`).
+    /// The answer in the user's units (mass in kg, area in m², effort in N²·s, ...).
+    pub headline: Headline,
+    /// Final objective value as the model states it (possibly nondimensional; `headline` is
+    /// the same number in the user's units).
     pub objective: f64,
     /// Largest bound or constraint violation.
     pub max_violation: f64,
@@ -127,6 +180,7 @@ impl ResultSummary {
             kind,
             status,
             status_message: message,
+            headline: Headline::new("objective", f64::NAN, ""),
             objective: f64::NAN,
             max_violation: f64::NAN,
             iterations: 0,
@@ -140,6 +194,7 @@ impl ResultSummary {
     /// Fills the common solver fields from a solution.
     pub fn from_solution(problem: &str, kind: Kind, seed: u64, solution: &Solution) -> Self {
         ResultSummary {
+            headline: Headline::new("objective", solution.objective, ""),
             objective: solution.objective,
             max_violation: solution.max_violation,
             iterations: solution.iterations,

@@ -275,3 +275,55 @@ fn an_iteration_limit_on_a_coarse_level_writes_the_best_result_and_exits_3() {
     assert_eq!(summary["status"], "IterationLimit", "{summary}");
     assert!(out.join("model.glb").is_file());
 }
+
+#[test]
+fn a_run_reports_its_answer_in_the_users_unit() {
+    // warren_bridge's NLP minimizes mass / M; the user sees the mass in kg everywhere.
+    let scratch = Scratch::new("headline");
+    let out = optimize(&[
+        "truss",
+        "problems/truss/warren_bridge.toml",
+        "--threads",
+        "1",
+        "-o",
+        scratch.0.to_str().unwrap(),
+    ]);
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(scratch.0.join("result.json")).unwrap())
+            .unwrap();
+    let headline = &summary["headline"];
+    let mass = summary["figures"]["mass_kg"].as_f64().unwrap();
+    assert_eq!(
+        (&headline["name"], &headline["unit"]),
+        (&"mass".into(), &"kg".into())
+    );
+    let value = headline["value"].as_f64().unwrap();
+    assert!((value / mass - 1.0).abs() < 1e-9, "{value} vs {mass}");
+    assert!(stdout.contains(&format!("mass {value:.6e} kg")), "{stdout}");
+    // The log opens with the problem's size and closes with the statistics block.
+    let first = stderr.lines().next().unwrap();
+    assert!(
+        first.contains(" variables, ") && first.contains("Jacobian nonzeros"),
+        "{first}"
+    );
+    assert!(
+        stderr.contains(&format!("Final mass ................: {value:.9e} kg")),
+        "{stderr}"
+    );
+    // iterations.csv: the solve and stage columns, the objective in kg.
+    let csv = std::fs::read_to_string(scratch.0.join("iterations.csv")).unwrap();
+    assert!(csv.starts_with("solve,stage,iter,objective,"), "{csv}");
+    let last: Vec<&str> = csv.lines().last().unwrap().split(',').collect();
+    let logged: f64 = last[3].parse().unwrap();
+    assert!((logged / value - 1.0).abs() < 1e-9, "{logged} vs {value}");
+    let plot = std::fs::read_to_string(scratch.0.join("convergence.svg")).unwrap();
+    assert!(
+        plot.contains("mass [kg]") && plot.contains("<polyline"),
+        "{plot}"
+    );
+}

@@ -42,7 +42,7 @@ use std::time::Instant;
 
 use crate::application::{Application, CheckCase};
 use crate::error::{Error, InputError};
-use crate::outcome::{Artifact, Kind, Outcome, ResultSummary, RunOptions};
+use crate::outcome::{Artifact, Headline, Kind, Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::{
     CheckOptions, FiniteDifferenceOptions, jittered_start, spread_columns,
 };
@@ -180,7 +180,7 @@ impl Application for Cmc {
         if let serde_json::Value::Object(start_figures) = figures {
             case.figures.extend(start_figures);
         }
-        case.objective = Some(area::total_area(&mesh));
+        case.objective = Some(Headline::new("area", area::total_area(&mesh), "m²"));
         case.build_seconds = Some(build_seconds);
         case.artifacts.push(Artifact {
             name: "preview.svg".into(),
@@ -218,10 +218,11 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     }
     // A coarse level that ended short is the run's result (cmc::multilevel).
     let coarse_result = stopped.is_some();
+    let staged_run = !log.is_empty() || problem.spec.file.quality.flip_rounds > 0;
     let mut solution = match stopped {
         Some(solution) => solution,
         None => {
-            let solution = crate::solver::solve(&nlp, &options);
+            let solution = nlp.solve(&options, if staged_run { "full" } else { "" });
             iterations += solution.iterations;
             evaluations.functions += solution.evaluations.functions;
             evaluations.derivatives += solution.evaluations.derivatives;
@@ -246,7 +247,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     } else {
         problem.spec.file.quality.flip_rounds
     };
-    for _ in 0..flip_rounds {
+    for round in 0..flip_rounds {
         let feasible_stop = matches!(solution.status, Status::Stalled | Status::IterationLimit)
             && solution.max_violation <= options.constraint_tolerance;
         if !(solution.status.is_success() || feasible_stop) {
@@ -275,7 +276,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         nlp = nlp
             .remeshed(flipped)
             .map_err(|e| Error::Runtime(format!("{}: {e}", problem.name)))?;
-        solution = crate::solver::solve(&nlp, &options);
+        solution = nlp.solve(&options, &format!("remesh {}", round + 1));
         log.extend_from_slice(&solution.log);
         iterations += solution.iterations;
         evaluations.functions += solution.evaluations.functions;
@@ -298,6 +299,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     // The module's objective in SI units: the total area, m² (the solver saw it scaled by 1/L²
     // plus the tangential regularization, both reported under `figures`).
     summary.objective = area::total_area(&mesh);
+    summary.headline = Headline::new("area", summary.objective, "m²");
     summary.iterations = iterations;
     summary.evaluations = evaluations;
     summary.figures = figures_json(&nlp, &mesh, &solution.x)?;
@@ -326,12 +328,15 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     summary
         .timings
         .insert("export".into(), export_started.elapsed().as_secs_f64());
+    let [iterations, convergence] =
+        crate::io::result::iteration_files(&problem.name, &summary.headline, &log);
     Ok(Outcome {
         summary,
         status: Some(solution.status),
         check_passed: None,
         artifacts: vec![
-            crate::io::result::iterations_csv("iterations.csv", &log),
+            iterations,
+            convergence,
             Artifact {
                 name: "model.glb".into(),
                 bytes: model,
@@ -535,7 +540,15 @@ mod tests {
             assert!((got / want - 1.0).abs() < 1e-6);
         }
         let names: Vec<&str> = outcome.artifacts.iter().map(|a| a.name.as_str()).collect();
-        assert_eq!(names, ["iterations.csv", "model.glb", "preview.svg"]);
+        assert_eq!(
+            names,
+            [
+                "iterations.csv",
+                "convergence.svg",
+                "model.glb",
+                "preview.svg"
+            ]
+        );
     }
 
     #[test]

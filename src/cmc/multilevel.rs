@@ -102,9 +102,10 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
     let mut nlp = problem.with_resolution(first).build()?;
     let (mut stages, mut log, mut evaluations) = (Vec::new(), Vec::new(), Evaluations::default());
     let mut resolution = first;
-    for &factor in &factors {
+    for (level, &factor) in factors.iter().enumerate() {
         let mut iterations = 0;
-        let mut solution = crate::solver::solve(&nlp, options);
+        let stage = format!("level {}", level + 1);
+        let mut solution = nlp.solve(options, &stage);
         iterations += solution.iterations;
         log.extend_from_slice(&solution.log);
         add(&mut evaluations, &solution.evaluations);
@@ -119,7 +120,7 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
                 nlp = nlp
                     .remeshed(flipped)
                     .map_err(|e| runtime("flipped mesh", &e))?;
-                solution = crate::solver::solve(&nlp, options);
+                solution = nlp.solve(options, &format!("{stage} remeshed"));
                 iterations += solution.iterations;
                 log.extend_from_slice(&solution.log);
                 add(&mut evaluations, &solution.evaluations);

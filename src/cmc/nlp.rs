@@ -44,7 +44,8 @@ use super::curvature::{mean_curvature, mean_curvature_gradient};
 use super::curvature_hessian::mean_curvature_hessian;
 use super::mesh::{Mesh, Point};
 use super::volume::{Region, chord, cone_volume_hessian};
-use crate::solver::{Dims, EvalError, Nlp};
+use crate::solver::log::ObjectiveUnit;
+use crate::solver::{Dims, EvalError, Nlp, Options, Solution};
 
 /// A volume constraint: the region must enclose `target` m³.
 #[derive(Debug, Clone, PartialEq)]
@@ -309,6 +310,15 @@ impl CmcNlp {
     /// The characteristic length `L` used for scaling, m.
     pub fn scale(&self) -> f64 {
         self.scale
+    }
+
+    /// Solves from the start mesh, the log showing the objective as area in m² (the NLP's
+    /// area / L² times L²; the small regularization term is included) under `stage`.
+    pub fn solve(&self, options: &Options, stage: &str) -> Solution {
+        let mut options = options.clone();
+        options.log.objective = ObjectiveUnit::new("area", "m²", self.scale * self.scale);
+        options.log.stage = stage.to_string();
+        crate::solver::solve(self, &options)
     }
 
     /// The volume constraints.

@@ -6,6 +6,7 @@ use std::fmt::Write;
 
 use super::area::area_vector;
 use super::mesh::{Mesh, Point};
+use crate::io::svg::escape;
 
 /// Base colours (RGB) cycled over surfaces.
 const PALETTE: [(f64, f64, f64); 8] = [
@@ -76,12 +77,6 @@ pub fn svg(mesh: &Mesh, width: f64, caption: &str) -> String {
     );
     out.push_str("</svg>\n");
     out
-}
-
-fn escape(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
 }
 
 #[cfg(test)]

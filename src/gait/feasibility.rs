@@ -27,10 +27,11 @@ use std::time::Instant;
 
 use nalgebra::{DMatrix, DVector};
 
+use crate::solver::log::LogTarget;
 use crate::solver::{Evaluations, Nlp};
 
 /// Limits of a feasibility phase.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct FeasibilitySettings {
     /// Stop once every violation is at most this (constraint units).
     pub target: f64,
@@ -38,8 +39,8 @@ pub struct FeasibilitySettings {
     pub max_iterations: usize,
     /// Wall-clock limit (s).
     pub max_time: f64,
-    /// Print one line per iteration to stderr.
-    pub verbose: bool,
+    /// Where one line per iteration goes (nowhere by default).
+    pub log: LogTarget,
 }
 
 /// The outcome of a feasibility phase.
@@ -219,29 +220,25 @@ pub fn restore<N: Nlp>(nlp: &N, z0: &[f64], settings: &FeasibilitySettings) -> F
                 break;
             }
         }
-        if settings.verbose {
-            eprintln!(
-                "feasibility {iterations:>4}: ‖r‖² {:.3e}  max {:.3e}  λ {lambda:.2e}  {:.1} s",
-                norm2(&r),
-                max_abs(&r),
-                clock.elapsed().as_secs_f64()
-            );
-        }
+        settings.log.line(&format!(
+            "feasibility {iterations:>4}: ‖r‖² {:.3e}  max {:.3e}  λ {lambda:.2e}  {:.1} s",
+            norm2(&r),
+            max_abs(&r),
+            clock.elapsed().as_secs_f64()
+        ));
         if !moved {
             break;
         }
     }
-    if settings.verbose {
-        for (i, v) in r
-            .iter()
-            .enumerate()
-            .filter(|(_, v)| v.abs() > settings.target)
-        {
-            eprintln!(
-                "feasibility: {} violated by {v:+.3e}",
-                nlp.constraint_name(i)
-            );
-        }
+    for (i, v) in r
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.abs() > settings.target)
+    {
+        settings.log.line(&format!(
+            "feasibility: {} violated by {v:+.3e}",
+            nlp.constraint_name(i)
+        ));
     }
     done(z, &r, iterations, evaluations)
 }
@@ -301,7 +298,7 @@ mod tests {
             target: 1e-10,
             max_iterations: 50,
             max_time: 10.0,
-            verbose: false,
+            log: LogTarget::default(),
         };
         let out = restore(&Circle, &[0.1, 0.1, 0.0], &settings);
         assert!(out.reached, "{out:?}");
@@ -361,7 +358,7 @@ mod tests {
             target: 1e-8,
             max_iterations: 20,
             max_time: 10.0,
-            verbose: false,
+            log: LogTarget::default(),
         };
         let out = restore(&Far, &[0.0], &settings);
         assert!(!out.reached);

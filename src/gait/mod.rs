@@ -47,7 +47,7 @@ use std::time::Instant;
 
 use crate::application::{Application, CheckCase};
 use crate::error::{Error, InputError};
-use crate::outcome::{Kind, Outcome, ResultSummary, RunOptions};
+use crate::outcome::{Headline, Kind, Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::CheckOptions;
 use crate::solver::{Evaluations, Nlp, Status};
 use crate::spec::Source;
@@ -156,7 +156,8 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     }
     let mut options = opts.solver_options(&problem.solver);
     if opts.trial.is_none() && !opts.verbose {
-        // Parallel trials would interleave their logs.
+        // Parallel trials: one line per trial as it finishes; their solver logs (buffered and
+        // written in trial order) only with --verbose.
         options.verbosity = 0;
     }
     let clock = Instant::now();
@@ -169,13 +170,12 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     let solve_seconds = clock.elapsed().as_secs_f64();
     let tol = problem.trials.tolerance;
     let table = trials::table(&results, tol);
-    if !opts.quiet {
-        eprintln!(
-            "{}: {} trial(s), {solve_seconds:.1} s\n{table}",
-            problem.name,
-            results.len()
-        );
-    }
+    opts.say(&format!(
+        "{}: {} trial(s), {solve_seconds:.1} s\n{}",
+        problem.name,
+        results.len(),
+        table.trim_end()
+    ));
     let best = trials::best(&results)
         .ok_or_else(|| Error::Runtime(format!("{}: no trials were run", problem.name)))?;
     let chosen = &results[best];
@@ -188,9 +188,16 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     let export_clock = Instant::now();
     let mut artifacts = export::artifacts(problem, &chosen.x)
         .map_err(|e| Error::Runtime(format!("{}: {e}", problem.name)))?;
-    artifacts.push(crate::io::result::iterations_csv(
-        "iterations.csv",
-        &chosen.solution.log,
+    // Every trial's records, in trial order (the stage column names the trial).
+    let log: Vec<_> = results
+        .iter()
+        .flat_map(|r| r.solution.log.iter().cloned())
+        .collect();
+    let headline = Headline::new("effort", chosen.cost(), "N²·s");
+    artifacts.extend(crate::io::result::iteration_files(
+        &problem.name,
+        &headline,
+        &log,
     ));
     let mut timings = std::collections::BTreeMap::new();
     timings.insert("solve".to_string(), solve_seconds);
@@ -201,6 +208,7 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     let summary = ResultSummary {
         problem: problem.name.clone(),
         kind: Kind::Gait,
+        headline,
         status: format!("{status:?}"),
         status_message: format!(
             "Best of {} trial(s): trial {} ({:?}); its last solve ended {:?}. {}",

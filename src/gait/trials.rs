@@ -52,6 +52,7 @@ use super::feasibility::{FeasibilitySettings, restore};
 use super::formulation::Formulation;
 use super::shaping::shape;
 use super::spec::Problem;
+use crate::solver::log::{Buffer, LogTarget, ObjectiveUnit};
 use crate::solver::{Evaluations, IterationRecord, Nlp, Options, Solution, Status, solve};
 
 /// The feasibility phase stops once every violation is within this fraction of the tolerance.
@@ -253,7 +254,11 @@ pub fn solve_trial(
             target: FEASIBILITY_TARGET * tol,
             max_iterations: options.max_iterations,
             max_time: options.max_time.unwrap_or(f64::INFINITY),
-            verbose: options.verbosity >= 1,
+            log: if options.verbosity >= 1 {
+                options.log.clone()
+            } else {
+                LogTarget::default()
+            },
         };
         let params = &nlp.hand_made_start()[..f.reduced().parameters()];
         let mut current = params.to_vec();
@@ -436,7 +441,11 @@ pub(super) fn append_log(log: &mut Vec<IterationRecord>, more: &[IterationRecord
     }));
 }
 
-/// Solves trials `which` (1-based; all when `None`) in parallel.
+/// Solves trials `which` (1-based; all when `None`) in parallel. Each trial's solver log goes
+/// to its own buffer, written to `options.log` in trial order and followed by the trial's line
+/// (number, status, cost, time); without a solver log (verbosity 0) the line is written as soon
+/// as the trial finishes. On a terminal a status line counts the finished trials. A single
+/// trial logs live.
 pub fn run_trials(
     problem: &Problem,
     seed: u64,
@@ -449,10 +458,119 @@ pub fn run_trials(
         Some(k) => vec![k],
         None => (1..=all.len()).collect(),
     };
+    let effort = ObjectiveUnit::new("effort", "N²·s", f.objective_scale());
+    let progress = Progress::new(&options.log, chosen.len());
+    let trial_options = |k: usize, out: Option<&Buffer>| {
+        let mut o = options.clone();
+        o.log.objective = effort.clone();
+        o.log.stage = format!("trial {k}/{}", all.len());
+        if let Some(buffer) = out {
+            (o.log.out, o.log.terminal) = (Some(buffer.writer()), false);
+        }
+        o
+    };
+    if let [k] = chosen[..] {
+        let result = solve_trial(problem, &f, k, &all[k - 1], &trial_options(k, None));
+        progress.finished(0, &result, String::new());
+        return vec![result];
+    }
     chosen
         .par_iter()
-        .map(|&k| solve_trial(problem, &f, k, &all[k - 1], options))
+        .enumerate()
+        .map(|(i, &k)| {
+            let buffer = Buffer::default();
+            let result = solve_trial(
+                problem,
+                &f,
+                k,
+                &all[k - 1],
+                &trial_options(k, Some(&buffer)),
+            );
+            progress.finished(i, &result, buffer.text());
+            result
+        })
         .collect()
+}
+
+/// What parallel trials show while they run (see [`run_trials`]).
+struct Progress<'a> {
+    log: &'a LogTarget,
+    count: usize,
+    clock: Instant,
+    state: std::sync::Mutex<ProgressState>,
+}
+
+#[derive(Default)]
+struct ProgressState {
+    finished: usize,
+    /// The next trial (0-based among those run) whose buffered log is due.
+    next_log: usize,
+    /// Buffered logs (and their trial lines) of trials that finished before an earlier one.
+    waiting: std::collections::BTreeMap<usize, (String, String)>,
+    /// Whether the status line is on screen.
+    status_shown: bool,
+}
+
+impl<'a> Progress<'a> {
+    fn new(log: &'a LogTarget, count: usize) -> Self {
+        Progress {
+            log,
+            count,
+            clock: Instant::now(),
+            state: Default::default(),
+        }
+    }
+
+    /// Trial `index` (0-based among those run) finished with `result`; `text` is its log.
+    fn finished(&self, index: usize, result: &TrialResult, text: String) {
+        let Ok(mut state) = self.state.lock() else {
+            return;
+        };
+        if state.status_shown {
+            self.log.raw("\r\x1b[2K");
+            state.status_shown = false;
+        }
+        state.finished += 1;
+        let line = trial_line(result, state.finished, self.count);
+        if text.is_empty() {
+            // Nothing buffered: the line at once.
+            self.log.line(&line);
+        }
+        state.waiting.insert(index, (text, line));
+        while let Some((text, line)) = {
+            let next = state.next_log;
+            state.waiting.remove(&next)
+        } {
+            if !text.is_empty() {
+                self.log.raw(&text);
+                self.log.line(&line);
+            }
+            state.next_log += 1;
+        }
+        if self.log.terminal && state.finished < self.count {
+            self.log.raw(&format!(
+                "  {}/{} trials finished, {:.0} s",
+                state.finished,
+                self.count,
+                self.clock.elapsed().as_secs_f64()
+            ));
+            state.status_shown = true;
+        }
+    }
+}
+
+/// One finished trial as a line: "trial 3 (2/8 done): Success, cost 31.5 N²·s, ...".
+fn trial_line(r: &TrialResult, finished: usize, count: usize) -> String {
+    format!(
+        "trial {} ({finished}/{count} done): {:?}, cost {:.6} N²·s, violation sum {:.2e}, \
+         {} iterations, {:.1} s",
+        r.trial,
+        r.status,
+        r.cost(),
+        r.violation_sum(),
+        r.iterations,
+        r.seconds
+    )
 }
 
 /// Index of the best trial: the lowest cost among the best class present (Success, then
@@ -587,6 +705,54 @@ mod tests {
             assert_eq!(a.status, b.status);
         }
         assert_eq!(one.len(), 2);
+    }
+
+    /// Parallel trials write their solver logs in trial order, each whole and followed by its
+    /// trial's line; without solver logs, one line per trial as it finishes. Every record
+    /// carries its trial's stage.
+    #[test]
+    fn parallel_trials_log_in_order_and_report_each_trial() {
+        let mut p = golden("pogo_crouch_short");
+        p.trials.count = 3;
+        let run = |verbosity: u8| {
+            let buffer = Buffer::default();
+            let options = Options {
+                max_iterations: 3,
+                verbosity,
+                log: LogTarget::to(buffer.writer(), false),
+                ..Options::default()
+            };
+            let results = rayon::ThreadPoolBuilder::new()
+                .num_threads(2)
+                .build()
+                .unwrap()
+                .install(|| run_trials(&p, 8, None, &options));
+            (results, buffer.text())
+        };
+        let (results, text) = run(1);
+        let blocks: Vec<&str> = text
+            .lines()
+            .filter(|l| l.contains(" variables,") || l.contains(" done): "))
+            .map(|l| l.split([':', '(']).next().unwrap().trim_end())
+            .collect();
+        let expected = [
+            "trial 1/3",
+            "trial 1",
+            "trial 2/3",
+            "trial 2",
+            "trial 3/3",
+            "trial 3",
+        ];
+        assert_eq!(blocks, expected, "{text}");
+        for r in &results {
+            let stage = format!("trial {}/3", r.trial);
+            assert!(r.solution.log.iter().all(|rec| rec.stage == stage));
+        }
+        let (_, text) = run(0);
+        assert_eq!(text.lines().count(), 3, "{text}");
+        for (j, line) in text.lines().enumerate() {
+            assert!(line.contains(&format!("({}/3 done): ", j + 1)), "{text}");
+        }
     }
 
     /// With the feasibility phase (and continuation) first, the short pogo jump raised to

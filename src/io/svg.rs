@@ -53,6 +53,13 @@ impl<'a> Style<'a> {
     }
 }
 
+/// Text safe inside an SVG element (`&`, `<`, `>` escaped).
+pub fn escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
 impl Svg {
     /// A picture `width` pixels wide showing the world rectangle `[xmin, xmax] × [ymin, ymax]`
     /// (metres) with a margin of 5%; the height follows from the aspect ratio.
@@ -123,10 +130,7 @@ impl Svg {
     /// Text at a world point, `size` in pixels.
     pub fn text(&mut self, at: [f64; 2], size: f64, text: &str) {
         let (x, y) = self.map(at[0], at[1]);
-        let escaped = text
-            .replace('&', "&amp;")
-            .replace('<', "&lt;")
-            .replace('>', "&gt;");
+        let escaped = escape(text);
         let _ = writeln!(
             self.body,
             "<text x=\"{x:.2}\" y=\"{y:.2}\" font-family=\"sans-serif\" font-size=\"{size:.1}\">{escaped}</text>"

@@ -66,7 +66,7 @@ pub mod global;
 pub mod hessian;
 pub mod interrupt;
 pub mod kkt;
-mod log;
+pub mod log;
 mod merit;
 mod multipliers;
 mod nlp;

@@ -7,6 +7,7 @@ use std::sync::atomic::AtomicBool;
 use serde::{Deserialize, Serialize};
 
 use super::Tuning;
+use super::log::LogTarget;
 use super::qp::QpMethod;
 
 /// How the solver obtains second-order information.
@@ -65,6 +66,10 @@ macro_rules! settings {
             /// The SQP method's tuning constants (tests vary them). Not a file key.
             #[serde(skip)]
             pub tuning: Tuning,
+            /// Where the log goes, who observes the iterations, how the objective is shown
+            /// (default: nowhere; the command line passes stderr). Not a file key.
+            #[serde(skip)]
+            pub log: LogTarget,
         }
 
         impl Default for Options {
@@ -73,6 +78,7 @@ macro_rules! settings {
                     $($name: $default,)*
                     interrupt: None,
                     tuning: Tuning::default(),
+                    log: LogTarget::default(),
                 }
             }
         }
@@ -125,7 +131,7 @@ settings! {
     qp_method: QpMethod = QpMethod::Auto;
     /// Line search (default) or trust region.
     globalization: Globalization = Globalization::LineSearch;
-    /// 0 silent, 1 one line per iteration, 2 more detail. The log goes to stderr.
+    /// 0 silent, 1 one line per iteration, 2 more detail. The log goes to `log`.
     verbosity: u8 = 1, valid: log_level;
 }
 

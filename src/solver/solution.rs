@@ -5,11 +5,15 @@ use serde::Serialize;
 use super::Status;
 
 /// One row of the iteration log (and of `iterations.csv`).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct IterationRecord {
+    /// The stage of a longer run the solve belonged to, e.g. "round 2" (empty for a lone solve;
+    /// see `LogTarget::stage`).
+    pub stage: String,
     /// Major iteration, 0 = the start.
     pub iter: usize,
-    /// Objective f(x) (unscaled).
+    /// Objective f(x) unscaled, times the shown unit's factor (`LogTarget::objective`; the
+    /// NLP's own f by default).
     pub objective: f64,
     /// Largest bound or constraint violation (unscaled).
     pub infeasibility: f64,

@@ -183,7 +183,7 @@ struct Sqp<'a> {
     tuning: &'a Tuning,
     started: Instant,
     log: Vec<IterationRecord>,
-    /// What of the log is shown live (stderr; a status line for long runs on a terminal).
+    /// What of the log is shown live (`options.log`; a status line for long runs on a terminal).
     live: RefCell<log::LiveLog>,
     model: Model,
     /// Penalty weights of the merit function, one per row.
@@ -259,7 +259,7 @@ fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
         tuning: &options.tuning,
         started,
         log: Vec::new(),
-        live: RefCell::new(log::LiveLog::stderr(options.verbosity)),
+        live: RefCell::new(log::LiveLog::on(&options.log, options.verbosity)),
         model,
         rho: vec![0.0; m],
         warm: WarmStart::new(qp_method),
@@ -297,6 +297,30 @@ impl<'a> Sqp<'a> {
 
     fn say(&self, text: &str) {
         self.live.borrow_mut().message(text);
+    }
+
+    /// The size line before the column header (see `log::size_line`).
+    fn say_size(&self) {
+        let hessian = match &self.model {
+            Model::Bfgs(_) => "dense BFGS",
+            Model::Lbfgs(_) => "L-BFGS",
+            Model::Exact { .. } => "exact",
+        };
+        let qp = if self.sparse_qp() {
+            "sparse interior point"
+        } else {
+            "dense active set"
+        };
+        let stage = &self.options.log.stage;
+        let prefix = if stage.is_empty() {
+            String::new()
+        } else {
+            format!("{stage}: ")
+        };
+        self.say(&format!(
+            "{prefix}{}",
+            log::size_line(&self.ev.dims, hessian, qp)
+        ));
     }
 
     fn jacobian(&self, values: &[f64]) -> CsrMatrix<f64> {
@@ -349,6 +373,7 @@ impl<'a> Sqp<'a> {
             Err((status, x)) => return self.failed_start(status, x),
         };
         if self.options.verbosity >= 1 {
+            self.say_size();
             self.live.borrow_mut().header();
         }
         if !self.model.is_quasi_newton() {
@@ -1344,9 +1369,11 @@ impl<'a> Sqp<'a> {
     }
 
     fn record(&mut self, iter: usize, point: &Point, kkt: Kkt, step: f64, qp_iterations: usize) {
+        let target = &self.options.log;
         let r = IterationRecord {
+            stage: target.stage.clone(),
             iter,
-            objective: point.values.f / self.ev.scale_f,
+            objective: point.values.f / self.ev.scale_f * target.objective.scale,
             infeasibility: self.ev.max_violation(&point.x, &point.values.c),
             optimality: kkt.optimality,
             step,
@@ -1355,6 +1382,9 @@ impl<'a> Sqp<'a> {
             elapsed: self.elapsed(),
         };
         self.live.borrow_mut().record(&r);
+        if let Some(observer) = &target.observer {
+            observer.observe(&r);
+        }
         self.log.push(r);
     }
 

@@ -15,9 +15,10 @@ use std::fmt::Write;
 
 use super::build::STEEL_DENSITY;
 use super::design::Design;
-use super::model::{JointKind, Vec3};
+use super::model::{JointKind, Support, Vec3};
 use crate::io::gltf::{GltfError, Material, Mesh, Node, Scene};
 use crate::io::shapes;
+use crate::io::svg::escape;
 
 /// Fraction of the largest |λ| below which a beam is reported idle.
 pub const IDLE_FRACTION: f64 = 1e-3;
@@ -72,8 +73,15 @@ pub fn beams_csv(design: &Design) -> String {
     out
 }
 
-/// SVG preview: elevation (x right, y up) on the left, plan (x right, z down) on the right.
-pub fn preview_svg(design: &Design) -> String {
+/// SVG preview: `caption` on top, the elevation (x right, y up) above the plan (x right, z
+/// down), both at one scale in px/m chosen so the x extent fills the width (each view's height
+/// follows its own extent, so a long bridge is not squeezed into a square), then a legend and
+/// a scale bar. Beam width grows with √mass; colours give the force state.
+pub fn preview_svg(design: &Design, caption: &str) -> String {
+    const WIDTH: f64 = 960.0;
+    const MARGIN: f64 = 30.0;
+    const MAX_VIEW: f64 = 420.0;
+    const MIN_VIEW: f64 = 24.0;
     let joints = &design.structure.joints;
     let mut lo = Vec3::repeat(f64::INFINITY);
     let mut hi = Vec3::repeat(f64::NEG_INFINITY);
@@ -81,19 +89,22 @@ pub fn preview_svg(design: &Design) -> String {
         lo = lo.inf(&j.position);
         hi = hi.sup(&j.position);
     }
-    let span = (hi - lo).max().max(1e-9);
-    let panel = 480.0;
-    let margin = 20.0;
-    let scale = (panel - 2.0 * margin) / span;
-    let width = 2.0 * panel;
-    let height = panel;
-    // Screen coordinates of a point in the elevation (x, y) or plan (x, z) panel.
+    let extent = (hi - lo).map(|e| e.max(1e-9));
+    let scale = ((WIDTH - 2.0 * MARGIN) / extent.x)
+        .min(MAX_VIEW / extent.y)
+        .min(MAX_VIEW / extent.z);
+    let view_height = |e: f64| (e * scale).max(MIN_VIEW) + 2.0 * MARGIN;
+    let elevation_top = 40.0;
+    let plan_top = elevation_top + view_height(extent.y);
+    let legend_top = plan_top + view_height(extent.z);
+    let height = legend_top + 50.0;
+    // Screen coordinates of a point in the elevation (x, y) or plan (x, z) view.
     let to_screen = |p: &Vec3, plan: bool| -> (f64, f64) {
-        let x = margin + (p.x - lo.x) * scale + if plan { panel } else { 0.0 };
+        let x = MARGIN + (p.x - lo.x) * scale;
         let y = if plan {
-            margin + (p.z - lo.z) * scale
+            plan_top + MARGIN + (p.z - lo.z) * scale
         } else {
-            panel - margin - (p.y - lo.y) * scale
+            elevation_top + MARGIN + (hi.y - p.y) * scale
         };
         (x, y)
     };
@@ -103,16 +114,19 @@ pub fn preview_svg(design: &Design) -> String {
     let mut svg = String::new();
     let _ = writeln!(
         svg,
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width}\" height=\"{height}\" \
-         viewBox=\"0 0 {width} {height}\">"
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{WIDTH}\" height=\"{height:.0}\" \
+         viewBox=\"0 0 {WIDTH} {height:.0}\" font-family=\"sans-serif\">"
     );
     let _ = writeln!(
         svg,
-        "<rect width=\"{width}\" height=\"{height}\" fill=\"white\"/>\n\
-         <text x=\"10\" y=\"16\" font-size=\"13\" font-family=\"sans-serif\">elevation (x, y)</text>\n\
-         <text x=\"{}\" y=\"16\" font-size=\"13\" font-family=\"sans-serif\">plan (x, z)</text>\n\
-         <line x1=\"{panel}\" y1=\"0\" x2=\"{panel}\" y2=\"{height}\" stroke=\"#ccc\"/>",
-        panel + 10.0
+        "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n\
+         <text x=\"10\" y=\"22\" font-size=\"15\">{}</text>\n\
+         <text x=\"10\" y=\"{:.1}\" font-size=\"12\" fill=\"#555\">elevation (x right, y up)</text>\n\
+         <text x=\"10\" y=\"{:.1}\" font-size=\"12\" fill=\"#555\">plan (x right, z down)</text>\n\
+         <line x1=\"0\" y1=\"{plan_top:.1}\" x2=\"{WIDTH}\" y2=\"{plan_top:.1}\" stroke=\"#ccc\"/>",
+        escape(caption),
+        elevation_top + 14.0,
+        plan_top + 14.0,
     );
     for plan in [false, true] {
         let _ = writeln!(svg, "<g>");
@@ -120,9 +134,12 @@ pub fn preview_svg(design: &Design) -> String {
             let (x1, y1) = to_screen(&joints[beam.ends[0]].position, plan);
             let (x2, y2) = to_screen(&joints[beam.ends[1]].position, plan);
             let (colour, w) = match state(design, j, peaks[j], top) {
-                "compression" => ("#1f6fb4", 0.6 + 5.0 * (design.masses[j] / heaviest).sqrt()),
-                "tension" => ("#d9822b", 0.6 + 5.0 * (design.masses[j] / heaviest).sqrt()),
-                _ => ("#bbbbbb", 0.3),
+                "compression" => (
+                    COMPRESSION,
+                    0.6 + 5.0 * (design.masses[j] / heaviest).sqrt(),
+                ),
+                "tension" => (TENSION, 0.6 + 5.0 * (design.masses[j] / heaviest).sqrt()),
+                _ => (IDLE, 0.3),
             };
             let _ = writeln!(
                 svg,
@@ -132,29 +149,108 @@ pub fn preview_svg(design: &Design) -> String {
         }
         for j in joints {
             let (x, y) = to_screen(&j.position, plan);
-            let mark = match j.kind {
-                JointKind::Anchor(_) => format!(
-                    "<polygon points=\"{:.2},{:.2} {:.2},{:.2} {:.2},{:.2}\" fill=\"black\"/>",
-                    x,
-                    y,
-                    x - 5.0,
-                    y + 8.0,
-                    x + 5.0,
-                    y + 8.0
-                ),
-                JointKind::Load => {
-                    format!("<circle cx=\"{x:.2}\" cy=\"{y:.2}\" r=\"3.5\" fill=\"#2a9d3a\"/>")
-                }
-                JointKind::Free => {
-                    format!("<circle cx=\"{x:.2}\" cy=\"{y:.2}\" r=\"1.5\" fill=\"#666\"/>")
-                }
-            };
-            let _ = writeln!(svg, "{mark}");
+            let _ = writeln!(svg, "{}", joint_mark(&j.kind, x, y));
         }
         let _ = writeln!(svg, "</g>");
     }
+    legend(&mut svg, legend_top + 20.0);
+    scale_bar(&mut svg, extent.x, scale, WIDTH - MARGIN, legend_top + 20.0);
     svg.push_str("</svg>\n");
     svg
+}
+
+const COMPRESSION: &str = "#1f6fb4";
+const TENSION: &str = "#d9822b";
+const IDLE: &str = "#bbbbbb";
+
+/// A joint's mark at screen point (x, y): a black triangle (anchor), a green dot (load) or a
+/// small grey dot (free joint).
+fn joint_mark(kind: &JointKind, x: f64, y: f64) -> String {
+    match kind {
+        JointKind::Anchor(_) => format!(
+            "<polygon points=\"{:.2},{:.2} {:.2},{:.2} {:.2},{:.2}\" fill=\"black\"/>",
+            x,
+            y,
+            x - 5.0,
+            y + 8.0,
+            x + 5.0,
+            y + 8.0
+        ),
+        JointKind::Load => {
+            format!("<circle cx=\"{x:.2}\" cy=\"{y:.2}\" r=\"3.5\" fill=\"#2a9d3a\"/>")
+        }
+        JointKind::Free => format!("<circle cx=\"{x:.2}\" cy=\"{y:.2}\" r=\"1.5\" fill=\"#666\"/>"),
+    }
+}
+
+/// The legend row at height `y`: beam colours, joint marks and what the width means.
+fn legend(svg: &mut String, y: f64) {
+    let mut x = 10.0;
+    for (colour, label) in [
+        (COMPRESSION, "compression"),
+        (TENSION, "tension"),
+        (IDLE, "idle"),
+    ] {
+        let _ = writeln!(
+            svg,
+            "<line x1=\"{x:.1}\" y1=\"{y:.1}\" x2=\"{:.1}\" y2=\"{y:.1}\" stroke=\"{colour}\" \
+             stroke-width=\"4\"/><text x=\"{:.1}\" y=\"{:.1}\" font-size=\"12\">{label}</text>",
+            x + 24.0,
+            x + 30.0,
+            y + 4.0
+        );
+        x += 40.0 + 7.0 * label.len() as f64;
+    }
+    for (kind, label) in [
+        (JointKind::Anchor(Support::Pinned), "anchor"),
+        (JointKind::Load, "load"),
+        (JointKind::Free, "free joint"),
+    ] {
+        let _ = writeln!(
+            svg,
+            "{}<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"12\">{label}</text>",
+            joint_mark(&kind, x + 5.0, y - 3.0),
+            x + 14.0,
+            y + 4.0
+        );
+        x += 24.0 + 7.0 * label.len() as f64;
+    }
+    let _ = writeln!(
+        svg,
+        "<text x=\"{x:.1}\" y=\"{:.1}\" font-size=\"12\" fill=\"#555\">width ∝ √mass</text>",
+        y + 4.0
+    );
+}
+
+/// A scale bar ending at `right`, at height `y`: a round length (1, 2 or 5 × 10ᵏ m) near a
+/// fifth of the x extent, drawn at `scale` px/m.
+fn scale_bar(svg: &mut String, extent_x: f64, scale: f64, right: f64, y: f64) {
+    let target = extent_x / 5.0;
+    let decade = 10f64.powf(target.log10().floor());
+    let length = [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|k| k * decade)
+        .rfind(|&l| l <= target)
+        .unwrap_or(decade);
+    let px = length * scale;
+    let left = right - px;
+    let _ = writeln!(
+        svg,
+        "<path d=\"M{left:.1},{:.1} V{y:.1} H{right:.1} V{:.1}\" fill=\"none\" stroke=\"black\" \
+         stroke-width=\"1.5\"/><text x=\"{:.1}\" y=\"{:.1}\" font-size=\"12\" \
+         text-anchor=\"middle\">{} m</text>",
+        y - 5.0,
+        y - 5.0,
+        (left + right) / 2.0,
+        y + 15.0,
+        round_metres(length)
+    );
+}
+
+/// A round length as text without trailing zeros ("20", "0.5").
+fn round_metres(length: f64) -> String {
+    let text = format!("{length:.6}");
+    text.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
 /// `model.glb` bytes (module header).
@@ -235,6 +331,19 @@ pub fn model_glb(design: &Design) -> Result<Vec<u8>, GltfError> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn scale_bars_are_round_lengths() {
+        assert_eq!(super::round_metres(20.0), "20");
+        assert_eq!(super::round_metres(0.5), "0.5");
+        let mut svg = String::new();
+        // 72 m span: a 10 m bar (the largest of 1, 2, 5, 10 × 10ᵏ up to 14.4 m) at 12 px/m.
+        super::scale_bar(&mut svg, 72.0, 12.0, 900.0, 50.0);
+        assert!(
+            svg.contains("M780.0,45.0") && svg.contains(">10 m<"),
+            "{svg}"
+        );
+    }
+
     use super::*;
     use crate::truss::model::{Beam, Joint, Structure, Support};
 
@@ -278,12 +387,16 @@ mod tests {
 
     #[test]
     fn svg_draws_every_beam_in_both_views() {
-        let svg = preview_svg(&design());
+        let svg = preview_svg(&design(), "bridge: mass 9 kg <test>");
         assert!(svg.starts_with("<svg"));
         assert!(svg.trim_end().ends_with("</svg>"));
-        assert_eq!(svg.matches("<line x1=").count(), 2 * 3 + 1);
-        assert_eq!(svg.matches("<polygon").count(), 2);
-        assert_eq!(svg.matches("#2a9d3a").count(), 2);
+        // 3 beams in 2 views, the views' divider, 3 legend lines.
+        assert_eq!(svg.matches("<line x1=").count(), 2 * 3 + 1 + 3);
+        // The anchor in 2 views and in the legend; the load likewise.
+        assert_eq!(svg.matches("<polygon").count(), 2 + 1);
+        assert_eq!(svg.matches("#2a9d3a").count(), 2 + 1);
+        assert!(svg.contains("bridge: mass 9 kg &lt;test&gt;"));
+        assert!(svg.contains("width ∝ √mass") && svg.contains(" m</text>"));
     }
 
     #[test]

@@ -40,7 +40,7 @@ use serde_json::json;
 
 use crate::application::{Application, CheckCase};
 use crate::error::{Error, InputError};
-use crate::outcome::{Artifact, Kind, Outcome, ResultSummary, RunOptions};
+use crate::outcome::{Artifact, Headline, Kind, Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::CheckOptions;
 use crate::solver::{Evaluations, Nlp, Solution};
 use crate::spec::{Key, Source};
@@ -259,6 +259,11 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     // The last round that ended Optimal: its model, solution and number.
     let mut converged: Option<(TrussNlp, Solution, usize)> = None;
     loop {
+        let mut options = options.clone();
+        options.log = options.log.with_objective(nlp.objective_unit());
+        if rounds > 1 {
+            options.log.stage = format!("round {}", round + 1);
+        }
         solution = crate::solver::solve(&nlp, &options);
         iterations += solution.iterations;
         evaluations.functions += solution.evaluations.functions;
@@ -310,6 +315,8 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let design = Design::from_point(&nlp, &solution.x);
     let figures = design.figures(nlp.settings());
     let mut summary = ResultSummary::from_solution(problem.name(), Kind::Truss, seed, &solution);
+    let unit = nlp.objective_unit();
+    summary.headline = Headline::of(&unit, solution.objective * unit.scale);
     summary.iterations = iterations;
     summary.evaluations = evaluations;
     summary.figures = json!({
@@ -329,6 +336,13 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         "rounds_run": rounds_run,
         "result_round": result_round,
     });
+    let caption = format!(
+        "{}: {}, {} beams; {}",
+        problem.name(),
+        summary.headline.text(),
+        figures.active_beams,
+        solution.status.sentence()
+    );
     let glb = export::model_glb(&design).map_err(|e| Error::Runtime(e.to_string()))?;
     let mut artifacts = vec![
         Artifact {
@@ -341,18 +355,15 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         },
         Artifact {
             name: "preview.svg".into(),
-            bytes: export::preview_svg(&design).into_bytes(),
+            bytes: export::preview_svg(&design, &caption).into_bytes(),
         },
     ];
-    // One iteration log per round: iterations.csv, then iterations_round2.csv, ...
-    for (r, round_log) in logs.iter().enumerate() {
-        let file = if r == 0 {
-            "iterations.csv".to_string()
-        } else {
-            format!("iterations_round{}.csv", r + 1)
-        };
-        artifacts.push(crate::io::result::iterations_csv(&file, round_log));
-    }
+    // One iteration log for all rounds (its `stage` column names the round).
+    artifacts.extend(crate::io::result::iteration_files(
+        problem.name(),
+        &summary.headline,
+        &logs.concat(),
+    ));
     timings.insert("export".to_string(), export_start.elapsed().as_secs_f64());
     summary.timings = timings;
     Ok(Outcome {

@@ -42,6 +42,8 @@
 
 use std::collections::BTreeMap;
 
+use crate::solver::log::ObjectiveUnit;
+
 use nalgebra::{DMatrix, Matrix3};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -419,6 +421,18 @@ impl TrussNlp {
     /// Mass scale M, kg.
     pub fn mass_scale(&self) -> f64 {
         self.mass_scale
+    }
+
+    /// How the objective is shown: mass in kg (Σ m / M times M), compression-weighted mass in
+    /// kg, or length in m (Σ L / D times D).
+    pub fn objective_unit(&self) -> ObjectiveUnit {
+        match self.settings.objective {
+            Objective::Mass => ObjectiveUnit::new("mass", "kg", self.mass_scale),
+            Objective::MassTensionPreference(_) => {
+                ObjectiveUnit::new("weighted mass", "kg", self.mass_scale)
+            }
+            Objective::Length => ObjectiveUnit::new("length", "m", self.length_scale),
+        }
     }
 
     /// Beam forces λ in N, `[case][beam]`.

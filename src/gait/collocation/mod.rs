@@ -20,7 +20,7 @@ use std::time::Instant;
 
 use crate::error::{Error, InputError};
 use crate::io::result::{Csv, num};
-use crate::outcome::{Artifact, Kind, Outcome, ResultSummary, RunOptions};
+use crate::outcome::{Artifact, Headline, Kind, Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::CheckOptions;
 use crate::solver::{Nlp, solve};
 use crate::spec::Source;
@@ -55,26 +55,27 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         "cost": solution.objective,
         "validity": validity,
     });
-    if !opts.quiet {
-        eprintln!(
-            "{}: {:?} in {} iterations, {:.3} s; cost {:.6} N²·s; Newton residual {:.2e} N, \
+    summary.headline = Headline::new("effort", solution.objective, "N²·s");
+    opts.say(&format!(
+        "{}: {:?} in {} iterations, {:.3} s; cost {:.6} N²·s; Newton residual {:.2e} N, \
              re-simulation gap {:.2e} m, wall clearance {}",
-            problem.name,
-            solution.status,
-            solution.iterations,
-            solve_seconds,
-            solution.objective,
-            validity.newton_residual,
-            validity.resimulation_gap,
-            validity
-                .wall_clearance
-                .map_or("n/a".into(), |c| format!("{c:.4} m")),
-        );
-    }
-    let artifacts = vec![
-        trajectory_csv(&nlp.layout, &solution.x),
-        crate::io::result::iterations_csv("iterations.csv", &solution.log),
-    ];
+        problem.name,
+        solution.status,
+        solution.iterations,
+        solve_seconds,
+        solution.objective,
+        validity.newton_residual,
+        validity.resimulation_gap,
+        validity
+            .wall_clearance
+            .map_or("n/a".into(), |c| format!("{c:.4} m")),
+    ));
+    let mut artifacts = vec![trajectory_csv(&nlp.layout, &solution.x)];
+    artifacts.extend(crate::io::result::iteration_files(
+        &problem.name,
+        &summary.headline,
+        &solution.log,
+    ));
     Ok(Outcome {
         summary,
         status: Some(solution.status),

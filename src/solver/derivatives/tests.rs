@@ -520,6 +520,7 @@ fn forward_then_central_restarts_from_the_first_result() {
                 merit: 0.0,
                 qp_iterations: 0,
                 elapsed: 0.0,
+                stage: String::new(),
             }],
         }
     };

@@ -311,6 +311,7 @@ pub fn anneal(nlp: &dyn Nlp, options: &AnnealOptions) -> AnnealResult {
             merit: best.cost(mu),
             qp_iterations: 0,
             elapsed: clock.elapsed().as_secs_f64(),
+            stage: String::new(),
         });
     };
     record(&mut log, 0, &best, t0, mu);
