@@ -34,7 +34,16 @@ use super::nlp::Chord;
 use super::octahedron::{self, OctahedronTopology};
 use super::volume::Region;
 use crate::error::InputError;
-use crate::spec::{Key, SolverSpec, Source};
+use crate::spec::{Key, SolverSpec, Source, is_positive as positive};
+
+/// Largest `resolution` and `[quality] coarse_resolution` (the face count is bounded too,
+/// [`MAX_FACES`]).
+pub const MAX_RESOLUTION: usize = 64;
+/// Most start-mesh faces a problem may ask for, estimated before the mesh is built
+/// ([`ShapeSpec::face_estimate`]).
+pub const MAX_FACES: usize = 500_000;
+/// Most corners of a regular polygon (`sides`).
+pub const MAX_SIDES: usize = 1_000;
 
 /// The whole file.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -120,11 +129,13 @@ pub enum ShapeSpec {
     /// The standard double bubble.
     DoubleBubble {
         /// The two volumes, m³.
+        #[serde(deserialize_with = "crate::spec::arrays::exact")]
         volumes: [f64; 2],
     },
     /// Three bubbles (wedges of a ball to start).
     TripleBubble {
         /// The three volumes, m³.
+        #[serde(deserialize_with = "crate::spec::arrays::exact")]
         volumes: [f64; 3],
     },
     /// Wire cube, with a central bubble or without (the central-square film).
@@ -194,6 +205,7 @@ pub enum ShapeSpec {
 #[serde(deny_unknown_fields)]
 pub struct RimToml {
     /// Centre (x, z), m.
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub centre: [f64; 2],
     /// Circumradius, m.
     pub radius: f64,
@@ -209,6 +221,7 @@ pub struct RimToml {
 #[serde(deny_unknown_fields)]
 pub struct PoleRingToml {
     /// Centre (x, z), m.
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub centre: [f64; 2],
     /// Ring radius, m.
     pub radius: f64,
@@ -228,6 +241,7 @@ pub struct PoleRingToml {
 #[serde(deny_unknown_fields)]
 pub struct PoleToml {
     /// Position (x, z), m.
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub at: [f64; 2],
     /// Height, m.
     pub height: f64,
@@ -242,6 +256,7 @@ pub struct TentToml {
     /// Surface name.
     pub name: String,
     /// Rim corners (x, y, z), m, counter-clockwise seen from above.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt_vec")]
     pub boundary: Option<Vec<[f64; 3]>>,
     /// Or a regular polygon rim.
     pub rim: Option<RimToml>,
@@ -260,6 +275,7 @@ pub struct CellToml {
     /// Surface name.
     pub name: String,
     /// Footprint corners (x, z), m, counter-clockwise seen from above.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt_vec")]
     pub footprint: Option<Vec<[f64; 2]>>,
     /// Or a regular polygon footprint (its `height` is ignored).
     pub circle: Option<RimToml>,
@@ -279,13 +295,35 @@ pub struct VolumeToml {
     /// Bounding surfaces; prefix `-` for surfaces whose normals point into the region.
     pub surfaces: Vec<String>,
     /// Reference point (m), on the fixed plane for regions closed by one; default origin.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact")]
     pub reference: [f64; 3],
     /// Volume, m³.
     pub volume: f64,
 }
 
 impl ShapeSpec {
+    /// An upper estimate of the start mesh's triangles at `resolution`, in floating point so
+    /// that absurd inputs cannot overflow: an icosphere has 20·4ʳ; the other generators grow
+    /// with r² per surface piece (a tent and each of its poles, a cell), at most 100·r² each.
+    /// Imports are bounded when read ([`super::import`]).
+    pub fn face_estimate(&self, resolution: usize) -> f64 {
+        let r = resolution as f64;
+        let pieces = match self {
+            ShapeSpec::Sphere { .. } => return 20.0 * 4f64.powf(r),
+            ShapeSpec::Obj { .. } | ShapeSpec::Gltf { .. } => return 0.0,
+            ShapeSpec::Tents { tent } => tent
+                .iter()
+                .map(|t| {
+                    let ring_poles: f64 = t.pole_ring.iter().map(|p| p.count as f64).sum();
+                    1.0 + t.pole.len() as f64 + ring_poles
+                })
+                .sum(),
+            ShapeSpec::Cells { cell } => cell.len() as f64,
+            _ => 1.0,
+        };
+        100.0 * r * r * pieces
+    }
+
     /// The resolution used when the file gives none.
     pub fn default_resolution(&self) -> usize {
         match self {
@@ -316,10 +354,6 @@ pub fn parse(source: Source) -> Result<CmcSpec, InputError> {
     Ok(spec)
 }
 
-fn positive(v: f64) -> bool {
-    v > 0.0 && v.is_finite()
-}
-
 impl CmcSpec {
     fn err(&self, path: &[Key<'_>], message: impl Into<String>) -> InputError {
         self.source.error_at(path, message)
@@ -328,28 +362,23 @@ impl CmcSpec {
     fn validate(&self) -> Result<(), InputError> {
         let f = &self.file;
         f.solver.validate(&self.source, &[Key::Name("solver")])?;
-        if let Some(r) = f.resolution
-            && !(1..=64).contains(&r)
-        {
-            return Err(self.err(
-                &["resolution".into()],
-                format!("`resolution` must be between 1 and 64, got {r}"),
-            ));
+        let src = &self.source;
+        if let Some(r) = f.resolution {
+            src.count_in(&["resolution".into()], r, 1, MAX_RESOLUTION)?;
         }
-        if f.quality.flip_rounds > 10 {
-            return Err(self.err(
-                &["quality".into(), "flip_rounds".into()],
-                format!(
-                    "`flip_rounds` must be at most 10, got {}",
-                    f.quality.flip_rounds
-                ),
-            ));
-        }
-        if f.quality.coarse_resolution == Some(0) {
-            return Err(self.err(
+        src.count_in(
+            &["quality".into(), "flip_rounds".into()],
+            f.quality.flip_rounds,
+            0,
+            10,
+        )?;
+        if let Some(r) = f.quality.coarse_resolution {
+            src.count_in(
                 &["quality".into(), "coarse_resolution".into()],
-                "`coarse_resolution` must be at least 1",
-            ));
+                r,
+                1,
+                MAX_RESOLUTION,
+            )?;
         }
         if f.quality
             .refine
@@ -360,19 +389,12 @@ impl CmcSpec {
                 "`refine` must be a finite number ≥ 1 (a multiple of the median edge length)",
             ));
         }
-        if !(f.quality.tangential_weight >= 0.0 && f.quality.tangential_weight.is_finite()) {
-            return Err(self.err(
-                &["quality".into(), "tangential_weight".into()],
-                "`tangential_weight` must be a finite number ≥ 0",
-            ));
-        }
+        src.non_negative(
+            &["quality".into(), "tangential_weight".into()],
+            f.quality.tangential_weight,
+        )?;
         for (i, c) in f.chord.iter().enumerate() {
-            if !positive(c.length) {
-                return Err(self.err(
-                    &["chord".into(), i.into(), "length".into()],
-                    format!("chord length must be positive metres, got {}", c.length),
-                ));
-            }
+            src.positive(&["chord".into(), i.into(), "length".into()], c.length)?;
         }
         let shape = |key: &'static str| [Key::Name("shape"), Key::Name(key)];
         let check_volumes = |volumes: &[f64]| match volumes.iter().find(|v| !positive(**v)) {
@@ -382,17 +404,27 @@ impl CmcSpec {
             )),
             None => Ok(()),
         };
+        let resolution = f.resolution.unwrap_or_else(|| f.shape.default_resolution());
+        let sized_by: &[Key<'_>] = if f.resolution.is_some() {
+            &[Key::Name("resolution")]
+        } else {
+            &[Key::Name("shape")]
+        };
+        src.within_limit(
+            sized_by,
+            f.shape.face_estimate(resolution),
+            MAX_FACES as f64,
+            "start-mesh faces",
+        )?;
         match &f.shape {
-            ShapeSpec::Sphere { volume } => check_volumes(&[*volume])?,
+            ShapeSpec::Sphere { volume } => src.positive(&shape("volume"), *volume)?,
             ShapeSpec::DoubleBubble { volumes } => check_volumes(volumes)?,
             ShapeSpec::TripleBubble { volumes } => check_volumes(volumes)?,
             ShapeSpec::CubeFrame {
                 edge,
                 bubble_volume,
             } => {
-                if !positive(*edge) {
-                    return Err(self.err(&shape("edge"), "`edge` must be positive metres"));
-                }
+                src.positive(&shape("edge"), *edge)?;
                 if let Some(bubble_volume) = bubble_volume
                     && !(positive(*bubble_volume) && bubble_volume.cbrt() < 0.8 * edge)
                 {
@@ -404,11 +436,7 @@ impl CmcSpec {
             }
             ShapeSpec::Catenoid { radius, separation } => {
                 for (key, v) in [("radius", radius), ("separation", separation)] {
-                    if !positive(*v) {
-                        return Err(
-                            self.err(&shape(key), format!("`{key}` must be positive metres"))
-                        );
-                    }
+                    src.positive(&shape(key), *v)?;
                 }
                 if catenoid::exact_catenoid(*radius, *separation).is_none() {
                     return Err(self.err(
@@ -421,18 +449,10 @@ impl CmcSpec {
                     ));
                 }
             }
-            ShapeSpec::OctahedronFrame { edge, .. } => {
-                if !positive(*edge) {
-                    return Err(self.err(&shape("edge"), "`edge` must be positive metres"));
-                }
-            }
+            ShapeSpec::OctahedronFrame { edge, .. } => src.positive(&shape("edge"), *edge)?,
             ShapeSpec::UWires { width, depth } => {
                 for (key, v) in [("width", width), ("depth", depth)] {
-                    if !positive(*v) {
-                        return Err(
-                            self.err(&shape(key), format!("`{key}` must be positive metres"))
-                        );
-                    }
+                    src.positive(&shape(key), *v)?;
                 }
             }
             ShapeSpec::Tents { tent } => {
@@ -499,27 +519,21 @@ impl CmcSpec {
                     if let Some(fp) = &c.footprint {
                         self.check_polygon(fp, &at("footprint"))?;
                     }
-                    if !positive(c.volume) {
-                        return Err(self.err(&at("volume"), "`volume` must be positive m³"));
-                    }
-                    if c.height.is_some_and(|h| !positive(h)) {
-                        return Err(self.err(&at("height"), "`height` must be positive m"));
+                    src.positive(&at("volume"), c.volume)?;
+                    if let Some(h) = c.height {
+                        src.positive(&at("height"), h)?;
                     }
                 }
             }
             ShapeSpec::Obj { volume, .. } | ShapeSpec::Gltf { volume, .. } => {
                 for (i, v) in volume.iter().enumerate() {
-                    if !positive(v.volume) {
-                        return Err(self.err(
-                            &[
-                                Key::Name("shape"),
-                                Key::Name("volume"),
-                                Key::Index(i),
-                                Key::Name("volume"),
-                            ],
-                            "`volume` must be positive m³",
-                        ));
-                    }
+                    let at = [
+                        Key::Name("shape"),
+                        Key::Name("volume"),
+                        Key::Index(i),
+                        Key::Name("volume"),
+                    ];
+                    src.positive(&at, v.volume)?;
                 }
             }
         }
@@ -539,9 +553,12 @@ impl CmcSpec {
             ));
         }
         if let Some(r) = regular
-            && !(positive(r.radius) && r.sides >= 3 && r.height.is_finite())
+            && !(positive(r.radius) && (3..=MAX_SIDES).contains(&r.sides) && r.height.is_finite())
         {
-            return Err(self.err(path, "a regular polygon needs radius > 0 and sides ≥ 3"));
+            return Err(self.err(
+                path,
+                format!("a regular polygon needs radius > 0 and 3 to {MAX_SIDES} sides"),
+            ));
         }
         Ok(())
     }
@@ -782,5 +799,53 @@ fn cell_spec(c: &CellToml) -> CellSpec {
         footprint,
         height: c.height,
         volume: c.volume,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The face estimate that bounds a start mesh before it is built is an upper bound of the
+    /// real mesh for every shipped problem at resolutions 1 to 3.
+    #[test]
+    fn face_estimate_bounds_the_built_meshes() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/cmc");
+        let mut files: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+            .collect();
+        files.sort();
+        for file in files {
+            let spec = parse(Source::read(&file).unwrap()).unwrap();
+            for r in 1..=3 {
+                let (shape, _) = spec.build(r).unwrap();
+                let faces = shape.mesh.triangles().len() as f64;
+                let estimate = spec.file.shape.face_estimate(r);
+                if estimate > 0.0 {
+                    assert!(
+                        faces <= estimate,
+                        "{}: r{r} {faces} > {estimate}",
+                        file.display()
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn an_absurd_resolution_is_refused_before_building() {
+        let source = Source {
+            path: "s.toml".into(),
+            text: "resolution = 40\n[shape]\ntype = \"sphere\"\nvolume = 1.0\n".into(),
+        };
+        let e = parse(source).unwrap_err();
+        assert_eq!(e.position, Some((1, 1)));
+        assert!(
+            e.message
+                .starts_with("`resolution` would generate 2.4e25 start-mesh faces; limit 5e5"),
+            "{e}"
+        );
     }
 }

@@ -54,7 +54,10 @@ pub struct FileSpec {
     /// RK4 step (s).
     pub dt: f64,
     /// Gravity acceleration (m/s²); default `[0, −9.81, 0]`.
-    #[serde(default = "default_gravity")]
+    #[serde(
+        default = "default_gravity",
+        deserialize_with = "crate::spec::arrays::exact"
+    )]
     pub gravity: [f64; 3],
     /// Links, parents first.
     pub link: Vec<LinkSpec>,
@@ -145,16 +148,19 @@ pub struct LinkSpec {
     /// Mass (kg), positive.
     pub mass: f64,
     /// Centre of mass in link coordinates (m); default the shape's centre.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub com: Option<[f64; 3]>,
     /// Principal moments about the centre of mass along link axes `[Ixx, Iyy, Izz]` (kg·m²);
     /// default: the uniform solid `shape` of this mass.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub inertia: Option<[f64; 3]>,
     /// Products of inertia `[Ixy, Ixz, Iyz]` (kg·m²); default zero.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub inertia_products: Option<[f64; 3]>,
     /// Display shape (link coordinates, m).
     pub shape: ShapeSpec,
     /// Contact points in link coordinates (m).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_vec")]
     pub contacts: Vec<[f64; 3]>,
     /// The joint attaching this link to its parent (the root's: to the world).
     pub joint: JointSpec,
@@ -167,9 +173,10 @@ pub enum ShapeSpec {
     /// A box of full side lengths `size` (m) centred at `center` (m).
     Box {
         /// Side lengths (m).
+        #[serde(deserialize_with = "crate::spec::arrays::exact")]
         size: [f64; 3],
         /// Centre (m); default origin.
-        #[serde(default)]
+        #[serde(default, deserialize_with = "crate::spec::arrays::exact")]
         center: [f64; 3],
     },
     /// A capsule of `radius` (m) from `from` to `to` (m).
@@ -177,8 +184,10 @@ pub enum ShapeSpec {
         /// Radius (m).
         radius: f64,
         /// First end (m).
+        #[serde(deserialize_with = "crate::spec::arrays::exact")]
         from: [f64; 3],
         /// Second end (m).
+        #[serde(deserialize_with = "crate::spec::arrays::exact")]
         to: [f64; 3],
     },
     /// A sphere of `radius` (m) centred at `center`.
@@ -186,7 +195,7 @@ pub enum ShapeSpec {
         /// Radius (m).
         radius: f64,
         /// Centre (m); default origin.
-        #[serde(default)]
+        #[serde(default, deserialize_with = "crate::spec::arrays::exact")]
         center: [f64; 3],
     },
 }
@@ -234,11 +243,13 @@ pub struct JointSpec {
     /// Parent link's name; omitted for the root (attached to the world).
     pub parent: Option<String>,
     /// Joint frame origin in the parent's frame (m); default origin.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact")]
     pub origin: [f64; 3],
     /// Axis of a revolute or prismatic joint (parent frame; normalized); default `[0, 0, 1]`.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub axis: Option<[f64; 3]>,
     /// Coordinate limits `[lower, upper]` (rad or m) of a scalar joint.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub limits: Option<[f64; 2]>,
     /// Stiffness of the limit springs (N·m/rad or N/m); default 100.
     pub limit_stiffness: Option<f64>,
@@ -259,6 +270,7 @@ pub struct JointSpec {
     /// Planar root: initial rotation about z (rad).
     pub angle: Option<f64>,
     /// Floating root: initial orientation as a quaternion `[w, x, y, z]` (normalized).
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub orientation: Option<[f64; 4]>,
     /// Initial rate: scalar joints a number (rad/s or m/s); planar `[vx, vy]`, floating
     /// `[vx, vy, vz]` (m/s, world velocity of the link frame's origin).
@@ -277,6 +289,7 @@ pub struct ActuatorSpec {
     /// The link whose (scalar) joint it drives.
     pub joint: String,
     /// Force bounds `[lower, upper]` (N·m for revolute, N for prismatic joints).
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub bounds: [f64; 2],
     /// Starting guess: force at each control knot (N·m or N); default zeros.
     pub start: Option<Vec<f64>>,
@@ -381,6 +394,7 @@ pub struct TaskSpec {
     /// Link (point and airborne-free quantities) or joint (the link whose joint) name.
     pub link: Option<String>,
     /// Point on the link (m, link coordinates); default the link origin.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub point: Option<[f64; 3]>,
     /// World axis of a vector quantity.
     pub axis: Option<Axis>,

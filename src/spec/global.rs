@@ -358,7 +358,7 @@ mod tests {
         let e = check("[global]\nstarts = 0\n").unwrap_err();
         assert_eq!(e.position, Some((2, 1)));
         let e = check("[global]\nperturbation = nan\n").unwrap_err();
-        assert!(e.message.contains("positive"), "{}", e.message);
+        assert!(e.message.contains("must be finite"), "{}", e.message);
     }
 
     #[test]

@@ -83,8 +83,10 @@ fn default_gravity() -> f64 {
 #[serde(deny_unknown_fields)]
 pub struct StartSpec {
     /// m.
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub position: [f64; 2],
     /// m/s.
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub velocity: [f64; 2],
 }
 
@@ -93,6 +95,7 @@ pub struct StartSpec {
 #[serde(deny_unknown_fields)]
 pub struct EndSpec {
     /// m.
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub position: [f64; 2],
 }
 
