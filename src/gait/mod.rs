@@ -47,7 +47,7 @@ use crate::error::{Error, InputError};
 use crate::run::{Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::{CheckOptions, check_derivatives};
 use crate::solver::{Evaluations, Nlp};
-use crate::spec::Source;
+use crate::spec::{Key, Source};
 
 pub use spec::Problem;
 
@@ -74,6 +74,14 @@ pub fn execute(path: &Path, opts: &RunOptions) -> Result<(String, Outcome), Erro
         return Ok((problem.name.clone(), outcome));
     }
     let problem = spec::load_source(&source)?;
+    let count = problem.trials.count;
+    if let Some(k) = opts.trial
+        && !(1..=count).contains(&k)
+    {
+        let at = [Key::Name("trials"), Key::Name("count")];
+        let message = format!("--trial {k}: {} has trials 1 to {count}", problem.name);
+        return Err(source.error_at(&at, message).into());
+    }
     let outcome = run(&problem, opts)?;
     Ok((problem.name().to_string(), outcome))
 }

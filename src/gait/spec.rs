@@ -36,6 +36,7 @@ use super::character::{
     Actuator, ContactParams, JointKind, Limits, Link, Model, Shape, Spring, shape_center,
     shape_inertia,
 };
+use super::aba::Dynamics;
 use super::sim::State;
 use super::spatial::{Mat3, RigidInertia, Vec3};
 use super::spline::KnotGrid;
@@ -805,6 +806,7 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
     }
     let model = Model::new(links, actuators, file.gravity, contact);
     let initial = build_initial(source, &file, &model)?;
+    check_contacts_above_ground(source, &model, &initial)?;
 
     let knots = file.controls.knots.unwrap_or(6);
     if !(2..=100).contains(&knots) {
@@ -845,6 +847,7 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
             "`horizon` must be positive seconds (or give at least one task)".into(),
         ));
     }
+    source.within_limit(&hat, horizon / file.dt, MAX_STEPS as f64, "RK4 steps of `dt`")?;
     if last > horizon + 1e-12 {
         return Err(err(
             hat,
@@ -892,6 +895,50 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
         trials,
         solver: file.solver,
     })
+}
+
+/// Most RK4 steps one rollout may take (task times and the horizon over `dt`): ten times the
+/// longest shipped motion, so that a `--check` or a solve never starts an hour-long rollout.
+pub const MAX_STEPS: usize = 50_000;
+
+/// How far, m, a contact point may start below the ground: the contact spring pushes
+/// exponentially harder with depth (e^{700·depth}), so a deeper start blows the simulation up.
+pub const MAX_START_PENETRATION: f64 = 0.01;
+
+/// Every contact point starts above the ground, or at most [`MAX_START_PENETRATION`] into it;
+/// the error points at the contact point and names its depth.
+fn check_contacts_above_ground(
+    source: &Source,
+    model: &Model,
+    initial: &State<f64>,
+) -> Result<(), InputError> {
+    let mut dynamics = Dynamics::<f64>::new(model);
+    dynamics.kinematics(model, &initial.q, &initial.v);
+    for (i, link) in model.links.iter().enumerate() {
+        for (c, point) in link.contacts.iter().enumerate() {
+            let y = dynamics.point_position(i, &Vec3::from_f64(*point)).0[1];
+            let depth = model.contact.ground - y;
+            if depth > MAX_START_PENETRATION || !depth.is_finite() {
+                return Err(source.error_at(
+                    &[
+                        Key::Name("link"),
+                        Key::Index(i),
+                        Key::Name("contacts"),
+                        Key::Index(c),
+                    ],
+                    format!(
+                        "contact point {} of link `{}` starts {depth:.3} m below the ground \
+                         (y = {} m) in the initial state; at most {MAX_START_PENETRATION} m \
+                         is allowed",
+                        c + 1,
+                        link.name,
+                        model.contact.ground
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Converts times (s) to RK4 steps of `dt`, `None` when not within 1e-9 of a step.
@@ -1278,6 +1325,7 @@ fn build_tasks(
                 ),
             ));
         }
+        source.within_limit(&at("time"), steps, MAX_STEPS as f64, "RK4 steps of `dt`")?;
         let step = steps.round() as usize;
         let (lower, upper) = match (t.value, t.min, t.max) {
             (Some(v), None, None) => (v, v),

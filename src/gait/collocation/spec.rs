@@ -30,7 +30,7 @@
 use serde::Deserialize;
 
 use crate::error::InputError;
-use crate::spec::{Key, SolverSpec, Source};
+use crate::spec::{Key, SolverSpec, Source, is_positive as positive};
 
 /// The whole file.
 #[derive(Debug, Clone, Deserialize)]
@@ -206,10 +206,6 @@ pub fn selects_collocation(source: &Source) -> bool {
 pub fn load_source(source: &Source) -> Result<Problem, InputError> {
     let file: FileSpec = source.parse()?;
     build(source, file)
-}
-
-fn positive(v: f64) -> bool {
-    v > 0.0 && v.is_finite()
 }
 
 fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
