@@ -304,23 +304,38 @@ pub struct VolumeToml {
 impl ShapeSpec {
     /// An upper estimate of the start mesh's triangles at `resolution`, in floating point so
     /// that absurd inputs cannot overflow: an icosphere has 20·4ʳ; the other generators grow
-    /// with r² per surface piece (a tent and each of its poles, a cell), at most 100·r² each.
-    /// Imports are bounded when read ([`super::import`]).
+    /// with r² per surface piece (a tent and each of its poles, a cell), at most 100·r² each,
+    /// times the aspect ratio where rows follow it (U wires: depth/width; quadrilateral tents
+    /// and cells: long/short side). Imports are bounded when read ([`super::import`]).
     pub fn face_estimate(&self, resolution: usize) -> f64 {
         let r = resolution as f64;
         let pieces = match self {
             ShapeSpec::Sphere { .. } => return 20.0 * 4f64.powf(r),
             ShapeSpec::Obj { .. } | ShapeSpec::Gltf { .. } => return 0.0,
+            ShapeSpec::UWires { width, depth } => (depth / width).max(1.0),
             ShapeSpec::Tents { tent } => tent
                 .iter()
                 .map(|t| {
                     let ring_poles: f64 = t.pole_ring.iter().map(|p| p.count as f64).sum();
-                    1.0 + t.pole.len() as f64 + ring_poles
+                    let corners: Vec<[f64; 3]> = t.boundary.clone().unwrap_or_default();
+                    (1.0 + t.pole.len() as f64 + ring_poles) * quad_aspect(&corners)
                 })
                 .sum(),
-            ShapeSpec::Cells { cell } => cell.len() as f64,
+            ShapeSpec::Cells { cell } => cell
+                .iter()
+                .map(|c| {
+                    let corners: Vec<[f64; 3]> = (c.footprint.iter().flatten())
+                        .map(|&[x, z]| [x, 0.0, z])
+                        .collect();
+                    quad_aspect(&corners)
+                })
+                .sum(),
             _ => 1.0,
         };
+        // NaN (a zero width) counts as over every limit.
+        if pieces.is_nan() {
+            return f64::INFINITY;
+        }
         100.0 * r * r * pieces
     }
 
@@ -719,20 +734,50 @@ impl CmcSpec {
                 })?;
                 boundary.push((s, sign));
             }
-            regions.push((
-                v.name.clone(),
-                Region {
-                    boundary,
-                    reference: Point::from(v.reference),
-                },
-                v.volume,
-            ));
+            let region = Region {
+                boundary,
+                reference: Point::from(v.reference),
+            };
+            let enclosed = region.volume(&mesh);
+            if !(enclosed > 0.0) {
+                return Err(self.err(
+                    &[
+                        Key::Name("shape"),
+                        Key::Name("volume"),
+                        Key::Index(i),
+                        Key::Name("surfaces"),
+                    ],
+                    format!(
+                        "the surfaces of volume `{}` enclose {enclosed:.3e} m³ as wound: their \
+                         normals must point out of the region (reverse the faces, or prefix a \
+                         surface whose normals point in with `-`)",
+                        v.name
+                    ),
+                ));
+            }
+            regions.push((v.name.clone(), region, v.volume));
         }
         Ok(Shape {
             mesh,
             volumes: regions,
         })
     }
+}
+
+/// The ratio of the longer to the shorter mean side of a quadrilateral (the generators grid it
+/// with rows along the short side); 1 for other polygons.
+fn quad_aspect(corners: &[[f64; 3]]) -> f64 {
+    if corners.len() != 4 {
+        return 1.0;
+    }
+    let len = |i: usize, j: usize| {
+        let d: f64 = (0..3)
+            .map(|k| (corners[i][k] - corners[j][k]).powi(2))
+            .sum();
+        d.sqrt()
+    };
+    let (u, v) = ((len(0, 1) + len(3, 2)) / 2.0, (len(1, 2) + len(0, 3)) / 2.0);
+    (u.max(v) / u.min(v)).max(1.0)
 }
 
 /// Corners of a regular polygon, counter-clockwise seen from above, first corner at +x.

@@ -32,11 +32,11 @@ use std::collections::HashMap;
 
 use serde::Deserialize;
 
+use super::aba::Dynamics;
 use super::character::{
     Actuator, ContactParams, JointKind, Limits, Link, Model, Shape, Spring, shape_center,
     shape_inertia,
 };
-use super::aba::Dynamics;
 use super::sim::State;
 use super::spatial::{Mat3, RigidInertia, Vec3};
 use super::spline::KnotGrid;
@@ -847,7 +847,12 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
             "`horizon` must be positive seconds (or give at least one task)".into(),
         ));
     }
-    source.within_limit(&hat, horizon / file.dt, MAX_STEPS as f64, "RK4 steps of `dt`")?;
+    source.within_limit(
+        &hat,
+        horizon / file.dt,
+        MAX_STEPS as f64,
+        "RK4 steps of `dt`",
+    )?;
     if last > horizon + 1e-12 {
         return Err(err(
             hat,
