@@ -20,10 +20,13 @@ pub struct Inconsistent {
     pub neighbour: usize,
 }
 
+/// An undirected edge (smaller vertex first) within a named surface.
+type SurfaceEdge<'a> = (&'a str, usize, usize);
+
 /// The first inconsistently wound face of `faces` (`(surface name, polygon)` pairs), if any.
 pub fn inconsistent_face(faces: &[(String, Vec<usize>)]) -> Option<Inconsistent> {
     // Undirected edge within a surface → (face, traverses it from the smaller vertex).
-    let mut edges: HashMap<(&str, usize, usize), Vec<(usize, bool)>> = HashMap::new();
+    let mut edges: HashMap<SurfaceEdge<'_>, Vec<(usize, bool)>> = HashMap::new();
     for (f, (surface, poly)) in faces.iter().enumerate() {
         for k in 0..poly.len() {
             let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);

@@ -739,7 +739,7 @@ impl CmcSpec {
                 reference: Point::from(v.reference),
             };
             let enclosed = region.volume(&mesh);
-            if !(enclosed > 0.0) {
+            if enclosed.is_nan() || enclosed <= 0.0 {
                 return Err(self.err(
                     &[
                         Key::Name("shape"),

@@ -77,6 +77,7 @@ mod tests {
         let ok: File = toml::from_str("g = [0, -9.81, 0]\nv = [[1, 2]]\n").unwrap();
         assert_eq!(ok.g, [0.0, -9.81, 0.0]);
         assert_eq!(ok.o, None);
+        assert_eq!(ok.v, [[1.0, 2.0]]);
         for bad in [
             "g = [0, -9.81, 0, 5]",
             "g = [0, 1]",
