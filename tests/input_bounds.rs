@@ -78,19 +78,6 @@ fn a_huge_random_count_is_refused() {
 }
 
 #[test]
-fn a_far_away_joint_does_not_merge_the_others() {
-    let p = mutant(
-        "problems/truss/roof_fink.toml",
-        "[ground]",
-        "[[joint]]\nkind = \"free\"\nat = [1e15, 0.0, 0.0]\n\n[ground]",
-        "far",
-    );
-    let out = check("truss", &p);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!stderr.contains("same position"), "{stderr}");
-}
-
-#[test]
 fn extra_array_elements_and_nan_are_positioned_errors() {
     let p = mutant(
         "problems/gait/pogo_crouch.toml",
