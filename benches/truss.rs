@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use criterion::{Criterion, SamplingMode, criterion_group, criterion_main};
-use optimize::run::RunOptions;
+use optimize::outcome::RunOptions;
 use optimize::truss::{load, start};
 
 /// Examples timed as whole runs: warren_bridge (the sub-second target), michell (a

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
-use crate::run::{Kind, RunOptions};
+use crate::outcome::{Kind, RunOptions};
 
 const EXAMPLES: &str = "\
 Examples:
@@ -73,8 +73,13 @@ pub struct Common {
     /// without solving.
     #[arg(long)]
     pub check: bool,
-    /// Output folder [default: out/<problem name>/].
-    #[arg(short = 'o', long = "out", value_name = "DIR")]
+    /// Output folder; default `out/<problem name>/`.
+    #[arg(
+        short = 'o',
+        long = "out",
+        value_name = "DIR",
+        help = "Output folder [default: out/<problem name>/]"
+    )]
     pub out: Option<PathBuf>,
     /// Print nothing but errors.
     #[arg(short, long, conflicts_with = "verbose")]
@@ -85,8 +90,12 @@ pub struct Common {
     /// Print the result summary as JSON on stdout.
     #[arg(long)]
     pub json: bool,
-    /// Major-iteration limit (overrides [solver] max_iterations).
-    #[arg(long, value_name = "N")]
+    /// Major-iteration limit (overrides `[solver] max_iterations`).
+    #[arg(
+        long,
+        value_name = "N",
+        help = "Major-iteration limit (overrides [solver] max_iterations)"
+    )]
     pub max_iter: Option<usize>,
     /// Seed for every random choice [default: 0, or a truss file's `seed`]; the same file and
     /// seed give the same result. Given, it overrides the file's `seed`.

@@ -8,11 +8,13 @@
 //! Data flows one way: problem file → spec → model → [`solver::Nlp`] → [`solver::Solution`] →
 //! module result → files. See `docs/architecture.md`.
 
+pub mod application;
 pub mod cli;
 pub mod cmc;
 pub mod error;
 pub mod gait;
 pub mod io;
+pub mod outcome;
 pub mod run;
 pub mod solver;
 pub mod spec;

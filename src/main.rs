@@ -4,16 +4,16 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::Parser;
 use optimize::cli::Cli;
-use optimize::run::{Outcome, execute};
+use optimize::io::atomic::CHECK_FOLDER;
+use optimize::outcome::Outcome;
+use optimize::run::execute;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let (kind, common, mut opts) = cli.command.resolve();
+    let (kind, common, opts) = cli.command.resolve();
     if let Some(n) = opts.threads
         && let Err(e) = rayon::ThreadPoolBuilder::new()
             .num_threads(n)
@@ -22,16 +22,14 @@ fn main() -> ExitCode {
         eprintln!("error: cannot start {n} worker threads: {e}");
         return ExitCode::from(1);
     }
-    // First Ctrl-C: stop after the current iteration and write the best point so far.
-    // Second Ctrl-C: leave at once.
-    let interrupt = Arc::new(AtomicBool::new(false));
-    let flag = Arc::clone(&interrupt);
+    // First Ctrl-C: raise the run's interrupt flag; whatever is running stops at its next
+    // poll and the best point so far is written. Second Ctrl-C: leave at once.
+    let interrupt = opts.interrupt.clone();
     let _ = ctrlc::set_handler(move || {
-        if flag.swap(true, Ordering::SeqCst) {
+        if interrupt.raise() {
             std::process::exit(130);
         }
     });
-    opts.interrupt = Some(interrupt);
 
     let (name, outcome) = match execute(kind, &common.file, &opts) {
         Ok(done) => done,
@@ -40,10 +38,14 @@ fn main() -> ExitCode {
             return ExitCode::from(e.exit_code());
         }
     };
-    let dir = opts
+    let mut dir = opts
         .out_dir
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&name));
+    if opts.check {
+        // A check never touches the solved run beside it.
+        dir.push(CHECK_FOLDER);
+    }
     let written = match optimize::io::write_outcome(&dir, &outcome) {
         Ok(paths) => paths,
         Err(e) => {

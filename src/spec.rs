@@ -8,17 +8,16 @@
 //! - range errors from `validate` name a key path (`["solver", "tolerance"]`), which
 //!   [`Source::error_at`] maps back to the key's position with the toml parser's spans.
 //!
-//! The shared `[solver]` table ([`SolverSpec`]) is accepted by every kind; a `[global]` table
+//! The shared `[solver]` table (a [`crate::solver::Options`], checked by [`validate_solver`]) is
+//! accepted by every kind; a `[global]` table
 //! ([`GlobalSpec`]) asks for a global method around the local solver.
 
 use std::path::{Path, PathBuf};
 
-use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
 use crate::error::InputError;
-use crate::solver::qp::QpMethod;
-use crate::solver::{Globalization, HessianMode, Options};
+use crate::solver::Options;
 
 pub mod arrays;
 mod check;
@@ -167,109 +166,24 @@ fn edit_distance(a: &str, b: &str) -> usize {
     row[b.len()]
 }
 
-/// The `[solver]` table every problem kind accepts. All keys optional.
-#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct SolverSpec {
-    /// Scaled optimality (dual) tolerance; default 1e-6.
-    pub tolerance: Option<f64>,
-    /// Scaled feasibility (primal) tolerance; default 1e-6.
-    pub constraint_tolerance: Option<f64>,
-    /// Maximum number of major (SQP) iterations; default 1000.
-    pub max_iterations: Option<usize>,
-    /// Wall-clock limit for one solve, in seconds; default unlimited.
-    pub max_time: Option<f64>,
-    /// Hessian approximation: "auto" (default), "bfgs", "lbfgs" or "exact".
-    pub hessian: Option<HessianMode>,
-    /// Number of correction pairs kept by limited-memory BFGS; default 10.
-    pub lbfgs_memory: Option<usize>,
-    /// QP subproblem method: "auto" (default), "dense" or "sparse".
-    pub qp: Option<QpMethod>,
-    /// Step acceptance: "line_search" (default) or "trust_region".
-    pub globalization: Option<Globalization>,
-    /// Iteration-log detail: 0 silent, 1 one line per iteration (default), 2 more.
-    pub verbosity: Option<u8>,
-}
-
-impl SolverSpec {
-    /// Checks ranges; `path` is where this table sits in the file (usually `["solver"]`).
-    pub fn validate(&self, source: &Source, path: &[Key<'_>]) -> Result<(), InputError> {
-        let at = |key: &'static str, msg: String| {
-            let mut p = path.to_vec();
-            p.push(Key::Name(key));
-            source.error_at(&p, msg)
-        };
-        for (key, value) in [
-            ("tolerance", self.tolerance),
-            ("constraint_tolerance", self.constraint_tolerance),
-        ] {
-            if let Some(v) = value
-                && !(v > 0.0 && v < 1.0)
-            {
-                return Err(at(key, format!("`{key}` must be in (0, 1), got {v}")));
-            }
-        }
-        if let Some(t) = self.max_time
-            && (t.is_nan() || t <= 0.0)
-        {
-            return Err(at(
-                "max_time",
-                format!("`max_time` must be positive seconds, got {t}"),
-            ));
-        }
-        if self.lbfgs_memory == Some(0) {
-            return Err(at(
-                "lbfgs_memory",
-                "`lbfgs_memory` must be at least 1".into(),
-            ));
-        }
-        if let Some(v) = self.verbosity
-            && v > 2
-        {
-            return Err(at(
-                "verbosity",
-                format!("`verbosity` must be 0, 1 or 2, got {v}"),
-            ));
-        }
-        Ok(())
-    }
-
-    /// Solver options: defaults overridden by this table.
-    pub fn options(&self) -> Options {
-        let mut o = Options::default();
-        if let Some(v) = self.tolerance {
-            o.tolerance = v;
-        }
-        if let Some(v) = self.constraint_tolerance {
-            o.constraint_tolerance = v;
-        }
-        if let Some(v) = self.max_iterations {
-            o.max_iterations = v;
-        }
-        if let Some(v) = self.max_time {
-            o.max_time = Some(v);
-        }
-        if let Some(v) = self.hessian {
-            o.hessian = v;
-        }
-        if let Some(v) = self.lbfgs_memory {
-            o.lbfgs_memory = v;
-        }
-        if let Some(v) = self.qp {
-            o.qp_method = v;
-        }
-        if let Some(v) = self.globalization {
-            o.globalization = v;
-        }
-        if let Some(v) = self.verbosity {
-            o.verbosity = v;
-        }
-        o
-    }
+/// Checks a `[solver]` table ([`Options::validate`]); `path` is where the table sits in the
+/// file (usually `["solver"]`), so that a range error points at the offending key.
+pub fn validate_solver(
+    options: &Options,
+    source: &Source,
+    path: &[Key<'_>],
+) -> Result<(), InputError> {
+    options.validate().map_err(|e| {
+        let mut p = path.to_vec();
+        p.push(Key::Name(e.key));
+        source.error_at(&p, e.message)
+    })
 }
 
 #[cfg(test)]
 mod tests {
+    use serde::Deserialize;
+
     use super::*;
 
     #[derive(Debug, Deserialize)]
@@ -278,7 +192,7 @@ mod tests {
     struct File {
         name: String,
         #[serde(default)]
-        solver: SolverSpec,
+        solver: Options,
     }
 
     fn source(text: &str) -> Source {
@@ -312,7 +226,7 @@ mod tests {
     fn range_error_points_at_the_key() {
         let s = source("name = \"a\"\n\n[solver]\nmax_time = -1.0\n");
         let f: File = s.parse().unwrap();
-        let e = f.solver.validate(&s, &[Key::Name("solver")]).unwrap_err();
+        let e = validate_solver(&f.solver, &s, &[Key::Name("solver")]).unwrap_err();
         assert_eq!(e.position, Some((4, 1)));
         assert!(e.to_string().starts_with("p.toml:4:1: `max_time`"), "{e}");
     }

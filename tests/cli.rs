@@ -152,7 +152,7 @@ fn check_on_a_valid_file_exits_0() {
         let out = optimize(&[kind, file, "--check", "-q", "-o", out_dir]);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(0), "{kind} {file}: {stderr}");
-        let summary = std::fs::read_to_string(scratch.0.join("result.json")).unwrap();
+        let summary = std::fs::read_to_string(scratch.0.join("check").join("result.json")).unwrap();
         assert!(summary.contains("\"status\": \"Checked\""), "{summary}");
     }
 }
@@ -234,4 +234,44 @@ fn cmc_problem_file_starts_from_a_shipped_glb() {
         Some(line_of(&text, "\"-partition\"")),
         &["no surface `partition`", "left, wall, right"],
     );
+}
+
+#[test]
+fn check_after_a_solve_leaves_the_solved_run_intact() {
+    let scratch = Scratch::new("check-after-solve");
+    let out_dir = scratch.0.join("run");
+    let out = out_dir.to_str().unwrap();
+    let solve = optimize(&["truss", SHIPPED, "-q", "--threads", "1", "-o", out]);
+    assert_eq!(solve.status.code(), Some(0));
+    let solved = std::fs::read(out_dir.join("result.json")).unwrap();
+    let model = std::fs::read(out_dir.join("model.glb")).unwrap();
+    let check = optimize(&["truss", SHIPPED, "--check", "-q", "-o", out]);
+    assert_eq!(check.status.code(), Some(0));
+    assert_eq!(std::fs::read(out_dir.join("result.json")).unwrap(), solved);
+    assert_eq!(std::fs::read(out_dir.join("model.glb")).unwrap(), model);
+    let checked = std::fs::read_to_string(out_dir.join("check").join("result.json")).unwrap();
+    assert!(checked.contains("\"status\": \"Checked\""), "{checked}");
+}
+
+#[test]
+fn an_iteration_limit_on_a_coarse_level_writes_the_best_result_and_exits_3() {
+    let scratch = Scratch::new("coarse-limit");
+    let out = scratch.0.join("run");
+    let run = optimize(&[
+        "cmc",
+        "problems/cmc/octahedron_hexagon.toml",
+        "--max-iter",
+        "5",
+        "-q",
+        "--threads",
+        "1",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(3), "{stderr}");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("result.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "IterationLimit", "{summary}");
+    assert!(out.join("model.glb").is_file());
 }

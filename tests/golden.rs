@@ -9,7 +9,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use approx::relative_eq;
-use optimize::run::{Kind, RunOptions, execute};
+use optimize::outcome::{Kind, RunOptions};
+use optimize::run::execute;
 use rayon::prelude::*;
 use serde::Deserialize;
 use serde_json::Value;

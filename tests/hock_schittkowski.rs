@@ -176,7 +176,7 @@ fn run_set_with(
 /// every success must be a verified KKT point (to the factor 100 `Acceptable` allows), and at
 /// least `least` problems must reach the book's optimum (the counts measured with the
 /// active-set polish of degenerate QP solutions, which brought BFGS to the dense path's 77;
-/// BENCHMARKS.md lists the problems that differ from the dense path).
+/// docs/notes/solver.md lists the problems that differ from the dense path).
 fn sparse_path(mode: HessianMode, least: usize) {
     let outcome = run_set_with(mode, QpMethod::Sparse, Globalization::LineSearch);
     println!(

@@ -5,7 +5,7 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use optimize::solver::qp::QpMethod;
-use optimize::solver::{Dims, EvalError, HessianMode, Nlp, Options, Status, solve};
+use optimize::solver::{Dims, EvalError, HessianMode, Nlp, Options, Status, Tuning, solve};
 
 #[path = "common/chain.rs"]
 mod chain;
@@ -630,4 +630,35 @@ fn unbounded_objective_is_reported() {
     );
     assert_eq!(s.status, Status::Unbounded);
     assert!(!s.status.is_success());
+}
+
+#[test]
+fn a_tuning_constant_varied_through_the_options_takes_effect() {
+    // min (x − 100)² from x = 0, no constraints.
+    let far_minimum = || Small {
+        x0: vec![0.0],
+        xl: vec![-INF],
+        xu: vec![INF],
+        cl: vec![],
+        cu: vec![],
+        values: Box::new(|x, _c| Ok((x[0] - 100.0).powi(2))),
+        derivatives: Box::new(|x, g, _j| g[0] = 2.0 * (x[0] - 100.0)),
+        hessian: None,
+    };
+    let run = |tuning: Tuning| solve(&far_minimum(), &Options { tuning, ..quiet() });
+    let free = run(Tuning::default());
+    // Steps of at most 0.1·(1 + |x|) need many more iterations to travel from 0 to 100.
+    let short = run(Tuning {
+        step_limit: 0.1,
+        ..Tuning::default()
+    });
+    assert_eq!(free.status, Status::Optimal);
+    assert_eq!(short.status, Status::Optimal);
+    assert!((short.x[0] - 100.0).abs() < 1e-4, "{}", short.x[0]);
+    assert!(
+        short.iterations > free.iterations + 10,
+        "{} vs {}",
+        short.iterations,
+        free.iterations
+    );
 }

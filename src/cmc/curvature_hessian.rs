@@ -12,7 +12,7 @@
 //! with `J = ∂q/∂x`, `E = [−I I 0; −I 0 I]` the 6×9 map from a triangle's corners to its edge
 //! vectors and `P_t` scattering a triangle's nine coordinates into the star's. The
 //! per-triangle values, gradients and 6×6 Hessians of `q_{k,t}` and the 7×7 Hessian of `g` are
-//! computed exactly (to rounding) with second-order forward-mode numbers ([`hyperdual`]): no
+//! computed exactly (to rounding) with second-order forward-mode numbers (`hyperdual`): no
 //! finite differences. The mixed area is piecewise smooth (Meyer's obtuse rules switch at
 //! right angles); its Hessian is that of the active piece, consistent with
 //! [`super::area::mixed_area_corner0`]'s gradient.

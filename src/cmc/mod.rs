@@ -41,10 +41,11 @@ mod truth_tests;
 use std::path::Path;
 use std::time::Instant;
 
+use crate::application::{Application, CheckCase};
 use crate::error::{Error, InputError};
-use crate::run::{Artifact, Outcome, ResultSummary, RunOptions};
+use crate::outcome::{Artifact, Kind, Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::{
-    CheckOptions, FiniteDifferenceOptions, check_derivatives, jittered_start, spread_columns,
+    CheckOptions, FiniteDifferenceOptions, jittered_start, spread_columns,
 };
 use crate::solver::{Evaluations, Nlp, Status};
 use crate::spec::Source;
@@ -71,8 +72,10 @@ pub fn load(path: &Path) -> Result<Problem, InputError> {
     let source = Source::read(path)?;
     let spec = spec::parse(source)?;
     let name = spec.file.name.clone().unwrap_or_else(|| {
-        path.file_stem()
-            .map_or_else(|| "cmc".into(), |s| s.to_string_lossy().into_owned())
+        path.file_stem().map_or_else(
+            || Kind::Cmc.name().into(),
+            |s| s.to_string_lossy().into_owned(),
+        )
     });
     let resolution = spec
         .file
@@ -134,7 +137,7 @@ impl Problem {
     /// silently with the file's `[solver]` options). Used to hand the same start to other
     /// programs (Surface Evolver).
     pub fn start(&self) -> Result<CmcNlp, Error> {
-        let mut options = self.spec.file.solver.options();
+        let mut options = self.spec.file.solver.clone();
         options.verbosity = 0;
         match multilevel::coarse_to_fine(self, &options)? {
             Some(staged) => Ok(staged.nlp),
@@ -143,14 +146,60 @@ impl Problem {
     }
 }
 
-/// Builds the problem and either checks its derivatives (`opts.check`) or solves it.
+/// CMC problems as an [`Application`].
+pub struct Cmc;
+
+impl Application for Cmc {
+    const KIND: Kind = Kind::Cmc;
+    type Problem = Problem;
+
+    fn load(path: &Path) -> Result<Problem, Error> {
+        Ok(load(path)?)
+    }
+
+    fn name(problem: &Problem) -> &str {
+        problem.name()
+    }
+
+    /// The start mesh, checked at the start moved randomly by at most 1e-4 (scaled units) per
+    /// coordinate, off the generators' exact symmetries, with [`check_options`]; the start's
+    /// figures and area (m²) and a preview of the start are reported.
+    fn check_case<'p>(problem: &'p Problem, opts: &RunOptions) -> Result<CheckCase<'p>, Error> {
+        let started = Instant::now();
+        let nlp = problem.build()?;
+        let build_seconds = started.elapsed().as_secs_f64();
+        let n = nlp.dims().n;
+        let x = jittered_start(&nlp, 1e-4, opts.seed);
+        let mut start = vec![0.0; n];
+        nlp.start(&mut start);
+        let mesh = nlp
+            .mesh_at(&start)
+            .map_err(|e| Error::Runtime(format!("start mesh: {e}")))?;
+        let figures = figures_json(&nlp, &mesh, &start)?;
+        let caption = format!("{} (start)", problem.name);
+        let mut case = CheckCase::new(Box::new(nlp), x, check_options(n), opts.seed);
+        if let serde_json::Value::Object(start_figures) = figures {
+            case.figures.extend(start_figures);
+        }
+        case.objective = Some(area::total_area(&mesh));
+        case.build_seconds = Some(build_seconds);
+        case.artifacts.push(Artifact {
+            name: "preview.svg".into(),
+            bytes: preview::svg(&mesh, 800.0, &caption).into_bytes(),
+        });
+        Ok(case)
+    }
+
+    fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
+        run(problem, opts)
+    }
+}
+
+/// Builds the problem and solves it.
 pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let started = Instant::now();
     let nlp = problem.build()?;
     let build_seconds = started.elapsed().as_secs_f64();
-    if opts.check {
-        return check(problem, &nlp, opts, build_seconds);
-    }
     let options = opts.solver_options(&problem.spec.file.solver);
     let solve_started = Instant::now();
     let mut nlp = nlp;
@@ -159,20 +208,30 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let coarse_seconds = solve_started.elapsed().as_secs_f64();
     let mut coarse_stages = Vec::new();
     let (mut iterations, mut evaluations, mut log) = (0, Evaluations::default(), Vec::new());
+    let mut stopped = None;
     if let Some(staged) = staged {
         nlp = staged.nlp;
         coarse_stages = staged.stages;
         iterations = staged.iterations;
         evaluations = staged.evaluations;
         log = staged.log;
+        stopped = staged.stopped;
     }
-    let mut solution = crate::solver::solve(&nlp, &options);
-    iterations += solution.iterations;
-    evaluations.functions += solution.evaluations.functions;
-    evaluations.derivatives += solution.evaluations.derivatives;
-    evaluations.hessians += solution.evaluations.hessians;
-    // The iteration log of every solve, one after the other (iteration numbers restart).
-    log.extend_from_slice(&solution.log);
+    // A coarse level that ended short is the run's result (cmc::multilevel).
+    let coarse_result = stopped.is_some();
+    let mut solution = match stopped {
+        Some(solution) => solution,
+        None => {
+            let solution = crate::solver::solve(&nlp, &options);
+            iterations += solution.iterations;
+            evaluations.functions += solution.evaluations.functions;
+            evaluations.derivatives += solution.evaluations.derivatives;
+            evaluations.hessians += solution.evaluations.hessians;
+            // The iteration log of every solve, one after the other (numbers restart).
+            log.extend_from_slice(&solution.log);
+            solution
+        }
+    };
     let mut rounds = Vec::new();
     let max_edge = problem
         .spec
@@ -183,7 +242,12 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     // Equiangulate (and refine) and re-solve (cmc::remesh); each round's areas show the
     // effect. A feasible point that stalled or ran out of iterations is remeshed too: such a
     // stall here is usually a sliver that flips or splits remove.
-    for _ in 0..problem.spec.file.quality.flip_rounds {
+    let flip_rounds = if coarse_result {
+        0
+    } else {
+        problem.spec.file.quality.flip_rounds
+    };
+    for _ in 0..flip_rounds {
         let feasible_stop = matches!(solution.status, Status::Stalled | Status::IterationLimit)
             && solution.max_violation <= options.constraint_tolerance;
         if !(solution.status.is_success() || feasible_stop) {
@@ -231,7 +295,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let mesh = nlp
         .mesh_at(&solution.x)
         .map_err(|e| Error::Runtime(format!("final mesh: {e}")))?;
-    let mut summary = ResultSummary::from_solution(&problem.name, "cmc", opts.seed, &solution);
+    let mut summary = ResultSummary::from_solution(&problem.name, Kind::Cmc, opts.seed, &solution);
     // The module's objective in SI units: the total area, m² (the solver saw it scaled by 1/L²
     // plus the tangential regularization, both reported under `figures`).
     summary.objective = area::total_area(&mesh);
@@ -298,7 +362,7 @@ fn figures_json(nlp: &CmcNlp, mesh: &mesh::Mesh, x: &[f64]) -> Result<serde_json
     Ok(value)
 }
 
-/// The `--check` comparison: [`CHECK_COLUMNS`] variables spread over the mesh, central steps of
+/// The `--check` comparison: `CHECK_COLUMNS` variables spread over the mesh, central steps of
 /// about 3e-6 in scaled units (edges are 0.1–0.5), and re-estimation with 10× and 100× smaller
 /// steps wherever forward and backward differences disagree by more than a tenth of the
 /// tolerance: the mixed-area rule of Meyer et al. has kinks at right angles (which grid-made
@@ -316,48 +380,6 @@ pub fn check_options(n: usize) -> CheckOptions {
         kink_threshold: Some(0.1 * CHECK_TOLERANCE),
         ..CheckOptions::default()
     }
-}
-
-/// `--check`: compares derivatives with central differences at the start moved randomly by at
-/// most 1e-4 (scaled units) per coordinate, off the generators' exact symmetries.
-fn check(
-    problem: &Problem,
-    nlp: &CmcNlp,
-    opts: &RunOptions,
-    build_seconds: f64,
-) -> Result<Outcome, Error> {
-    let started = Instant::now();
-    let dims = nlp.dims();
-    let x = jittered_start(nlp, 1e-4, opts.seed);
-    let report = check_derivatives(nlp, &x, &check_options(dims.n))
-        .map_err(|e| Error::Runtime(format!("derivative check: {e}")))?;
-    let mut start = vec![0.0; dims.n];
-    nlp.start(&mut start);
-    let mesh = nlp
-        .mesh_at(&start)
-        .map_err(|e| Error::Runtime(format!("start mesh: {e}")))?;
-    let mut summary = ResultSummary::checked(&problem.name, "cmc", opts.seed, nlp, &x, &report)
-        .map_err(|e| Error::Runtime(format!("checked point: {e}")))?;
-    if let serde_json::Value::Object(start_figures) = figures_json(nlp, &mesh, &start)? {
-        for (key, value) in start_figures {
-            summary.set_figure(&key, value);
-        }
-    }
-    // The module's objective in SI units: the start's total area, m².
-    summary.objective = area::total_area(&mesh);
-    summary.timings.insert("build".into(), build_seconds);
-    summary
-        .timings
-        .insert("check".into(), started.elapsed().as_secs_f64());
-    Ok(Outcome {
-        summary,
-        status: None,
-        check_passed: Some(report.passed()),
-        artifacts: vec![Artifact {
-            name: "preview.svg".into(),
-            bytes: preview::svg(&mesh, 800.0, &format!("{} (start)", problem.name)).into_bytes(),
-        }],
-    })
 }
 
 /// Median edge length of a mesh, m.
@@ -423,7 +445,7 @@ mod tests {
             let problem = load(&path(name))
                 .unwrap()
                 .with_resolution(low_resolution(name));
-            let outcome = run(
+            let outcome = crate::application::run_problem::<Cmc>(
                 &problem,
                 &RunOptions {
                     check: true,

@@ -17,9 +17,13 @@
 //! last subdivision is the start of the main solve. This applies to shapes whose resolution
 //! counts segments per edge (frames, wires), so that `k`-fold subdivision of level `d` has the
 //! connectivity counts of level `k·d`.
+//!
+//! A level that ends short of a usable solution (iteration or time limit, interrupt,
+//! infeasible, ...) ends the run there: its mesh and solution are the run's result
+//! ([`Staged::stopped`]), with that level's status (exit 3, or 130 when interrupted).
 
 use crate::error::Error;
-use crate::solver::{Evaluations, IterationRecord, Options, Status};
+use crate::solver::{Evaluations, IterationRecord, Options, Solution, Status};
 
 use super::Problem;
 use super::area::total_area;
@@ -55,6 +59,9 @@ pub struct Staged {
     pub iterations: usize,
     /// Evaluations summed over the coarse solves.
     pub evaluations: Evaluations,
+    /// The solution of a coarse level that ended short of a usable one; `nlp` is then that
+    /// level's (not refined) and the run stops there.
+    pub stopped: Option<Solution>,
 }
 
 /// The first level `d` (largest divisor of `resolution` not above `coarse`) and the
@@ -95,7 +102,7 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
     let mut nlp = problem.with_resolution(first).build()?;
     let (mut stages, mut log, mut evaluations) = (Vec::new(), Vec::new(), Evaluations::default());
     let mut resolution = first;
-    for (level, &factor) in factors.iter().enumerate() {
+    for &factor in &factors {
         let mut iterations = 0;
         let mut solution = crate::solver::solve(&nlp, options);
         iterations += solution.iterations;
@@ -129,10 +136,14 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
             area: total_area(&mesh),
         });
         if !usable(solution.status, solution.max_violation, options) {
-            return Err(Error::Runtime(format!(
-                "{}: coarse level {level} (resolution {resolution}) ended {:?}",
-                problem.name, solution.status
-            )));
+            return Ok(Some(Staged {
+                nlp,
+                iterations: stages.iter().map(|s: &Stage| s.iterations).sum(),
+                stages,
+                log,
+                evaluations,
+                stopped: Some(solution),
+            }));
         }
         let finer = subdivide(&mesh, factor).map_err(|e| runtime("subdivision", &e))?;
         nlp = nlp
@@ -146,6 +157,7 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
         stages,
         log,
         evaluations,
+        stopped: None,
     }))
 }
 
@@ -184,7 +196,7 @@ mod tests {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("problems/cmc/octahedron_quadrilateral.toml");
         let problem = crate::cmc::load(&path).unwrap().with_resolution(2);
-        let mut options = problem.spec.file.solver.options();
+        let mut options = problem.spec.file.solver.clone();
         options.verbosity = 0;
         let staged = coarse_to_fine(&problem, &options).unwrap().unwrap();
         assert_eq!(staged.stages.len(), 1);

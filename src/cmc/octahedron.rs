@@ -55,7 +55,7 @@ fn window_normal(k: usize) -> Point {
     Point::new(sign(4), sign(2), sign(1)) / 3f64.sqrt()
 }
 
-/// Weights λ of the eight windows (order of [`window_normal`]) whose partition has the
+/// Weights λ of the eight windows (order of `window_normal`) whose partition has the
 /// topology's walls; `None` for the cone (equal weights meet at one point).
 pub fn window_weights(topology: OctahedronTopology) -> Option<[f64; 8]> {
     match topology {

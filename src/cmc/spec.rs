@@ -34,7 +34,8 @@ use super::nlp::Chord;
 use super::octahedron::{self, OctahedronTopology};
 use super::volume::Region;
 use crate::error::InputError;
-use crate::spec::{Key, SolverSpec, Source, is_positive as positive};
+use crate::solver::Options;
+use crate::spec::{Key, Source, is_positive as positive, validate_solver};
 
 /// Largest `resolution` and `[quality] coarse_resolution` (the face count is bounded too,
 /// [`MAX_FACES`]).
@@ -63,7 +64,7 @@ pub struct CmcFile {
     pub chord: Vec<ChordSpec>,
     /// Solver options.
     #[serde(default)]
-    pub solver: SolverSpec,
+    pub solver: Options,
 }
 
 /// `[quality]`.
@@ -376,7 +377,7 @@ impl CmcSpec {
 
     fn validate(&self) -> Result<(), InputError> {
         let f = &self.file;
-        f.solver.validate(&self.source, &[Key::Name("solver")])?;
+        validate_solver(&f.solver, &self.source, &[Key::Name("solver")])?;
         let src = &self.source;
         if let Some(r) = f.resolution {
             src.count_in(&["resolution".into()], r, 1, MAX_RESOLUTION)?;

@@ -24,7 +24,7 @@ use super::mesh::{Mesh, Point};
 use super::nlp::{CmcNlp, VolumeConstraint};
 use super::volume::Region;
 use super::{Problem, load, run};
-use crate::run::{Outcome, RunOptions};
+use crate::outcome::{Outcome, RunOptions};
 use crate::solver::Options;
 use nalgebra::{DMatrix, Vector3};
 
@@ -163,7 +163,7 @@ fn rates(errors: &[f64]) -> Vec<f64> {
 )]
 fn sphere_area_converges_at_second_order() {
     // V = 1: area (36π)^(1/3) = 4.835975862; icosphere levels 0, 1, 2 halve the edges.
-    // (Level 3, 642 vertices, takes minutes with the dense QP: measured in BENCHMARKS.md.)
+    // (Level 3, 642 vertices, takes minutes with the dense QP: docs/notes/cmc.md.)
     let exact = (36.0 * std::f64::consts::PI).cbrt();
     let errors: Vec<f64> = (0..3)
         .map(|level| {
@@ -222,7 +222,7 @@ fn catenoid_between_unit_rings_matches_the_catenary() {
         })
         .collect();
     // Edges shrink by 3/2: second order gives a ratio of 2.25 (measured 1.96; level 4 gives
-    // 1.70 against 1.78, BENCHMARKS.md).
+    // 1.70 against 1.78, docs/notes/cmc.md).
     assert!(errors[0] / errors[1] > 1.8, "{errors:?}");
     assert!(errors[1] / exact < 1e-4, "{errors:?}");
 }
@@ -300,7 +300,7 @@ fn tetrahedral_octahedron_film_is_flat_with_area_two_root_two() {
 fn double_bubble_junction_angles_converge_to_120_degrees() {
     // problems/cmc/double_bubble.toml (one round of flips) at levels 3, 4, 5: the largest
     // deviation of the sphere-fit junction angles from 120° must shrink with every refinement
-    // and be below 2° at level 5 (the stated tolerance). Measured (BENCHMARKS.md): 2.16°,
+    // and be below 2° at level 5 (the stated tolerance). Measured (docs/notes/cmc.md): 2.16°,
     // 1.76°, 1.09° at levels 3–5, 0.83° at 6, 0.46° at 8; fits within 1.3e-2 of the size.
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("problems/cmc/double_bubble.toml");
     let mut deviations = Vec::new();
@@ -330,7 +330,7 @@ fn triple_bubble_junction_angles_converge_to_120_degrees() {
     // triple bubble is spherical) at resolutions 4 and 6; the vertices where four junction
     // lines meet (the poles) are left out. The stated tolerance: below 1.5° at resolution 6,
     // and at least 1.5× smaller than at 4. Measured: 2.10° and 0.86° (0.92° at 5, 0.40° at 8);
-    // fits within 1.3e-2 of the size. (Resolution 3 stalls: BENCHMARKS.md.)
+    // fits within 1.3e-2 of the size. (Resolution 3 stalls: docs/notes/cmc.md.)
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("problems/cmc/triple_bubble.toml");
     let mut deviations = Vec::new();
     for level in [4, 6] {

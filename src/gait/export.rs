@@ -22,7 +22,7 @@ use crate::io::gltf::{Animation, Material, Mesh, Node, Scene, Track};
 use crate::io::result::{Csv, num};
 use crate::io::shapes;
 use crate::io::svg::{Style, Svg};
-use crate::run::Artifact;
+use crate::outcome::Artifact;
 
 /// Animation and CSV frame rate (frames per second).
 pub const FPS: f64 = 30.0;

@@ -30,6 +30,8 @@ pub mod task;
 pub mod trials;
 
 #[cfg(test)]
+mod interrupt_tests;
+#[cfg(test)]
 mod truth_tests;
 
 /// The golden-test problem file `tests/golden/problems/gait/{name}.toml`, loaded (tests only).
@@ -43,15 +45,16 @@ pub(crate) fn golden_problem(name: &str) -> Problem {
 use std::path::Path;
 use std::time::Instant;
 
+use crate::application::{Application, CheckCase};
 use crate::error::{Error, InputError};
-use crate::run::{Outcome, ResultSummary, RunOptions};
-use crate::solver::derivatives::{CheckOptions, check_derivatives};
-use crate::solver::{Evaluations, Nlp};
-use crate::spec::{Key, Source};
+use crate::outcome::{Kind, Outcome, ResultSummary, RunOptions};
+use crate::solver::derivatives::CheckOptions;
+use crate::solver::{Evaluations, Nlp, Status};
+use crate::spec::Source;
 
 pub use spec::Problem;
 
-/// Reads, parses and validates a gait problem file.
+/// Reads, parses and validates a gait problem file of the reduced-gradient formulation.
 pub fn load(path: &Path) -> Result<Problem, InputError> {
     spec::load_source(&Source::read(path)?)
 }
@@ -63,27 +66,64 @@ impl Problem {
     }
 }
 
-/// Loads and runs a gait problem file: the traditional collocation formulation when the file
-/// says `formulation = "collocation"` ([`collocation`]), else the reduced-gradient one
-/// ([`load`], [`run`]). Returns the problem's name and the outcome.
-pub fn execute(path: &Path, opts: &RunOptions) -> Result<(String, Outcome), Error> {
-    let source = Source::read(path)?;
-    if collocation::spec::selects_collocation(&source) {
-        let problem = collocation::load_source(&source)?;
-        let outcome = collocation::run(&problem, opts)?;
-        return Ok((problem.name.clone(), outcome));
+/// A loaded gait problem in either formulation: the reduced-gradient one, or the traditional
+/// collocation one when the file says `formulation = "collocation"` ([`collocation`]).
+#[derive(Debug, Clone)]
+pub enum GaitProblem {
+    /// [`reduced`], solved in trials ([`trials`]).
+    Reduced(Box<Problem>),
+    /// [`collocation`].
+    Collocation(Box<collocation::Problem>),
+}
+
+/// Gait problems as an [`Application`].
+pub struct Gait;
+
+impl Application for Gait {
+    const KIND: Kind = Kind::Gait;
+    type Problem = GaitProblem;
+
+    fn load(path: &Path) -> Result<GaitProblem, Error> {
+        let source = Source::read(path)?;
+        Ok(if collocation::spec::selects_collocation(&source) {
+            GaitProblem::Collocation(Box::new(collocation::load_source(&source)?))
+        } else {
+            GaitProblem::Reduced(Box::new(spec::load_source(&source)?))
+        })
     }
-    let problem = spec::load_source(&source)?;
-    let count = problem.trials.count;
-    if let Some(k) = opts.trial
-        && !(1..=count).contains(&k)
-    {
-        let at = [Key::Name("trials"), Key::Name("count")];
-        let message = format!("--trial {k}: {} has trials 1 to {count}", problem.name);
-        return Err(source.error_at(&at, message).into());
+
+    fn name(problem: &GaitProblem) -> &str {
+        match problem {
+            GaitProblem::Reduced(p) => &p.name,
+            GaitProblem::Collocation(p) => &p.name,
+        }
     }
-    let outcome = run(&problem, opts)?;
-    Ok((problem.name().to_string(), outcome))
+
+    /// Reduced gradient: the NLP at the start point with [`check_options`]. Collocation: the
+    /// NLP at its initial guess, every variable by plain central differences.
+    fn check_case<'p>(problem: &'p GaitProblem, opts: &RunOptions) -> Result<CheckCase<'p>, Error> {
+        Ok(match problem {
+            GaitProblem::Reduced(p) => {
+                let nlp = reduced::Reduced::new(p);
+                let mut x = vec![0.0; nlp.dims().n];
+                nlp.start(&mut x);
+                CheckCase::new(Box::new(nlp), x, check_options(), opts.seed)
+            }
+            GaitProblem::Collocation(p) => {
+                let nlp = collocation::Collocation::new(p);
+                let x = nlp.initial_guess();
+                CheckCase::new(Box::new(nlp), x, collocation::check_options(), opts.seed)
+                    .figure("formulation", "collocation")
+            }
+        })
+    }
+
+    fn run(problem: &GaitProblem, opts: &RunOptions) -> Result<Outcome, Error> {
+        match problem {
+            GaitProblem::Reduced(p) => solve_trials(p, opts),
+            GaitProblem::Collocation(p) => collocation::run(p, opts),
+        }
+    }
 }
 
 /// Relative agreement required of exact derivatives and central differences in `--check` runs.
@@ -102,38 +142,6 @@ pub fn check_options() -> CheckOptions {
     }
 }
 
-/// Runs a gait problem. With `opts.check`: builds the reduced-gradient NLP, evaluates it at the
-/// start point and compares its exact derivatives with extrapolated central differences by the
-/// shared checker ([`check_options`]; the report goes to `result.json` figures). Otherwise
-/// solves the trials ([`trials`]; `opts.trial` picks one) and returns the best motion
-/// ([`solve_trials`]).
-pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
-    if !opts.check {
-        return solve_trials(problem, opts);
-    }
-    let t0 = Instant::now();
-    let nlp = reduced::Reduced::new(problem);
-    let d = nlp.dims();
-    let mut x = vec![0.0; d.n];
-    nlp.start(&mut x);
-    let failed = |e: crate::solver::EvalError| Error::Runtime(format!("{}: {e}", problem.name));
-    let report = check_derivatives(&nlp, &x, &check_options()).map_err(failed)?;
-    let mut summary = ResultSummary::checked(&problem.name, "gait", opts.seed, &nlp, &x, &report)
-        .map_err(failed)?;
-    summary
-        .timings
-        .insert("check".to_string(), t0.elapsed().as_secs_f64());
-    summary.set_figure("variables", d.n);
-    summary.set_figure("constraints", d.m);
-    summary.set_figure("jacobian_nonzeros", d.jac_nnz);
-    Ok(Outcome {
-        summary,
-        status: None,
-        check_passed: Some(report.passed()),
-        artifacts: vec![],
-    })
-}
-
 /// Solves the trials in parallel, prints the trial table (unless `opts.quiet`) and returns the
 /// best trial's motion with the table in `result.json` figures.
 pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
@@ -141,9 +149,10 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     if let Some(k) = opts.trial
         && !(1..=count).contains(&k)
     {
-        return Err(Error::Runtime(format!(
-            "--trial {k}: {} has trials 1 to {count}",
-            problem.name
+        // A usage error (exit 2): the command line asks for a trial the file does not have.
+        return Err(Error::Input(InputError::whole_file(
+            Path::new(&problem.name),
+            format!("--trial {k}: the file has trials 1 to {count} (`[trials] count`)"),
         )));
     }
     let mut options = opts.solver_options(&problem.solver);
@@ -152,7 +161,12 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
         options.verbosity = 0;
     }
     let clock = Instant::now();
-    let results = trials::run_trials(problem, opts.seed, opts.trial, &options);
+    // Every rollout of the trials polls the run's interrupt flag.
+    let polled = Problem {
+        interrupt: opts.interrupt.clone(),
+        ..problem.clone()
+    };
+    let results = trials::run_trials(&polled, opts.seed, opts.trial, &options);
     let solve_seconds = clock.elapsed().as_secs_f64();
     let tol = problem.trials.tolerance;
     let table = trials::table(&results, tol);
@@ -184,16 +198,18 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     timings.insert("export".to_string(), export_clock.elapsed().as_secs_f64());
     let counts = |s: trials::TrialStatus| results.iter().filter(|r| r.status == s).count();
     let end = chosen.end.as_ref();
+    let status = run_status(chosen);
     let summary = ResultSummary {
         problem: problem.name.clone(),
-        kind: "gait".into(),
-        status: format!("{:?}", chosen.solver_status),
+        kind: Kind::Gait,
+        status: format!("{status:?}"),
         status_message: format!(
-            "Best of {} trial(s): trial {} ({:?}). {}",
+            "Best of {} trial(s): trial {} ({:?}); its last solve ended {:?}. {}",
             results.len(),
             chosen.trial,
             chosen.status,
-            chosen.solver_status.sentence()
+            chosen.solver_status,
+            status_sentence(status, chosen.status)
         ),
         objective: chosen.cost(),
         max_violation: end.map_or(f64::INFINITY, |a| a.max()),
@@ -204,6 +220,7 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
         figures: serde_json::json!({
             "best_trial": chosen.trial,
             "best_status": format!("{:?}", chosen.status),
+            "best_solver_status": format!("{:?}", chosen.solver_status),
             "cost": chosen.cost(),
             "tolerance": tol,
             "successes": counts(trials::TrialStatus::Success),
@@ -216,10 +233,44 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     };
     Ok(Outcome {
         summary,
-        status: Some(chosen.solver_status),
+        status: Some(status),
         check_passed: None,
         artifacts,
     })
+}
+
+/// The status of a gait run, which decides its exit code (a raised interrupt flag makes any
+/// run `Interrupted`, [`crate::outcome::Outcome::mark_interrupted`]): the run converged
+/// (exit 0) exactly when its best trial is a Success (every pose constraint within `[trials] tolerance`), whatever
+/// stopped that trial's last effort-lowering solve: `Optimal` if that solve converged, else
+/// `Acceptable`. A best trial short of Success keeps its last solve's status, or `Stalled` if
+/// that solve converged to the solver's tolerances but not to the file's (exit 3).
+pub fn run_status(best: &trials::TrialResult) -> Status {
+    let success = best.status == trials::TrialStatus::Success;
+    match best.solver_status {
+        Status::Optimal if success => Status::Optimal,
+        _ if success => Status::Acceptable,
+        s if s.is_success() => Status::Stalled,
+        s => s,
+    }
+}
+
+/// The run's status in one sentence (the trial classes of [`trials`]).
+fn status_sentence(status: Status, best: trials::TrialStatus) -> &'static str {
+    match status {
+        Status::Interrupted => Status::Interrupted.sentence(),
+        Status::Optimal | Status::Acceptable => {
+            "Converged: the best motion meets every pose constraint within the file's tolerance."
+        }
+        _ if best == trials::TrialStatus::Marginal => {
+            "Not converged: the best motion meets every pose constraint only within 10× the \
+             file's tolerance; the best point is returned."
+        }
+        _ => {
+            "Not converged: the best motion violates a pose constraint by more than 10× the \
+             file's tolerance; the best point is returned."
+        }
+    }
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -228,5 +279,68 @@ fn median(mut v: Vec<f64>) -> f64 {
         0 => f64::NAN,
         n if n % 2 == 1 => v[n / 2],
         n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::trials::{Assessment, TrialResult, TrialStatus};
+    use super::*;
+    use crate::solver::Solution;
+
+    fn trial(status: TrialStatus, solver_status: Status) -> TrialResult {
+        let end = Assessment {
+            cost: 1.0,
+            violations: vec![0.0],
+        };
+        TrialResult {
+            trial: 1,
+            origin: "hand-made",
+            x: vec![],
+            start: None,
+            end: Some(end),
+            status,
+            solver_status,
+            iterations: 0,
+            seconds: 0.0,
+            evaluations: Evaluations::default(),
+            solution: Solution {
+                status: solver_status,
+                x: vec![],
+                lambda: vec![],
+                z: vec![],
+                objective: 1.0,
+                constraints: vec![],
+                max_violation: 0.0,
+                optimality: 0.0,
+                iterations: 0,
+                evaluations: Evaluations::default(),
+                seconds: 0.0,
+                log: vec![],
+            },
+        }
+    }
+
+    /// The run converged (exit 0) exactly when its best trial is a Success.
+    #[test]
+    fn a_gait_run_converges_when_its_best_trial_is_a_success() {
+        use TrialStatus::*;
+        let cases = [
+            (Success, Status::Optimal, Status::Optimal),
+            (Success, Status::IterationLimit, Status::Acceptable),
+            (Success, Status::Stalled, Status::Acceptable),
+            (Marginal, Status::Optimal, Status::Stalled),
+            (Failure, Status::IterationLimit, Status::IterationLimit),
+            (Unimproved, Status::Interrupted, Status::Interrupted),
+        ];
+        for (class, solver, want) in cases {
+            let status = run_status(&trial(class, solver));
+            assert_eq!(status, want, "{class:?} {solver:?}");
+            assert_eq!(
+                status.is_success(),
+                class == Success,
+                "{class:?} {solver:?}"
+            );
+        }
     }
 }

@@ -271,7 +271,8 @@ impl<'p> Reduced<'p> {
             params: p[..self.n_par].to_vec(),
         };
         let mut state = self.start_state(0, p);
-        let mut sim = Simulator::<f64>::new(&self.problem.model);
+        let mut sim =
+            Simulator::<f64>::new(&self.problem.model).interruptible(&self.problem.interrupt);
         let mut out = Vec::with_capacity((self.segments() - 1) * self.nx);
         let mut n = 0;
         for &b in &self.boundaries[1..self.segments()] {
@@ -301,7 +302,7 @@ impl<'p> Reduced<'p> {
             params: x[..self.n_par].to_vec(),
         };
         let mut state = self.start_state(k, x);
-        let mut sim = Simulator::<T>::new(m);
+        let mut sim = Simulator::<T>::new(m).interruptible(&p.interrupt);
         let mut n = self.boundaries[k];
         for (i, &target) in self.samples[k].iter().enumerate() {
             while n < target {
@@ -390,7 +391,7 @@ impl<'p> Reduced<'p> {
     /// `S_{n+1} = Φ·S_n + Σ_s G_s·W_s` with `W_s` the spline weights at stage time `s`, and a
     /// constraint row is `∂C/∂x · S` at its sample. The cost per step does not grow with the
     /// number of parameters (apart from the small product); on the Luxo leap it takes about as
-    /// long as the chunked method on one thread (BENCHMARKS.md), which also runs its chunks in
+    /// long as the chunked method on one thread (docs/notes/gait.md), which also runs its chunks in
     /// parallel, so this is the independent cross-check rather than the default. Single
     /// shooting only (one segment).
     pub fn jacobian_by_tangents<const N: usize>(
@@ -432,7 +433,7 @@ impl<'p> Reduced<'p> {
         let mut next = DMatrix::<f64>::zeros(nx, n_par);
         let mut phi = DMatrix::<f64>::zeros(nx, nx);
         let mut state = p.initial.clone();
-        let mut sim = Simulator::<D<N>>::new(m);
+        let mut sim = Simulator::<D<N>>::new(m).interruptible(&p.interrupt);
         let mut n = 0;
         for (k, &target) in self.samples[0].iter().enumerate() {
             while n < target {
@@ -522,8 +523,14 @@ impl<'p> Reduced<'p> {
     }
 }
 
+/// A failed rollout as an evaluation error: a domain error (the solver backs off), or the
+/// interrupt's fatal one ([`crate::solver::interrupt`]).
 fn domain(e: SimError) -> EvalError {
-    EvalError::Domain(e.to_string())
+    if e.interrupted {
+        EvalError::Fatal(crate::solver::interrupt::INTERRUPTED.into())
+    } else {
+        EvalError::Domain(e.to_string())
+    }
 }
 
 impl Nlp for Reduced<'_> {
@@ -748,11 +755,15 @@ mod tests {
     #[test]
     fn check_run_passes_on_a_short_pogo_jump() {
         let p = shortened("pogo_jump", 0.2);
-        let opts = crate::run::RunOptions {
+        let opts = crate::outcome::RunOptions {
             check: true,
             ..Default::default()
         };
-        let out = crate::gait::run(&p, &opts).unwrap();
+        let out = crate::application::run_problem::<crate::gait::Gait>(
+            &crate::gait::GaitProblem::Reduced(Box::new(p)),
+            &opts,
+        )
+        .unwrap();
         assert_eq!(out.check_passed, Some(true), "{:?}", out.summary.figures);
         assert_eq!(out.summary.status, "Checked");
         // The shipped start (no force) leaves the pogo on the ground: the jump is violated by

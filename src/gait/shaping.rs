@@ -78,6 +78,9 @@ pub fn shape(problem: &Problem, x0: &[f64], tol: f64, options: &Options) -> Shap
     let all = Formulation::new(&shaped);
     let mut best: Option<(Vec<f64>, f64)> = None;
     for attempt in 0..ATTEMPTS {
+        if problem.interrupt.is_raised() {
+            break;
+        }
         let x = staged(problem, x0, steps << attempt, tol, options, &mut out);
         let Some(a) = assess(&all, &x) else {
             continue;
@@ -108,6 +111,9 @@ fn staged(
     let mut x = x0.to_vec();
     let horizons = problem.shaping_horizons();
     for horizon in horizons.iter().copied().chain([f64::INFINITY]) {
+        if problem.interrupt.is_raised() {
+            break;
+        }
         let stage = problem.shaped_until(horizon);
         let Some(values) = constraint_values(&Formulation::new(&stage), &x) else {
             x = solve_into(out, &stage, &x, false, options);
@@ -116,7 +122,7 @@ fn staged(
         // The homotopy in the bounds, its step halved (twice at most) when a step's rows are
         // not met; a step that still fails ends the stage at its end point.
         let (mut w, mut dw) = (0.0, 1.0 / steps as f64);
-        while w < 1.0 {
+        while w < 1.0 && !problem.interrupt.is_raised() {
             let target = (w + dw).min(1.0);
             let sub = relaxed(&stage, &values, target);
             let next = solve_into(out, &sub, &x, false, options);

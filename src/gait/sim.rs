@@ -6,19 +6,53 @@
 //! `x ← x + h/6·(k₁ + 2k₂ + 2k₃ + k₄)`, then a floating base's quaternion is renormalized.
 //! Controls are actuator forces (N·m or N) as functions of time, evaluated at the stage times.
 //! A step whose state is not finite (e.g. a contact point driven far below the ground, where the
-//! contact spring's exponential overflows) is reported as a [`SimError`].
+//! contact spring's exponential overflows) is reported as a [`SimError`], as is a raised
+//! interrupt flag ([`Simulator::interruptible`], polled every
+//! [`STEPS_BETWEEN_POLLS`] steps).
 
 use super::aba::Dynamics;
 use super::character::Model;
 use super::contact::add_contact_forces;
 use super::spatial::{Force, Real};
+use crate::solver::Interrupt;
+use crate::solver::interrupt::STEPS_BETWEEN_POLLS;
 
-/// The simulation left the domain where it is defined.
+/// The simulation left the domain where it is defined, or was interrupted.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("simulation state not finite at t = {time} s")]
+#[error("{} at t = {time} s", if *.interrupted { "simulation interrupted" } else { "simulation state not finite" })]
 pub struct SimError {
     /// Time of the failed step (s).
     pub time: f64,
+    /// The run's interrupt flag stopped the simulation (the state was finite).
+    pub interrupted: bool,
+}
+
+impl SimError {
+    /// The state was not finite after the step ending at `time` (s).
+    pub fn not_finite(time: f64) -> Self {
+        SimError {
+            time,
+            interrupted: false,
+        }
+    }
+
+    /// The interrupt flag was raised before the step starting at `time` (s).
+    pub fn interrupted(time: f64) -> Self {
+        SimError {
+            time,
+            interrupted: true,
+        }
+    }
+}
+
+/// `Err(SimError::interrupted(t))` if `step` is a polling step and `interrupt` is raised.
+pub fn poll(interrupt: Option<&Interrupt>, step: usize, t: f64) -> Result<(), SimError> {
+    match interrupt {
+        Some(flag) if step.is_multiple_of(STEPS_BETWEEN_POLLS) && flag.is_raised() => {
+            Err(SimError::interrupted(t))
+        }
+        _ => Ok(()),
+    }
 }
 
 /// Actuator forces as functions of time: fills `out` (one per actuator, N·m or N) at `t` (s).
@@ -54,6 +88,10 @@ pub struct Simulator<'m, T> {
     kq: [Vec<T>; 4],
     kv: [Vec<T>; 4],
     tmp: State<T>,
+    /// Polled every [`STEPS_BETWEEN_POLLS`] steps, if any.
+    interrupt: Option<Interrupt>,
+    /// Steps taken.
+    steps: usize,
 }
 
 impl<'m, T: Real> Simulator<'m, T> {
@@ -72,7 +110,16 @@ impl<'m, T: Real> Simulator<'m, T> {
                 q: z(model.nq),
                 v: z(model.nv),
             },
+            interrupt: None,
+            steps: 0,
         }
+    }
+
+    /// The same simulator, stopping with [`SimError::interrupted`] once `interrupt` is raised
+    /// (polled every [`STEPS_BETWEEN_POLLS`] steps).
+    pub fn interruptible(mut self, interrupt: &Interrupt) -> Self {
+        self.interrupt = Some(interrupt.clone());
+        self
     }
 
     /// The model simulated.
@@ -111,6 +158,8 @@ impl<'m, T: Real> Simulator<'m, T> {
         x: &mut State<T>,
         controls: &dyn Controls<T>,
     ) -> Result<(), SimError> {
+        poll(self.interrupt.as_ref(), self.steps, t)?;
+        self.steps += 1;
         let mut kq = std::mem::take(&mut self.kq);
         let mut kv = std::mem::take(&mut self.kv);
         let mut tmp = std::mem::replace(
@@ -152,7 +201,7 @@ impl<'m, T: Real> Simulator<'m, T> {
         if x.q.iter().chain(&x.v).all(|z| z.re().is_finite()) {
             Ok(())
         } else {
-            Err(SimError { time: t + h })
+            Err(SimError::not_finite(t + h))
         }
     }
 

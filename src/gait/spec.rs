@@ -42,7 +42,8 @@ use super::spatial::{Mat3, RigidInertia, Vec3};
 use super::spline::KnotGrid;
 use super::task::{PoseConstraint, Quantity};
 use crate::error::InputError;
-use crate::spec::{Key, SolverSpec, Source};
+use crate::solver::{Interrupt, Options};
+use crate::spec::{Key, Source, validate_solver};
 
 /// The whole file.
 #[derive(Debug, Clone, Deserialize)]
@@ -79,7 +80,7 @@ pub struct FileSpec {
     pub trials: TrialsSpec,
     /// Solver options.
     #[serde(default)]
-    pub solver: SolverSpec,
+    pub solver: Options,
 }
 
 /// The `[trials]` table: how many starts are solved, how random starts are drawn, how force
@@ -448,7 +449,10 @@ pub struct Problem {
     /// Trial settings.
     pub trials: TrialSettings,
     /// Solver options table.
-    pub solver: SolverSpec,
+    pub solver: Options,
+    /// The run's interrupt flag, polled by every rollout of this problem's NLPs (a run sets it
+    /// from its options; a loaded problem has a fresh, lowered one).
+    pub interrupt: Interrupt,
 }
 
 impl Problem {
@@ -551,7 +555,7 @@ fn unit(v: [f64; 3]) -> Option<[f64; 3]> {
 
 fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
     let err = |p: Path<'_>, msg: String| source.error_at(&p, msg);
-    file.solver.validate(source, &[Key::Name("solver")])?;
+    validate_solver(&file.solver, source, &[Key::Name("solver")])?;
     if !(file.dt > 0.0 && file.dt <= 0.01) {
         return Err(err(
             path(&["dt".into()]),
@@ -899,6 +903,7 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
         shaping,
         trials,
         solver: file.solver,
+        interrupt: Interrupt::new(),
     })
 }
 

@@ -98,6 +98,8 @@ impl Assessment {
 
 /// Evaluates the motion of physical spline parameters `x` (the leading entries; segment start
 /// states after them are ignored) by one rollout; `None` if the simulation fails.
+/// After the run's interrupt flag is raised, a rollout stops early and the point is not
+/// assessed (`None`): a trial then keeps the last point it assessed.
 pub fn assess(f: &Formulation<'_>, x: &[f64]) -> Option<Assessment> {
     let nlp = f.reduced();
     let d = nlp.dims();
@@ -232,7 +234,7 @@ fn improves(a: Option<&Assessment>, b: Option<&Assessment>, tol: f64) -> bool {
 
 /// Solves one trial from physical start `x0`: the feasibility phase first when the problem asks
 /// for it ([`crate::gait::feasibility`]), then the SQP solve (and restarts) from its end point;
-/// the best point met (by [`improves`]) is the trial's result.
+/// the best point met (by `improves`) is the trial's result.
 pub fn solve_trial(
     problem: &Problem,
     f: &Formulation<'_>,
@@ -256,6 +258,9 @@ pub fn solve_trial(
         let params = &nlp.hand_made_start()[..f.reduced().parameters()];
         let mut current = params.to_vec();
         for stage in stage_problems(problem, params, problem.trials.continuation_stages) {
+            if problem.interrupt.is_raised() {
+                break;
+            }
             let staged = Formulation::new(&stage).starting_at(&current);
             let mut z0 = vec![0.0; staged.dims().n];
             staged.start(&mut z0);
@@ -283,7 +288,7 @@ pub fn solve_trial(
         nlp = f.starting_at(&x);
         if !phase.reached {
             // The SQP solve lowers the effort from a feasible point; from a stationary point
-            // of the violation it stalls as before (BENCHMARKS.md).
+            // of the violation it stalls as before (docs/notes/gait.md, feasibility phase).
             let solver_status = if phase.iterations >= options.max_iterations {
                 Status::IterationLimit
             } else {

@@ -10,15 +10,13 @@ pub mod svg;
 use std::path::{Path, PathBuf};
 
 use crate::error::Error;
-use crate::run::Outcome;
+use crate::outcome::Outcome;
 
-/// Writes a run's files into `dir`: the module's artifacts first, then `result.json`, so a
-/// folder holding a `result.json` always holds the whole result of that run.
+/// Writes a run's files as the folder `dir`: the module's artifacts, then `result.json`, into a
+/// fresh folder moved into place as a whole ([`atomic::write_run`]), so a folder holding a
+/// `result.json` always holds exactly one complete run.
 pub fn write_outcome(dir: &Path, outcome: &Outcome) -> Result<Vec<PathBuf>, Error> {
-    let mut paths = atomic::write_all(dir, &outcome.artifacts)?;
-    paths.extend(atomic::write_all(
-        dir,
-        &[result::summary_json(&outcome.summary)],
-    )?);
-    Ok(paths)
+    let mut files = outcome.artifacts.clone();
+    files.push(result::summary_json(&outcome.summary));
+    atomic::write_run(dir, &files)
 }

@@ -3,7 +3,7 @@
 
 use std::fmt::Write;
 
-use crate::run::{Artifact, ResultSummary};
+use crate::outcome::{Artifact, ResultSummary};
 use crate::solver::IterationRecord;
 
 /// `result.json`: the summary, pretty-printed.

@@ -1,10 +1,12 @@
-//! Solver options: tolerances, limits, Hessian mode, verbosity.
+//! Solver settings: tolerances, limits, Hessian mode, QP method, globalization, verbosity; the
+//! library's `Options` and a problem file's `[solver]` table are the same type.
 
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use serde::{Deserialize, Serialize};
 
+use super::Tuning;
 use super::qp::QpMethod;
 
 /// How the solver obtains second-order information.
@@ -36,46 +38,202 @@ pub enum Globalization {
     TrustRegion,
 }
 
-/// Everything that steers a solve. `Default` gives the documented defaults.
-#[derive(Debug, Clone)]
-pub struct Options {
-    /// Scaled dual-optimality tolerance.
-    pub tolerance: f64,
-    /// Scaled primal-feasibility tolerance.
-    pub constraint_tolerance: f64,
-    /// Major-iteration limit.
-    pub max_iterations: usize,
-    /// Wall-clock limit in seconds.
-    pub max_time: Option<f64>,
-    /// Hessian mode.
-    pub hessian: HessianMode,
-    /// Correction pairs kept by L-BFGS.
-    pub lbfgs_memory: usize,
-    /// QP subproblem method: `Auto` (dense Goldfarb–Idnani for n ≤ [`crate::solver::qp::DENSE_LIMIT`],
-    /// sparse interior point above), or either one forced (`Sparse` never forms an n×n matrix).
-    pub qp_method: QpMethod,
-    /// Line search (default) or trust region.
-    pub globalization: Globalization,
-    /// 0 silent, 1 one line per iteration, 2 more detail. The log goes to stderr.
-    pub verbosity: u8,
-    /// Set from outside (Ctrl-C) to stop at the end of the current iteration with status
-    /// `Interrupted`, returning the best point so far.
-    pub interrupt: Option<Arc<AtomicBool>>,
+/// Declares [`Options`] from one list: each setting's doc line, name, type, default and
+/// (optionally) its range check. The struct, its `Default`, its `PartialEq` and
+/// [`Options::validate`] are generated from that list, so a setting is added in one place.
+macro_rules! settings {
+    ($(
+        $(#[doc = $doc:literal])*
+        $(#[serde($serde:meta)])?
+        $name:ident: $ty:ty = $default:expr $(, valid: $check:path)?;
+    )*) => {
+        /// Everything that steers a solve, and the `[solver]` table of every problem file
+        /// (same names, except `qp_method`, which files spell `qp`). All keys are optional in a
+        /// file; `Default` gives the documented defaults. [`Options::validate`] checks ranges.
+        #[derive(Debug, Clone, Deserialize)]
+        #[serde(default, deny_unknown_fields)]
+        pub struct Options {
+            $(
+                $(#[doc = $doc])*
+                $(#[serde($serde)])?
+                pub $name: $ty,
+            )*
+            /// Set from outside (Ctrl-C) to stop at the end of the current iteration with status
+            /// `Interrupted`, returning the best point so far. Not a file key.
+            #[serde(skip)]
+            pub interrupt: Option<Arc<AtomicBool>>,
+            /// The SQP method's tuning constants (tests vary them). Not a file key.
+            #[serde(skip)]
+            pub tuning: Tuning,
+        }
+
+        impl Default for Options {
+            fn default() -> Self {
+                Options {
+                    $($name: $default,)*
+                    interrupt: None,
+                    tuning: Tuning::default(),
+                }
+            }
+        }
+
+        /// Settings compare by value, the interrupt flag by identity.
+        impl PartialEq for Options {
+            fn eq(&self, other: &Self) -> bool {
+                $(self.$name == other.$name &&)*
+                self.tuning == other.tuning
+                    && match (&self.interrupt, &other.interrupt) {
+                        (None, None) => true,
+                        (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+                        _ => false,
+                    }
+            }
+        }
+
+        impl Options {
+            /// Checks every setting's range; the first one out of range is the error.
+            pub fn validate(&self) -> Result<(), InvalidSetting> {
+                $($(
+                    $check(&self.$name).map_err(|why| InvalidSetting {
+                        key: stringify!($name),
+                        message: format!("`{}` {why}", stringify!($name)),
+                    })?;
+                )?)*
+                Ok(())
+            }
+        }
+    };
 }
 
-impl Default for Options {
-    fn default() -> Self {
-        Options {
-            tolerance: 1e-6,
-            constraint_tolerance: 1e-6,
-            max_iterations: 1000,
-            max_time: None,
-            hessian: HessianMode::Auto,
-            lbfgs_memory: 10,
-            qp_method: QpMethod::Auto,
-            globalization: Globalization::LineSearch,
-            verbosity: 1,
-            interrupt: None,
+settings! {
+    /// Scaled dual-optimality tolerance, in (0, 1).
+    tolerance: f64 = 1e-6, valid: open_unit_interval;
+    /// Scaled primal-feasibility tolerance, in (0, 1).
+    constraint_tolerance: f64 = 1e-6, valid: open_unit_interval;
+    /// Major-iteration limit.
+    max_iterations: usize = 1000;
+    /// Wall-clock limit for one solve in seconds (positive); `None`: unlimited.
+    max_time: Option<f64> = None, valid: positive_seconds;
+    /// Second-order information (see [`HessianMode`]).
+    hessian: HessianMode = HessianMode::Auto;
+    /// Correction pairs kept by L-BFGS, at least 1.
+    lbfgs_memory: usize = 10, valid: at_least_one;
+    /// QP subproblem method: `Auto` (dense Goldfarb–Idnani for n ≤ [`super::qp::DENSE_LIMIT`],
+    /// sparse interior point above), or either one forced (`Sparse` never forms an n×n matrix).
+    /// The file key is `qp`.
+    #[serde(rename = "qp")]
+    qp_method: QpMethod = QpMethod::Auto;
+    /// Line search (default) or trust region.
+    globalization: Globalization = Globalization::LineSearch;
+    /// 0 silent, 1 one line per iteration, 2 more detail. The log goes to stderr.
+    verbosity: u8 = 1, valid: log_level;
+}
+
+/// A setting out of its range: which one, and a sentence saying so.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct InvalidSetting {
+    /// The setting's name (its key in a problem file's `[solver]` table).
+    pub key: &'static str,
+    /// E.g. "`tolerance` must be in (0, 1), got 2".
+    pub message: String,
+}
+
+impl std::fmt::Display for InvalidSetting {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for InvalidSetting {}
+
+fn open_unit_interval(v: &f64) -> Result<(), String> {
+    if *v > 0.0 && *v < 1.0 {
+        Ok(())
+    } else {
+        Err(format!("must be in (0, 1), got {v}"))
+    }
+}
+
+fn positive_seconds(t: &Option<f64>) -> Result<(), String> {
+    match t {
+        Some(t) if t.is_nan() || *t <= 0.0 => Err(format!("must be positive seconds, got {t}")),
+        _ => Ok(()),
+    }
+}
+
+fn at_least_one(n: &usize) -> Result<(), String> {
+    if *n >= 1 {
+        Ok(())
+    } else {
+        Err("must be at least 1".into())
+    }
+}
+
+fn log_level(v: &u8) -> Result<(), String> {
+    if *v <= 2 {
+        Ok(())
+    } else {
+        Err(format!("must be 0, 1 or 2, got {v}"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_empty_table_gives_the_defaults() {
+        let parsed: Options = toml::from_str("").unwrap();
+        assert_eq!(parsed, Options::default());
+        assert_eq!(Options::default().validate(), Ok(()));
+    }
+
+    #[test]
+    fn file_keys_set_the_library_fields() {
+        let parsed: Options =
+            toml::from_str("qp = \"sparse\"\nmax_time = 2.5\nglobalization = \"trust_region\"")
+                .unwrap();
+        assert_eq!(parsed.qp_method, QpMethod::Sparse);
+        assert_eq!(parsed.max_time, Some(2.5));
+        assert_eq!(parsed.globalization, Globalization::TrustRegion);
+        assert!(toml::from_str::<Options>("tuning = 1").is_err());
+        assert!(toml::from_str::<Options>("interrupt = true").is_err());
+    }
+
+    #[test]
+    fn validate_names_the_first_setting_out_of_range() {
+        let bad = Options {
+            constraint_tolerance: 1.0,
+            verbosity: 3,
+            ..Options::default()
+        };
+        let e = bad.validate().unwrap_err();
+        assert_eq!(e.key, "constraint_tolerance");
+        assert_eq!(e.message, "`constraint_tolerance` must be in (0, 1), got 1");
+        for (options, message) in [
+            (
+                Options {
+                    max_time: Some(f64::NAN),
+                    ..Options::default()
+                },
+                "`max_time` must be positive seconds, got NaN",
+            ),
+            (
+                Options {
+                    lbfgs_memory: 0,
+                    ..Options::default()
+                },
+                "`lbfgs_memory` must be at least 1",
+            ),
+            (
+                Options {
+                    verbosity: 3,
+                    ..Options::default()
+                },
+                "`verbosity` must be 0, 1 or 2, got 3",
+            ),
+        ] {
+            assert_eq!(options.validate().unwrap_err().message, message);
         }
     }
 }

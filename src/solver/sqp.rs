@@ -6,27 +6,27 @@
 //!    warm-started from the previous working set; bounds on x are constraints of the QP, so
 //!    every iterate satisfies them exactly.
 //! 2. Elastic mode (see `elastic`) when that QP is inconsistent or its constraint forces
-//!    `|λᵢ|·‖∇cᵢ‖` exceed [`ELASTIC_WEIGHT`] times the objective gradient (a nearly
+//!    `|λᵢ|·‖∇cᵢ‖` exceed [`Tuning::elastic_weight`] times the objective gradient (a nearly
 //!    inconsistent linearization). The least reachable linearized violation is computed
 //!    first; when it improves on the current violation by less than `tolerance` relative,
 //!    x is a stationary point of the violation: the solve ends `Infeasible`, unless an earlier
 //!    iterate was clearly less violated, in which case it returns there once more with a
-//!    stiffer model (at most [`MAX_RETREATS`] times). Otherwise the elastic weights are raised
-//!    ×10 until the step achieves a tenth of the reachable reduction (steering).
+//!    stiffer model (at most [`Tuning::max_retreats`] times). Otherwise the elastic weights are
+//!    raised ×10 until the step achieves a tenth of the reachable reduction (steering).
 //! 3. Termination tests at x with the QP multipliers (see `termination`); a feasible x with
 //!    f < −1e20 or ‖x‖∞ > 1e10 ends the solve `Unbounded`.
 //! 4. Weights ρᵢ of the ℓ1 merit `φ = f + Σ ρᵢ viol(cᵢ)`: Powell's update from the QP
 //!    multipliers, raised where needed so the linearized violation decrease pays for the
 //!    model's objective change (see `merit`).
 //! 5. Backtracking Armijo line search on φ (η = 1e-4, safeguarded quadratic interpolation),
-//!    starting no further than [`STEP_LIMIT`]·(1 + ‖x‖∞) away. If the unit step is rejected,
-//!    one second-order correction (N&W eq. 18.51) re-solves the QP with the constraint bounds
-//!    shifted by `c(x+d) − c(x) − J d`, against the Maratos effect. Steps whose predicted
+//!    starting no further than [`Tuning::step_limit`]·(1 + ‖x‖∞) away. If the unit step is
+//!    rejected, one second-order correction (N&W eq. 18.51) re-solves the QP with the constraint
+//!    bounds shifted by `c(x+d) − c(x) − J d`, against the Maratos effect. Steps whose predicted
 //!    merit decrease comes mostly from the violation (and elastic steps) must also decrease
 //!    the violation itself. With the exact Hessian no trial point may multiply the violation
-//!    by more than [`VIOLATION_GROWTH`] (above [`VIOLATION_FLOOR`]). A failed or non-finite
-//!    evaluation at a trial point only shortens the step; `EvalError::Fatal` ends the solve
-//!    with `EvaluationError`.
+//!    by more than [`Tuning::violation_growth`] (above [`Tuning::violation_floor`]). A failed or
+//!    non-finite evaluation at a trial point only shortens the step; `EvalError::Fatal` ends the
+//!    solve with `EvaluationError`.
 //!    Under [`Globalization::TrustRegion`] (Fletcher's Sℓ1QP proper) the QP's step box is
 //!    intersected with an ℓ∞ radius instead, and the step is accepted or rejected by the ratio
 //!    of the merit's actual to predicted decrease (see `trust_region_step`); a QP that fails
@@ -34,30 +34,31 @@
 //! 6. Hessian update (damped BFGS / L-BFGS) or exact Hessian at the new point with the new
 //!    multipliers λ = λ_QP (initial multipliers: least squares, for the exact Hessian). An
 //!    exact-Hessian solve whose line search fails, or whose penalty weights stay above
-//!    `EXACT_WEIGHT_LIMIT` for `EXACT_PATIENCE` iterations (curvature scaled by diverging
-//!    multipliers freezes the steps), continues with the quasi-Newton model instead. On the
-//!    dense path the variables held at a bound by the Lagrangian gradient are decoupled from
+//!    `Tuning::exact_weight_limit` for `Tuning::exact_patience` iterations (curvature scaled by
+//!    diverging multipliers freezes the steps), continues with the quasi-Newton model instead. On
+//!    the dense path the variables held at a bound by the Lagrangian gradient are decoupled from
 //!    the exact Hessian before it is convexified (see `hessian::held`), so that a negative
 //!    curvature along them (which the bound blocks) does not shift the whole Hessian. On the
-//!    sparse path only at points violating no constraint by more than `HELD_VIOLATION`: far
+//!    sparse path only at points violating no constraint by more than `Tuning::held_violation`: far
 //!    from feasibility the held set predicts little (the gait ball collocation's QPs failed).
 //!    The QP multipliers of void rows (no Jacobian entry above `multipliers::VOID_ROW`) are
 //!    set to 0 (see `multipliers::clear_void_rows`).
 //!
 //! Hessian choice in `HessianMode::Auto`: the exact Hessian when the problem has one; else
-//! dense BFGS for n ≤ [`DENSE_BFGS_LIMIT`] (an n×n update costs O(n²) per iteration and the
+//! dense BFGS for n ≤ [`Tuning::dense_bfgs_limit`] (an n×n update costs O(n²) per iteration and the
 //! dense QP O(n³) anyway), L-BFGS above. `HessianMode::Exact` on a problem without a Hessian
 //! makes the same quasi-Newton choice. `HessianMode::Bfgs` above [`qp::DENSE_LIMIT`] variables
 //! is served by L-BFGS (no n×n matrix on the large-problem path).
 //!
 //! QP method ([`Options::qp_method`], see `qp::select`): the dense active-set method up to
-//! [`qp::DENSE_LIMIT`] variables (up to [`EXACT_SPARSE_LIMIT`] with the exact Hessian), the
+//! [`qp::DENSE_LIMIT`] variables (up to [`Tuning::exact_sparse_limit`] with the exact Hessian), the
 //! sparse interior-point method above, with the exact
 //! Hessian kept as a sparse lower triangle (convexified inside the QP) and L-BFGS in compact
 //! form; elastic and least-violation subproblems use the same method.
 
 use std::cell::RefCell;
 use std::io::Write;
+use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
@@ -74,98 +75,14 @@ use super::noise;
 use super::qp::{self, QpHessian, QpMethod, QpProblem, QpSolution, QpStatus, WarmStart};
 use super::termination::{self, Kkt, KktInput};
 use super::{
-    EvalError, Globalization, HessianMode, IterationRecord, Nlp, Options, Solution, Status,
+    EvalError, Globalization, HessianMode, Interrupt, Interruptible, IterationRecord, Nlp, Options,
+    Solution, Status, Tuning,
 };
 
-/// Largest n for which `HessianMode::Auto` picks dense BFGS over L-BFGS.
-pub const DENSE_BFGS_LIMIT: usize = 500;
-
-/// Variables above which [`QpMethod::Auto`] sends problems solved with their exact Hessian to
-/// the sparse QP method, below [`qp::DENSE_LIMIT`]: the dense method's O(m·n²) work per QP
-/// dominates from a few hundred variables (double bubble, n ≈ 600 and 1668: sparse 15–22×
-/// faster, same optimum to 3e-12; hanging chain of 100 links: 15×; see BENCHMARKS.md). Kept at
-/// 1000, not lower, because a small octahedral film (the `cmc_octahedron_square_short` golden
-/// case) still reaches its iteration limit on the sparse path where the dense one converges.
-pub const EXACT_SPARSE_LIMIT: usize = 1000;
-
-/// Under the trust region, a QP that fails is retried with a tenth of the radius while the
-/// radius exceeds this times `1 + ‖x‖∞`.
-const QP_RETRY_RADIUS: f64 = 1e-8;
-/// Armijo constant of the line search.
-const ARMIJO: f64 = 1e-4;
-/// Smallest step length tried before the line search gives up.
-const MIN_STEP: f64 = 1e-12;
-/// Smallest trust-region radius, relative to `1 + ‖x‖∞`: below it a trial fails. Steps of that
-/// size change the iterate in its tenth digit; the merit differences they produce are rounding,
-/// and a truss round accepted steps of 1e-11 for hundreds of iterations (30 s each) at a point
-/// already feasible to 3e-14.
-const MIN_RADIUS: f64 = 1e-10;
-/// Largest constraint force `|λᵢ|·‖∇cᵢ‖∞`, relative to `max(1, ‖∇f‖∞)`, accepted from the
-/// ordinary QP; beyond it the linearization is treated as nearly inconsistent and the elastic
-/// subproblem is solved instead (SNOPT switches on large multipliers likewise). At a regular
-/// point the forces balance the objective gradient, so this only happens near degenerate or
-/// infeasible points. Also the cap of the elastic weights.
-const ELASTIC_WEIGHT: f64 = 1e4;
-/// Largest step `‖αd‖∞` relative to `1 + ‖x‖∞` tried by the line search (SNOPT's major step
-/// limit), so that a huge QP step cannot throw the iterate far away in one go.
-const STEP_LIMIT: f64 = 2.0;
-/// With the exact Hessian, a trial point may multiply the ℓ1 violation by at most this factor
-/// once it exceeds [`VIOLATION_FLOOR`]: the ℓ1 merit is exact only near a solution, and a long
-/// Newton step along a nearly singular reduced Hessian can lower it with weights ρᵢ = |λᵢ|
-/// while the true constraint forces far from x are much larger (truss: a step from violation
-/// 0.05 to 2.6 lowered φ, after which the weights diverged). Backtracking cuts such steps.
-const VIOLATION_GROWTH: f64 = 10.0;
-/// Largest scaled constraint violation (∞-norm) at which the sparse path decouples the
-/// variables held at a bound from the exact Hessian (see `hessian::held`): the held set
-/// predicts the active bounds near a feasible point only. Far from it (the gait ball
-/// collocation at violation 2.2e2) a held variable may have to leave its bound by a long step,
-/// and the model without its couplings then gave QP multipliers of 9e7 (forces beyond
-/// `ELASTIC_WEIGHT`: elastic mode, Stalled) where the coupled one gave 1e3. The truss layout
-/// starts are within 2e-2.
-const HELD_VIOLATION: f64 = 1.0;
-/// Scaled ℓ1 violation below which the growth cap does not apply.
-const VIOLATION_FLOOR: f64 = 0.1;
-/// An objective below this on a feasible point ends the solve `Unbounded` (SNOPT's
-/// "unbounded objective").
-const UNBOUNDED_OBJECTIVE: f64 = -1e20;
-/// Iterates larger than this (‖x‖∞) on a feasible point end the solve `Unbounded` (SNOPT's
-/// "unbounded step size"): a well-scaled problem never needs them.
-const UNBOUNDED_STEP: f64 = 1e10;
-/// Penalty weight beyond which an exact-Hessian iteration counts as stuck; after
-/// `EXACT_PATIENCE` such iterations in a row the solve switches to quasi-Newton updates.
-const EXACT_WEIGHT_LIMIT: f64 = 1e8;
-/// See `EXACT_WEIGHT_LIMIT`.
-const EXACT_PATIENCE: usize = 10;
-/// Returns to the least violated iterate before `Infeasible` is declared elsewhere.
-const MAX_RETREATS: usize = 3;
-/// Factor on the quasi-Newton matrix and the penalty weights after such a return.
-const RETREAT_STIFFNESS: f64 = 10.0;
-/// Elastic-penalty increases per iteration.
-const MAX_STEERING: usize = 8;
-/// Decay of the exact-Hessian step damping after a full step (see `damp_exact_steps`).
-const DAMPING_DECAY: f64 = 3.0;
-/// Largest accepted step length that raises the exact-Hessian step damping.
-const DAMPING_CUT: f64 = 0.1;
-/// Damping below which it is dropped (absolute, on the scaled problem).
-const DAMPING_MIN: f64 = 1e-8;
-/// Consecutive iterations within 100× the tolerances, without progress, before `Acceptable`.
-const ACCEPTABLE_ITERATIONS: usize = 15;
-/// Progress that keeps an acceptable run going: the best KKT ratio of the last
-/// `ACCEPTABLE_ITERATIONS` iterations below this fraction of the best one before them (a
-/// quasi-Newton method converging linearly, not a stall).
-const ACCEPTABLE_PROGRESS: f64 = 0.9;
-/// A line search that rejects a step whose predicted merit decrease is below this multiple of
-/// `10·ε_mach·|φ|` measures the noise of φ along the step (see `noise`).
-const NOISE_TRIGGER: f64 = 1e3;
-/// Spacing of the noise samples: x moves by this times `1 + ‖x‖∞` per sample.
-const NOISE_SPACING: f64 = 1e-6;
-/// Noise allowance of the relaxed Armijo tests, in standard deviations of the measured noise.
-const NOISE_ALLOWANCE: f64 = 3.0;
-
 /// Consecutive iterations within 100× the tolerances (`Acceptable` level), in windows of
-/// `ACCEPTABLE_ITERATIONS`: a window that does not improve the best KKT ratio
-/// `max(primal/ctol, optimality/tol)` before it by the factor `ACCEPTABLE_PROGRESS` ends the
-/// solve (IPOPT's acceptable test, which ends after a fixed count, would stop an L-BFGS solve
+/// `Tuning::acceptable_iterations`: a window that does not improve the best KKT ratio
+/// `max(primal/ctol, optimality/tol)` before it by the factor `Tuning::acceptable_progress` ends
+/// the solve (IPOPT's acceptable test, which ends after a fixed count, would stop an L-BFGS solve
 /// that converges linearly: the 100-link chain on the sparse path went from 2e-5 to 1e-6 in
 /// 45 such iterations).
 #[derive(Default)]
@@ -181,7 +98,7 @@ struct AcceptableRun {
 impl AcceptableRun {
     /// Records the KKT ratio of an iteration; true when progress has stopped at the
     /// acceptable level.
-    fn stalled(&mut self, ratio: f64) -> bool {
+    fn stalled(&mut self, ratio: f64, tuning: &Tuning) -> bool {
         if ratio > 100.0 {
             *self = AcceptableRun::default();
             return false;
@@ -195,10 +112,10 @@ impl AcceptableRun {
         }
         self.length += 1;
         self.within = self.within.min(ratio);
-        if self.length < ACCEPTABLE_ITERATIONS {
+        if self.length < tuning.acceptable_iterations {
             return false;
         }
-        if self.within > ACCEPTABLE_PROGRESS * self.before {
+        if self.within > tuning.acceptable_progress * self.before {
             return true;
         }
         // Progress: judge the next window against the best ratio so far.
@@ -237,7 +154,7 @@ struct Acceptance {
     v0: f64,
     /// Predicted violation change along d when the violation must decrease in fact.
     violation_slope: Option<f64>,
-    /// Largest ℓ1 violation accepted at a trial point (see [`VIOLATION_GROWTH`]).
+    /// Largest ℓ1 violation accepted at a trial point (see [`Tuning::violation_growth`]).
     violation_cap: f64,
     /// Change of φ that counts as no change: its rounding level.
     merit_noise: f64,
@@ -262,6 +179,8 @@ enum LineSearch {
 struct Sqp<'a> {
     ev: Evaluator<'a>,
     options: &'a Options,
+    /// The method's constants (`options.tuning`).
+    tuning: &'a Tuning,
     started: Instant,
     log: Vec<IterationRecord>,
     /// What of the log is shown live (stderr; a status line for long runs on a terminal).
@@ -276,19 +195,34 @@ struct Sqp<'a> {
     feasibility_warm: RefCell<WarmStart>,
     jac_shape: (Vec<usize>, Vec<usize>),
     /// The QP method in effect ([`Options::qp_method`], with `Auto` resolved for exact
-    /// Hessians above [`EXACT_SPARSE_LIMIT`]).
+    /// Hessians above [`Tuning::exact_sparse_limit`]).
     qp_method: QpMethod,
     /// ℓ∞ trust-region radius on the step (unscaled variables; infinite under the line search,
-    /// and at most [`STEP_LIMIT`]·(1 + ‖x‖∞) in effect).
+    /// and at most [`Tuning::step_limit`]·(1 + ‖x‖∞) in effect).
     radius: f64,
 }
 
 /// Solves `nlp` from its starting point (see the module documentation for the method).
+/// With [`Options::interrupt`] every evaluation polls the flag too
+/// ([`super::interrupt`]): a raised flag ends the solve with status `Interrupted` at the last
+/// accepted point, within one evaluation.
 pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
+    let Some(flag) = &options.interrupt else {
+        return solve_unguarded(nlp, options);
+    };
+    let interrupt = Interrupt::from(Arc::clone(flag));
+    let mut solution = solve_unguarded(&Interruptible::new(nlp, &interrupt), options);
+    if interrupt.is_raised() && solution.status == Status::EvaluationError {
+        solution.status = Status::Interrupted;
+    }
+    solution
+}
+
+fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
     let started = Instant::now();
     let ev = Evaluator::new(nlp);
     let n = ev.dims.n;
-    let quasi_newton = if n <= DENSE_BFGS_LIMIT {
+    let quasi_newton = if n <= options.tuning.dense_bfgs_limit {
         HessianMode::Bfgs
     } else {
         HessianMode::Lbfgs
@@ -311,7 +245,9 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
         _ => Model::Bfgs(DenseBfgs::new(n)),
     };
     let qp_method = match options.qp_method {
-        QpMethod::Auto if mode == HessianMode::Exact && n > EXACT_SPARSE_LIMIT => QpMethod::Sparse,
+        QpMethod::Auto if mode == HessianMode::Exact && n > options.tuning.exact_sparse_limit => {
+            QpMethod::Sparse
+        }
         other => other,
     };
     let jac_shape = (ev.jac_rows.clone(), ev.jac_cols.clone());
@@ -320,6 +256,7 @@ pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
         lambda: vec![0.0; ev.dims.m],
         ev,
         options,
+        tuning: &options.tuning,
         started,
         log: Vec::new(),
         live: RefCell::new(log::LiveLog::stderr(options.verbosity)),
@@ -433,16 +370,18 @@ impl<'a> Sqp<'a> {
         let mut qp_in = 0;
         let mut acceptable = AcceptableRun::default();
         let mut reset_done = false;
-        let mut retreats_left = MAX_RETREATS;
+        let mut retreats_left = self.tuning.max_retreats;
         let mut heavy_weights = 0;
         let mut least_violated = point.clone();
         let mut iteration = 0;
         loop {
             let jac = self.jacobian(&point.derivatives.jac);
             let step = self.choose_step(&point, &jac);
-            if !self.model.is_quasi_newton() && self.rho.iter().any(|&w| w > EXACT_WEIGHT_LIMIT) {
+            if !self.model.is_quasi_newton()
+                && self.rho.iter().any(|&w| w > self.tuning.exact_weight_limit)
+            {
                 heavy_weights += 1;
-                if heavy_weights >= EXACT_PATIENCE {
+                if heavy_weights >= self.tuning.exact_patience {
                     self.abandon_exact_hessian("the penalty weights stayed huge");
                 }
             } else {
@@ -471,12 +410,12 @@ impl<'a> Sqp<'a> {
             }
             let xnorm = point.x.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
             if kkt.primal <= 100.0 * ctol
-                && (point.values.f / self.ev.scale_f < UNBOUNDED_OBJECTIVE
-                    || xnorm > UNBOUNDED_STEP)
+                && (point.values.f / self.ev.scale_f < self.tuning.unbounded_objective
+                    || xnorm > self.tuning.unbounded_step)
             {
                 return self.finish(Status::Unbounded, &point, Some(&lambda_qp));
             }
-            if acceptable.stalled((kkt.primal / ctol).max(kkt.optimality / tol)) {
+            if acceptable.stalled((kkt.primal / ctol).max(kkt.optimality / tol), self.tuning) {
                 return self.finish(Status::Acceptable, &point, Some(&lambda_qp));
             }
             if let Some(status) = self.limit_reached(iteration) {
@@ -492,7 +431,7 @@ impl<'a> Sqp<'a> {
                 // Under the trust region: a fresh quasi-Newton model (an ill-conditioned one
                 // fails the dense QP's factorization), then smaller radii.
                 let radius = self.effective_radius(&point);
-                if radius.is_finite() && radius > QP_RETRY_RADIUS * (1.0 + xnorm) {
+                if radius.is_finite() && radius > self.tuning.qp_retry_radius * (1.0 + xnorm) {
                     if self.model.is_quasi_newton() && !reset_done {
                         self.model.reset();
                         reset_done = true;
@@ -643,10 +582,10 @@ impl<'a> Sqp<'a> {
     /// constraints hold, the true ones change at second order). The shift δ = μ(1/α − 1) would
     /// have made the step along such a direction the accepted one, while directions of large
     /// curvature keep their full Newton step, instead of all being cut to α. After a full step
-    /// the floor decays ×1/[`DAMPING_DECAY`] (to 0 below `DAMPING_MIN` of the Hessian scale),
-    /// like a trust region that grows back.
+    /// the floor decays ×1/[`Tuning::damping_decay`] (to 0 below `Tuning::damping_min` of the
+    /// Hessian scale), like a trust region that grows back.
     ///
-    /// Only a severe cut (α ≤ [`DAMPING_CUT`]) raises it, and μ leaves out the inertia
+    /// Only a severe cut (α ≤ [`Tuning::damping_cut`]) raises it, and μ leaves out the inertia
     /// correction above the floor (it damps the steps already): a floor ratcheting up on every
     /// cut step by μ including that correction slowed the 250-link hanging chain (shift ~3e4)
     /// from 30 to 345 iterations.
@@ -655,14 +594,18 @@ impl<'a> Sqp<'a> {
         // The curvature along d without the inertia correction above the floor.
         let correction = (self.warm.convexification() - self.warm.shift_floor()).max(0.0);
         let curvature = dhd - correction * dd;
-        let floor = if alpha <= DAMPING_CUT && dd > 0.0 && curvature > 0.0 {
+        let floor = if alpha <= self.tuning.damping_cut && dd > 0.0 && curvature > 0.0 {
             self.warm
                 .shift_floor()
                 .max(curvature / dd * (1.0 / alpha - 1.0))
         } else {
-            self.warm.shift_floor() / DAMPING_DECAY
+            self.warm.shift_floor() / self.tuning.damping_decay
         };
-        let floor = if floor < DAMPING_MIN { 0.0 } else { floor };
+        let floor = if floor < self.tuning.damping_min {
+            0.0
+        } else {
+            floor
+        };
         self.warm.set_shift_floor(floor);
     }
 
@@ -676,9 +619,9 @@ impl<'a> Sqp<'a> {
         }
         *left -= 1;
         *point = least.clone();
-        self.model.reset_stiffer(RETREAT_STIFFNESS);
+        self.model.reset_stiffer(self.tuning.retreat_stiffness);
         for w in &mut self.rho {
-            *w = (*w * RETREAT_STIFFNESS).max(1.0);
+            *w = (*w * self.tuning.retreat_stiffness).max(1.0);
         }
         self.warm.clear();
         if let Err(e) = self.update_exact(point) {
@@ -693,13 +636,13 @@ impl<'a> Sqp<'a> {
     /// bounded. The penalty weights restart from the current multipliers.
     fn abandon_exact_hessian(&mut self, why: &str) {
         let n = self.ev.dims.n;
-        self.model = if n <= DENSE_BFGS_LIMIT {
+        self.model = if n <= self.tuning.dense_bfgs_limit {
             Model::Bfgs(DenseBfgs::new(n))
         } else {
             Model::Lbfgs(Lbfgs::new(n, self.options.lbfgs_memory))
         };
         for (w, l) in self.rho.iter_mut().zip(&self.lambda) {
-            *w = l.abs().min(ELASTIC_WEIGHT);
+            *w = l.abs().min(self.tuning.elastic_weight);
         }
         self.say(&format!(
             "      exact Hessian abandoned ({why}); continuing with quasi-Newton updates"
@@ -760,7 +703,7 @@ impl<'a> Sqp<'a> {
             return f64::INFINITY;
         }
         let xnorm = point.x.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
-        self.radius.min(STEP_LIMIT * (1.0 + xnorm))
+        self.radius.min(self.tuning.step_limit * (1.0 + xnorm))
     }
 
     fn bounds_of_step(&self, point: &Point) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
@@ -845,7 +788,7 @@ impl<'a> Sqp<'a> {
             force = force.max(qp.lambda[i].abs() * norm);
         }
         let gmax = g.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
-        if qp.status == QpStatus::Optimal && force <= ELASTIC_WEIGHT * gmax {
+        if qp.status == QpStatus::Optimal && force <= self.tuning.elastic_weight * gmax {
             let iterations = qp.iterations;
             return StepChoice {
                 qp,
@@ -870,11 +813,11 @@ impl<'a> Sqp<'a> {
             .iter()
             .chain(self.lambda.iter())
             .fold(1.0_f64, |a, v| a.max(v.abs()))
-            .min(ELASTIC_WEIGHT);
+            .min(self.tuning.elastic_weight);
         let mut rho: Vec<f64> = self
             .rho
             .iter()
-            .map(|w| w.clamp(floor, ELASTIC_WEIGHT.max(floor)))
+            .map(|w| w.clamp(floor, self.tuning.elastic_weight.max(floor)))
             .collect();
         // Steering asks for a tenth of what the linearization can reach: within the trust
         // region, if it is tighter than the stationarity test's box.
@@ -888,7 +831,7 @@ impl<'a> Sqp<'a> {
         let mut sol = elastic::solve_elastic(h, g, &lin, &rho, &mut self.elastic_warm, tol);
         self.subproblem_multipliers(&mut sol.lambda, jac, &sol.d);
         iterations += sol.iterations;
-        for _ in 0..MAX_STEERING {
+        for _ in 0..self.tuning.max_steering {
             let after = lin.violation_after(&sol.d);
             let enough = after <= 1e-12 * (1.0 + now) || now - after >= 0.1 * best_reduction;
             if sol.status == QpStatus::Optimal && enough {
@@ -974,13 +917,13 @@ impl<'a> Sqp<'a> {
     /// Byrd & Nocedal, "Derivative-free optimization of noisy functions via quasi-Newton
     /// methods", SIAM J. Optim. 29(2), 2019, relaxed Armijo condition).
     fn accepts(&self, test: &Acceptance, values: &Values, alpha: f64) -> bool {
-        let merit_ok =
-            self.merit(values) <= test.phi0 + ARMIJO * alpha * test.slope + test.merit_noise;
+        let merit_ok = self.merit(values)
+            <= test.phi0 + self.tuning.armijo * alpha * test.slope + test.merit_noise;
         let violation = merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu);
         let violation_ok = violation <= test.violation_cap
-            && test
-                .violation_slope
-                .is_none_or(|vs| violation <= test.v0 + ARMIJO * alpha * vs + test.violation_noise);
+            && test.violation_slope.is_none_or(|vs| {
+                violation <= test.v0 + self.tuning.armijo * alpha * vs + test.violation_noise
+            });
         merit_ok && violation_ok
     }
 
@@ -993,7 +936,7 @@ impl<'a> Sqp<'a> {
         test.noise_measured = true;
         let dnorm = d.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
         let xnorm = point.x.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
-        let mut spacing = NOISE_SPACING * xnorm / dnorm;
+        let mut spacing = self.tuning.noise_spacing * xnorm / dnorm;
         for _ in 0..3 {
             let mut merits = Vec::with_capacity(noise::SAMPLES);
             let mut violations = Vec::with_capacity(noise::SAMPLES);
@@ -1011,8 +954,8 @@ impl<'a> Sqp<'a> {
                 return Ok(());
             };
             if sm > 0.0 || sv > 0.0 {
-                test.merit_noise = test.merit_noise.max(NOISE_ALLOWANCE * sm);
-                test.violation_noise = test.violation_noise.max(NOISE_ALLOWANCE * sv);
+                test.merit_noise = test.merit_noise.max(self.tuning.noise_allowance * sm);
+                test.violation_noise = test.violation_noise.max(self.tuning.noise_allowance * sv);
                 if self.options.verbosity >= 2 {
                     self.say(&format!(
                         "      noise along d: merit {sm:.2e}, violation {sv:.2e} (slope {:.2e})",
@@ -1048,7 +991,7 @@ impl<'a> Sqp<'a> {
             violation_cap: if self.model.is_quasi_newton() {
                 f64::INFINITY
             } else {
-                VIOLATION_GROWTH * v0.max(VIOLATION_FLOOR)
+                self.tuning.violation_growth * v0.max(self.tuning.violation_floor)
             },
             merit_noise: if -slope <= 100.0 * resolution {
                 resolution
@@ -1063,11 +1006,11 @@ impl<'a> Sqp<'a> {
         if dnorm <= 1e-15 * xnorm {
             return LineSearch::Failed;
         }
-        let first_alpha = (STEP_LIMIT * (1.0 + xnorm) / dnorm).min(1.0);
+        let first_alpha = (self.tuning.step_limit * (1.0 + xnorm) / dnorm).min(1.0);
         let mut alpha = first_alpha;
         let mut soc_tried = false;
         loop {
-            if alpha < MIN_STEP {
+            if alpha < self.tuning.min_step {
                 // Before giving up, find out whether φ is too noisy to resolve the predicted
                 // decrease at all (an objective that cancels to f ≈ 0 has no |φ|-based
                 // resolution); if it is, search again with the relaxed tests.
@@ -1097,7 +1040,7 @@ impl<'a> Sqp<'a> {
             // how noisy φ really is (sums of many terms are far noisier than ε_mach·|φ|).
             if !accepted
                 && !test.noise_measured
-                && -alpha * slope <= NOISE_TRIGGER * resolution.max(f64::MIN_POSITIVE)
+                && -alpha * slope <= self.tuning.noise_trigger * resolution.max(f64::MIN_POSITIVE)
             {
                 if self.measure_noise(point, d, &mut test).is_err() {
                     return LineSearch::Fatal;
@@ -1136,15 +1079,15 @@ impl<'a> Sqp<'a> {
 
     /// One trust-region trial (Fletcher's Sℓ1QP; Nocedal & Wright, 2nd ed., Algorithm 18.4):
     /// the step d, already bounded by the radius, is accepted when the merit function falls
-    /// by at least [`ARMIJO`] times the decrease the model predicts,
+    /// by at least [`Tuning::armijo`] times the decrease the model predicts,
     /// `pred = −(slope + ½dᵀHd)` (slope = ∇fᵀd − Σρᵢ·(linearized decrease of row i)),
     /// or else after one second-order correction. The radius then grows ×2 when the ratio of
     /// actual to predicted decrease exceeds 0.75 on a step at the radius, and shrinks to half
     /// the step when it is below 0.25. A rejected step shrinks the radius to the minimizer of
     /// the quadratic through φ(0), its slope and φ(x + d), within [0.1, 0.5]·‖d‖∞, and the
     /// iteration is repeated at the same point; `Failed` once the radius falls below
-    /// [`MIN_RADIUS`]·(1 + ‖x‖∞). With the exact Hessian the violation cap of the line search
-    /// applies too.
+    /// [`Tuning::min_radius`]·(1 + ‖x‖∞). With the exact Hessian the violation cap of the line
+    /// search applies too.
     fn trust_region_step(
         &mut self,
         point: &Point,
@@ -1159,7 +1102,7 @@ impl<'a> Sqp<'a> {
             return LineSearch::Failed;
         }
         let radius = self.effective_radius(point);
-        if radius < MIN_RADIUS * xnorm {
+        if radius < self.tuning.min_radius * xnorm {
             return LineSearch::Failed;
         }
         let predicted = -(slope + 0.5 * dhd.max(0.0));
@@ -1173,7 +1116,7 @@ impl<'a> Sqp<'a> {
             violation_cap: if self.model.is_quasi_newton() {
                 f64::INFINITY
             } else {
-                VIOLATION_GROWTH * v0.max(VIOLATION_FLOOR)
+                self.tuning.violation_growth * v0.max(self.tuning.violation_floor)
             },
             merit_noise: 10.0 * f64::EPSILON * phi0.abs(),
             violation_noise: 0.0,
@@ -1226,7 +1169,7 @@ impl<'a> Sqp<'a> {
         };
         self.radius = shrink.clamp(0.1, 0.5) * dnorm;
         self.log_radius((phi0 - phi) / predicted);
-        if self.radius < MIN_RADIUS * xnorm {
+        if self.radius < self.tuning.min_radius * xnorm {
             return LineSearch::Failed;
         }
         LineSearch::Rejected
@@ -1360,7 +1303,7 @@ impl<'a> Sqp<'a> {
                 .iter()
                 .zip(self.ev.cl.iter().zip(&self.ev.cu))
                 .fold(0.0_f64, |a, (&c, (&l, &u))| a.max(l - c).max(c - u));
-            let held = if worst > HELD_VIOLATION {
+            let held = if worst > self.tuning.held_violation {
                 Vec::new()
             } else {
                 held

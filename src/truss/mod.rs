@@ -38,9 +38,10 @@ use std::time::Instant;
 
 use serde_json::json;
 
+use crate::application::{Application, CheckCase};
 use crate::error::{Error, InputError};
-use crate::run::{Artifact, Outcome, ResultSummary, RunOptions};
-use crate::solver::derivatives::{CheckOptions, check_derivatives};
+use crate::outcome::{Artifact, Kind, Outcome, ResultSummary, RunOptions};
+use crate::solver::derivatives::CheckOptions;
 use crate::solver::{Evaluations, Nlp, Solution};
 use crate::spec::{Key, Source};
 
@@ -67,8 +68,10 @@ pub fn load(path: &Path) -> Result<Problem, InputError> {
     let spec: TrussSpec = source.parse()?;
     spec::validate(&spec, &source)?;
     let name = spec.name.clone().unwrap_or_else(|| {
-        path.file_stem()
-            .map_or_else(|| "truss".to_string(), |s| s.to_string_lossy().into_owned())
+        path.file_stem().map_or_else(
+            || Kind::Truss.name().into(),
+            |s| s.to_string_lossy().into_owned(),
+        )
     });
     let model = build::build(&spec, &source, spec.seed.unwrap_or(0))?;
     let problem = Problem {
@@ -194,18 +197,53 @@ impl Problem {
     }
 }
 
+/// Truss problems as an [`Application`].
+pub struct Truss;
+
+impl Application for Truss {
+    const KIND: Kind = Kind::Truss;
+    type Problem = Problem;
+
+    fn load(path: &Path) -> Result<Problem, Error> {
+        Ok(load(path)?)
+    }
+
+    fn name(problem: &Problem) -> &str {
+        problem.name()
+    }
+
+    /// The model built with the run's seed, checked at [`check_point`] with the difference
+    /// scale of [`check_options`].
+    fn check_case<'p>(problem: &'p Problem, opts: &RunOptions) -> Result<CheckCase<'p>, Error> {
+        let seed = problem.seed(opts);
+        let started = Instant::now();
+        let nlp = problem.nlp(&problem.model_for(seed)?, seed)?;
+        let build_seconds = started.elapsed().as_secs_f64();
+        let (x, options) = (check_point(&nlp, seed), check_options(&nlp));
+        let (hess_nnz, joints, beams) = (
+            nlp.dims().hess_nnz,
+            nlp.structure().joints.len(),
+            nlp.structure().beams.len(),
+        );
+        let mut case = CheckCase::new(Box::new(nlp), x, options, seed)
+            .figure("hessian_nonzeros", hess_nnz)
+            .figure("joints", joints)
+            .figure("beams", beams);
+        case.build_seconds = Some(build_seconds);
+        Ok(case)
+    }
+
+    fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
+        run(problem, opts)
+    }
+}
+
 /// Runs the problem: solve, clean up and re-solve for the requested rounds, then report.
-/// With `opts.check` the model is built and its derivatives checked instead.
 pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let seed = problem.seed(opts);
     let started = Instant::now();
     let model = problem.model_for(seed)?;
     let mut timings = BTreeMap::new();
-    if opts.check {
-        let nlp = problem.nlp(&model, seed)?;
-        timings.insert("build".to_string(), started.elapsed().as_secs_f64());
-        return check(problem, &nlp, seed, timings);
-    }
     let (mut nlp, start_report) = problem.staged_nlp(&model, seed)?;
     timings.insert("build".to_string(), started.elapsed().as_secs_f64());
     let options = opts.solver_options(&problem.spec.solver);
@@ -271,7 +309,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let export_start = Instant::now();
     let design = Design::from_point(&nlp, &solution.x);
     let figures = design.figures(nlp.settings());
-    let mut summary = ResultSummary::from_solution(problem.name(), "truss", seed, &solution);
+    let mut summary = ResultSummary::from_solution(problem.name(), Kind::Truss, seed, &solution);
     summary.iterations = iterations;
     summary.evaluations = evaluations;
     summary.figures = json!({
@@ -328,7 +366,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
 /// Largest violation (the solver's scaled measure) of a round's end point after which its
 /// clean-up may merge joints and tension runs. Merging moves joints and adds forces; at a point
 /// that does not balance, inside a self-stressed knot of short beams, it turned crane seed 4's
-/// violation of 2.3e-3 into 4.6 (BENCHMARKS.md). Pruning and dangling joints are unaffected.
+/// violation of 2.3e-3 into 4.6 (docs/notes/truss.md). Pruning and dangling joints are unaffected.
 const MERGE_VIOLATION: f64 = 1e-3;
 
 /// The round whose design a run reports: the last one, unless it did not end Optimal while an
@@ -396,36 +434,4 @@ pub fn check_options(nlp: &TrussNlp) -> CheckOptions {
     options.differences.characteristic_scale =
         Some((shortest / nlp.length_scale()).clamp(1e-3, 1.0));
     options
-}
-
-/// `--check`: the model is built and its derivatives are compared with central differences by
-/// the shared checker (`crate::solver::derivatives`) at [`check_point`], with the difference
-/// scale of [`check_options`].
-fn check(
-    problem: &Problem,
-    nlp: &TrussNlp,
-    seed: u64,
-    mut timings: BTreeMap<String, f64>,
-) -> Result<Outcome, Error> {
-    let started = Instant::now();
-    let x = check_point(nlp, seed);
-    let report = check_derivatives(nlp, &x, &check_options(nlp))
-        .map_err(|e| Error::Runtime(format!("derivative check: {e}")))?;
-    timings.insert("check".to_string(), started.elapsed().as_secs_f64());
-    let d = nlp.dims();
-    let mut summary = ResultSummary::checked(problem.name(), "truss", seed, nlp, &x, &report)
-        .map_err(|e| Error::Runtime(format!("evaluation at the start point: {e}")))?;
-    summary.timings = timings;
-    summary.set_figure("variables", d.n);
-    summary.set_figure("constraints", d.m);
-    summary.set_figure("jacobian_nonzeros", d.jac_nnz);
-    summary.set_figure("hessian_nonzeros", d.hess_nnz);
-    summary.set_figure("joints", nlp.structure().joints.len());
-    summary.set_figure("beams", nlp.structure().beams.len());
-    Ok(Outcome {
-        summary,
-        status: None,
-        check_passed: Some(report.passed()),
-        artifacts: Vec::new(),
-    })
 }

@@ -35,7 +35,7 @@
 //! or Σ L_j / D (length of all beams). With several cases the mass objective is Σ s_j / M.
 //!
 //! Internally every derivative is first formed with respect to positions in metres and then
-//! multiplied by D per position column ([`TrussNlp::column_scale`]).
+//! multiplied by D per position column (`TrussNlp::column_scale`).
 //!
 //! Patterns: entries are emitted by one walk over the model; duplicates are merged into a sorted
 //! unique pattern once, so the Jacobian and Hessian patterns have no repeated pairs.

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use super::{Problem, load};
-use crate::run::RunOptions;
+use crate::outcome::RunOptions;
 use crate::solver::Nlp;
 use crate::solver::derivatives::check_derivatives;
 
@@ -188,7 +188,7 @@ fn check_mode_runs_the_shared_derivative_checker() {
             quiet: true,
             ..Default::default()
         };
-        let outcome = super::run(&p, &opts).unwrap();
+        let outcome = crate::application::run_problem::<super::Truss>(&p, &opts).unwrap();
         assert!(outcome.check_passed.is_some());
         assert_eq!(outcome.summary.status, "Checked");
         let report = &outcome.summary.figures["derivatives"];
@@ -310,7 +310,7 @@ fn rounds_stop_once_an_optimal_round_leaves_nothing_to_clean() {
         rounds: Some(4),
         ..Default::default()
     };
-    let outcome = super::run(&p, &opts).unwrap();
+    let outcome = crate::application::run_problem::<super::Truss>(&p, &opts).unwrap();
     assert_eq!(outcome.summary.status, "Optimal");
     let figures = &outcome.summary.figures;
     assert_eq!(figures["rounds_run"], 1);

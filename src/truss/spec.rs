@@ -27,13 +27,14 @@
 //! [[symmetry]] point, normal       [[obstacle]] kind = "half_space" | "sphere"
 //! [[load_case]] name, factor (on the joints' own loads), loads = [{ joint, force, mass }]
 //! [rounds] count, prune, remove_crossings, merge_tolerance
-//! [solver] (shared, see crate::spec::SolverSpec)
+//! [solver] (shared, see crate::solver::Options)
 //! ```
 
 use serde::Deserialize;
 
 use crate::error::InputError;
-use crate::spec::{Key, SolverSpec, Source};
+use crate::solver::Options;
+use crate::spec::{Key, Source, validate_solver};
 
 /// Most joints a problem may have: the user's joints with rows expanded plus the generated
 /// ground structure (the k-nearest connection costs O(n² log n)).
@@ -105,7 +106,7 @@ pub struct TrussSpec {
     pub rounds: RoundsSpec,
     /// Solver options.
     #[serde(default)]
-    pub solver: SolverSpec,
+    pub solver: Options,
 }
 
 fn default_min_length() -> f64 {
@@ -630,7 +631,7 @@ pub fn validate(spec: &TrussSpec, src: &Source) -> Result<(), InputError> {
     }
     src.non_negative(&[N("rounds"), N("merge_tolerance")], r.merge_tolerance)?;
     src.count_in(&[N("rounds"), N("count")], r.count, 1, MAX_ROUNDS)?;
-    spec.solver.validate(src, &[N("solver")])
+    validate_solver(&spec.solver, src, &[N("solver")])
 }
 
 fn validate_mass(m: &MassSpec, src: &Source) -> Result<(), InputError> {

@@ -6,11 +6,11 @@
 //! - [`spec`]: the problem file (`formulation = "collocation"`), the seed's "actuated rubber
 //!   ball" (a point mass that can push on the floor only during its contact phases);
 //! - [`nlp`]: knots, variables, constraints and their constant exact derivatives;
-//! - [`validate`]: the physical checks of a solution (Newtonian residual between knots, RK4
+//! - [`validate`](mod@validate): the physical checks of a solution (Newtonian residual between knots, RK4
 //!   re-simulation, impulse balance, floor, friction, wall clearance).
 //!
 //! Selected by a gait problem file with a top-level `formulation = "collocation"`
-//! ([`crate::gait::execute`]).
+//! ([`crate::gait::Gait`]).
 
 pub mod nlp;
 pub mod spec;
@@ -20,9 +20,9 @@ use std::time::Instant;
 
 use crate::error::{Error, InputError};
 use crate::io::result::{Csv, num};
-use crate::run::{Artifact, Outcome, ResultSummary, RunOptions};
-use crate::solver::derivatives::{CheckOptions, check_derivatives};
-use crate::solver::{EvalError, Nlp, solve};
+use crate::outcome::{Artifact, Kind, Outcome, ResultSummary, RunOptions};
+use crate::solver::derivatives::CheckOptions;
+use crate::solver::{Nlp, solve};
 use crate::spec::Source;
 
 pub use nlp::{Collocation, Layout};
@@ -34,40 +34,17 @@ pub fn load_source(source: &Source) -> Result<Problem, InputError> {
     spec::load_source(source)
 }
 
-/// Solves the problem (or, with `opts.check`, compares its derivatives with central
-/// differences at the start point) and reports the physical checks of [`validate`] in the
+/// Solves the problem and reports the physical checks of [`validate`](mod@validate) in the
 /// `result.json` figures; writes `trajectory.csv` (knots) and `iterations.csv`.
 pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let nlp = Collocation::new(problem);
     let d = nlp.dims();
-    let failed = |e: crate::solver::EvalError| Error::Runtime(format!("{}: {e}", problem.name));
-    if opts.check {
-        let clock = Instant::now();
-        let x = nlp.initial_guess();
-        let report = check(&nlp, &x).map_err(failed)?;
-        let mut summary =
-            ResultSummary::checked(&problem.name, "gait", opts.seed, &nlp, &x, &report)
-                .map_err(failed)?;
-        summary
-            .timings
-            .insert("check".into(), clock.elapsed().as_secs_f64());
-        summary.set_figure("formulation", "collocation");
-        summary.set_figure("variables", d.n);
-        summary.set_figure("constraints", d.m);
-        summary.set_figure("jacobian_nonzeros", d.jac_nnz);
-        return Ok(Outcome {
-            summary,
-            status: None,
-            check_passed: Some(report.passed()),
-            artifacts: vec![],
-        });
-    }
     let options = opts.solver_options(&problem.solver);
     let clock = Instant::now();
     let solution = solve(&nlp, &options);
     let solve_seconds = clock.elapsed().as_secs_f64();
     let validity = validate(problem, &nlp.layout, &solution.x);
-    let mut summary = ResultSummary::from_solution(&problem.name, "gait", opts.seed, &solution);
+    let mut summary = ResultSummary::from_solution(&problem.name, Kind::Gait, opts.seed, &solution);
     summary.timings.insert("solve".into(), solve_seconds);
     summary.figures = serde_json::json!({
         "formulation": "collocation",
@@ -106,13 +83,10 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     })
 }
 
-/// Compares the exact gradient, Jacobian and Hessian of `nlp` at `x` with central differences
-/// in every variable (the fixed start, take-off and end positions included).
-pub fn check(
-    nlp: &Collocation<'_>,
-    x: &[f64],
-) -> Result<crate::solver::derivatives::DerivativeReport, EvalError> {
-    check_derivatives(nlp, x, &CheckOptions::default())
+/// The `--check` comparison: the exact gradient, Jacobian and Hessian against central
+/// differences in every variable (the fixed start, take-off and end positions included).
+pub fn check_options() -> CheckOptions {
+    CheckOptions::default()
 }
 
 /// `trajectory.csv`: per knot, time (s), position (m), velocity (m/s) and ground force (N).

@@ -32,7 +32,7 @@
 //!
 //! Unlike the seed's version (instantaneous contacts, forces only at two instants), contact here
 //! lasts a given phase and the force is finite, so the solution is a physically valid motion
-//! (see [`super::validate`]).
+//! (see [`super::validate`](mod@super::validate)).
 
 use super::spec::{Problem, Quantity};
 use crate::solver::{Dims, EvalError, Nlp};

@@ -30,7 +30,8 @@
 use serde::Deserialize;
 
 use crate::error::InputError;
-use crate::spec::{Key, SolverSpec, Source, is_positive as positive};
+use crate::solver::Options;
+use crate::spec::{Key, Source, is_positive as positive, validate_solver};
 
 /// The whole file.
 #[derive(Debug, Clone, Deserialize)]
@@ -71,7 +72,7 @@ pub struct FileSpec {
     pub wall: Option<WallSpec>,
     /// Solver options.
     #[serde(default)]
-    pub solver: SolverSpec,
+    pub solver: Options,
 }
 
 fn default_gravity() -> f64 {
@@ -189,7 +190,7 @@ pub struct Problem {
     /// The wall, if any.
     pub wall: Option<WallSpec>,
     /// Solver options table.
-    pub solver: SolverSpec,
+    pub solver: Options,
 }
 
 /// Whether a problem file's text selects this formulation (a top-level
@@ -220,7 +221,7 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
             ),
         ));
     }
-    file.solver.validate(source, &[Key::Name("solver")])?;
+    validate_solver(&file.solver, source, &[Key::Name("solver")])?;
     if !positive(file.mass) {
         return Err(err(
             &top("mass"),

@@ -67,7 +67,7 @@ fn exact_derivatives_match_central_differences() {
     let d = nlp.dims();
     let mut rng = ChaCha8Rng::seed_from_u64(11);
     let x: Vec<f64> = (0..d.n).map(|_| rng.random_range(-5.0..5.0)).collect();
-    let report = check(&nlp, &x).unwrap();
+    let report = crate::solver::derivatives::check_derivatives(&nlp, &x, &check_options()).unwrap();
     assert!(report.passed(), "{report}");
     assert!(report.hessian.is_some(), "the Hessian is checked too");
     assert!(report.jacobian.checked > 0 && report.gradient.checked > 0);
@@ -130,7 +130,7 @@ fn the_solved_ball_is_physically_valid() {
     let nlp = Collocation::new(&p);
     let options = Options {
         verbosity: 0,
-        ..p.solver.options()
+        ..p.solver.clone()
     };
     let sol = solve(&nlp, &options);
     assert_eq!(sol.status, Status::Optimal, "{:?}", sol.status);

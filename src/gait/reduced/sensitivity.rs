@@ -23,7 +23,7 @@ use rayon::prelude::*;
 
 use super::Reduced;
 use crate::gait::aba::derivatives::StageLinearizer;
-use crate::gait::sim::{Controls, SimError, Simulator, State};
+use crate::gait::sim::{Controls, SimError, Simulator, State, poll};
 use crate::gait::spline::SplineControls;
 
 /// Dual directions per evaluation of a constraint's state gradient.
@@ -115,6 +115,7 @@ impl Reduced<'_> {
             let end = target.unwrap_or(self.boundaries[(k + 1).min(self.segments())]);
             while n < end {
                 let t0 = n as f64 * h;
+                poll(Some(&self.problem.interrupt), n, t0)?;
                 // The RK4 step, arithmetic as in `Simulator::step`, with stage Jacobians.
                 for (s, &(dt_frac, x_frac, _)) in stages.iter().enumerate() {
                     if s == 0 {
@@ -142,7 +143,7 @@ impl Reduced<'_> {
                     *xv += (kv[0][j] + (kv[1][j] + kv[2][j]) * 2.0 + kv[3][j]) * w;
                 }
                 if !state.q.iter().chain(&state.v).all(|z| z.is_finite()) {
-                    return Err(SimError { time: t0 + h });
+                    return Err(SimError::not_finite(t0 + h));
                 }
                 // Tangent of the step.
                 for s in 0..4 {

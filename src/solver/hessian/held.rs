@@ -26,7 +26,7 @@
 //! nonetheless moves with curvature s (a cautious step), and is free at the next iterate.
 //!
 //! The sparse QP path uses [`decouple_triplets`] (the same, on the triplets, with each held
-//! variable's own curvature scale), and only near a feasible point (`sqp::HELD_VIOLATION`):
+//! variable's own curvature scale), and only near a feasible point (`Tuning::held_violation`):
 //! at the gait ball collocation's fourth iterate (violation 2.2e2) eight variables held at
 //! their bounds had to leave them by long steps, and the model without their couplings gave
 //! QP multipliers of 9e7 where the coupled one gave 1e3 (the solve then Stalled instead of
@@ -47,7 +47,7 @@ pub const WEAK_GRADIENT: f64 = 1e-4;
 
 /// Indices of the variables held at a bound: at it to within `1e-10·(1 + |bound|)` and pushed
 /// into it by the Lagrangian gradient `grad_l`, or not pulled off it by more than
-/// [`WEAK_GRADIENT`] (see the module header). Scaled units.
+/// `WEAK_GRADIENT` (see the module header). Scaled units.
 pub fn held_at_bounds(x: &[f64], xl: &[f64], xu: &[f64], grad_l: &[f64]) -> Vec<usize> {
     let near = |a: f64, b: f64| (a - b).abs() <= 1e-10 * (1.0 + b.abs());
     (0..x.len())

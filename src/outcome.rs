@@ -1,0 +1,223 @@
+//! What every problem kind shares at run time, one floor below the modules: the problem kinds,
+//! the command line's run options, the result summary written as `result.json`, and the files a
+//! run produces. Modules build these; [`crate::io`] writes them; nothing here knows a module.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use serde::Serialize;
+
+use crate::solver::{Evaluations, Interrupt, Options, Solution, Status};
+
+/// The problem kinds, one per module.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Kind {
+    /// Spacetime motion of articulated characters (module `gait`).
+    Gait,
+    /// Trusses on a ground structure (module `truss`).
+    Truss,
+    /// Constant-mean-curvature meshes (module `cmc`).
+    Cmc,
+}
+
+impl Kind {
+    /// Every kind, in command-line order.
+    pub const ALL: [Kind; 3] = [Kind::Gait, Kind::Truss, Kind::Cmc];
+
+    /// The name used on the command line and in result files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Gait => "gait",
+            Kind::Truss => "truss",
+            Kind::Cmc => "cmc",
+        }
+    }
+
+    /// The kind called `name` on the command line, if any.
+    pub fn from_name(name: &str) -> Option<Kind> {
+        Kind::ALL.into_iter().find(|k| k.name() == name)
+    }
+}
+
+impl std::fmt::Display for Kind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Options from the command line that apply to every kind.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Output folder; `None` means `out/<problem name>/`.
+    pub out_dir: Option<PathBuf>,
+    /// Suppress the live log.
+    pub quiet: bool,
+    /// More detail in the live log.
+    pub verbose: bool,
+    /// Only parse, validate, build the model and check derivatives against finite differences.
+    pub check: bool,
+    /// Overrides `[solver] max_iterations`.
+    pub max_iter: Option<usize>,
+    /// Seed for every random choice (ground structures, random starts, annealing).
+    pub seed: u64,
+    /// `seed` was given explicitly (`--seed`): it overrides a problem file's own `seed`.
+    pub seed_given: bool,
+    /// Worker threads for parallel parts (trials, multistart); `None` = all cores.
+    pub threads: Option<usize>,
+    /// Gait: run only this trial (1-based).
+    pub trial: Option<usize>,
+    /// Truss: number of topology rounds.
+    pub rounds: Option<usize>,
+    /// Raised by Ctrl-C: every solve, evaluation, rollout and check polls it
+    /// ([`crate::solver::interrupt`]) and the run ends with the best point so far.
+    pub interrupt: Interrupt,
+}
+
+impl RunOptions {
+    /// Solver options for one solve: the problem file's `[solver]` table, then the command
+    /// line on top (`--max-iter`, `--quiet` → silent log, `--verbose` → detailed log, Ctrl-C).
+    pub fn solver_options(&self, file: &Options) -> Options {
+        let mut options = file.clone();
+        if let Some(n) = self.max_iter {
+            options.max_iterations = n;
+        }
+        if self.quiet {
+            options.verbosity = 0;
+        } else if self.verbose {
+            options.verbosity = options.verbosity.max(2);
+        }
+        options.interrupt = Some(self.interrupt.flag());
+        options
+    }
+}
+
+/// The `result.json` summary: common figures plus module-specific ones under `figures`.
+#[derive(Debug, Clone, Serialize)]
+pub struct ResultSummary {
+    /// Problem name (file's `name` key, or its stem).
+    pub problem: String,
+    /// The problem kind ("gait", "truss" or "cmc" in the file).
+    pub kind: Kind,
+    /// Solver status name, e.g. "Optimal"; "Checked" for `--check` runs.
+    pub status: String,
+    /// The status explained in one sentence.
+    pub status_message: String,
+    /// Final objective value (module units, see `figures`).
+    pub objective: f64,
+    /// Largest bound or constraint violation.
+    pub max_violation: f64,
+    /// Major iterations (summed over rounds, trials or starts).
+    pub iterations: usize,
+    /// Evaluation counts (summed likewise).
+    pub evaluations: Evaluations,
+    /// Wall time per phase in seconds ("build", "solve", "export", ...).
+    pub timings: BTreeMap<String, f64>,
+    /// The seed used.
+    pub seed: u64,
+    /// Module-specific figures (areas, masses, trial tables, ...).
+    pub figures: serde_json::Value,
+}
+
+impl ResultSummary {
+    /// A summary with the given status and message and no figures yet.
+    pub fn new(problem: &str, kind: Kind, seed: u64, status: String, message: String) -> Self {
+        ResultSummary {
+            problem: problem.to_string(),
+            kind,
+            status,
+            status_message: message,
+            objective: f64::NAN,
+            max_violation: f64::NAN,
+            iterations: 0,
+            evaluations: Evaluations::default(),
+            timings: BTreeMap::new(),
+            seed,
+            figures: serde_json::Value::Object(Default::default()),
+        }
+    }
+
+    /// Fills the common solver fields from a solution.
+    pub fn from_solution(problem: &str, kind: Kind, seed: u64, solution: &Solution) -> Self {
+        ResultSummary {
+            objective: solution.objective,
+            max_violation: solution.max_violation,
+            iterations: solution.iterations,
+            evaluations: solution.evaluations,
+            ..ResultSummary::new(
+                problem,
+                kind,
+                seed,
+                format!("{:?}", solution.status),
+                solution.status.sentence().to_string(),
+            )
+        }
+    }
+
+    /// Adds (or replaces) one entry of `figures`, which is always a JSON object.
+    pub fn set_figure(&mut self, key: &str, value: impl Into<serde_json::Value>) {
+        if !self.figures.is_object() {
+            self.figures = serde_json::Value::Object(Default::default());
+        }
+        if let Some(figures) = self.figures.as_object_mut() {
+            figures.insert(key.to_string(), value.into());
+        }
+    }
+}
+
+/// A file a run produces, held in memory until the run is complete.
+#[derive(Debug, Clone)]
+pub struct Artifact {
+    /// File name inside the output folder, e.g. "model.glb".
+    pub name: String,
+    /// Contents.
+    pub bytes: Vec<u8>,
+}
+
+/// Everything a run produces.
+#[derive(Debug, Clone)]
+pub struct Outcome {
+    /// The summary (written as `result.json`).
+    pub summary: ResultSummary,
+    /// How the run ended; decides the exit code. `None` for a completed `--check` run
+    /// (`Interrupted` for an interrupted one).
+    pub status: Option<Status>,
+    /// Whether `--check` found the derivatives consistent (only for completed `--check` runs).
+    pub check_passed: Option<bool>,
+    /// Other files: `iterations.csv`, `model.glb`, previews, CSVs.
+    pub artifacts: Vec<Artifact>,
+}
+
+impl Outcome {
+    /// Marks a run during which the interrupt flag was raised: status `Interrupted` (exit 130)
+    /// whatever its last solve reported (e.g. an earlier round's `Optimal` kept as the result),
+    /// the summary's message naming both.
+    pub fn mark_interrupted(&mut self) {
+        let status = Status::Interrupted;
+        if self.status == Some(status) && self.summary.status == format!("{status:?}") {
+            return;
+        }
+        self.summary.status_message = format!(
+            "{} Result so far: {}",
+            status.sentence(),
+            self.summary.status_message
+        );
+        self.summary.status = format!("{status:?}");
+        self.status = Some(status);
+        self.check_passed = None;
+    }
+
+    /// The process exit code documented in README: 0 converged (or `--check` passed),
+    /// 1 evaluation failure or failed derivative check, 3 stopped without converging,
+    /// 130 interrupted.
+    pub fn exit_code(&self) -> u8 {
+        match (self.status, self.check_passed) {
+            (_, Some(true)) => 0,
+            (_, Some(false)) => 1,
+            (Some(s), None) if s.is_success() => 0,
+            (Some(Status::Interrupted), None) => 130,
+            (Some(Status::EvaluationError), None) => 1,
+            _ => 3,
+        }
+    }
+}
