@@ -16,6 +16,11 @@ Examples:
 Exit codes: 0 converged, 1 runtime failure, 2 usage or problem-file error,
 3 stopped without converging (best result written), 130 interrupted (best so far written).";
 
+/// Most worker threads `--threads` accepts.
+pub const MAX_THREADS: u64 = 256;
+/// Most topology rounds `--rounds` accepts (the file's `[rounds] count` has the same cap).
+const MAX_ROUNDS: u64 = crate::truss::spec::MAX_ROUNDS as u64;
+
 /// Design physically valid motion and structures by constrained nonlinear optimization.
 #[derive(Debug, Parser)]
 #[command(name = "optimize", version, after_help = EXAMPLES)]
@@ -44,9 +49,10 @@ pub enum Command {
     Truss {
         #[command(flatten)]
         common: Common,
-        /// Topology rounds: merge short beams, drop idle ones, re-solve (overrides the file).
-        #[arg(long, value_name = "N")]
-        rounds: Option<usize>,
+        /// Topology rounds, 1 to 100: merge short beams, drop idle ones, re-solve (overrides the
+        /// file).
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_ROUNDS))]
+        rounds: Option<u64>,
     },
     /// Constant-mean-curvature surfaces: soap films, bubbles, tents, pneumatic structures.
     #[command(
@@ -95,8 +101,8 @@ pub struct Common {
     /// seed give the same result. Given, it overrides the file's `seed`.
     #[arg(long, value_name = "N")]
     pub seed: Option<u64>,
-    /// Worker threads [default: all cores]; results do not depend on it.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    /// Worker threads, 1 to 256 [default: all cores]; results do not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_THREADS))]
     pub threads: Option<u64>,
 }
 
@@ -121,7 +127,7 @@ impl Command {
         };
         match self {
             Command::Gait { trial, .. } => opts.trial = trial.map(|t| t as usize),
-            Command::Truss { rounds, .. } => opts.rounds = *rounds,
+            Command::Truss { rounds, .. } => opts.rounds = rounds.map(|r| r as usize),
             Command::Cmc { .. } => {}
         }
         (kind, common, opts)

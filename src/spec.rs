@@ -19,7 +19,10 @@ use serde::de::DeserializeOwned;
 use crate::error::InputError;
 use crate::solver::Options;
 
+pub mod arrays;
+mod check;
 mod global;
+pub use check::{is_positive, short};
 pub use global::{GlobalMethodName, GlobalSpec};
 
 /// A problem file's text, kept to point errors found after parsing back into the file.
@@ -69,9 +72,12 @@ impl Source {
         })
     }
 
-    /// Deserializes the whole file into `T`, mapping toml/serde errors to positioned messages.
+    /// Deserializes the whole file into `T`, mapping toml/serde errors to positioned messages;
+    /// then rejects every float that is not finite, wherever it sits ([`check`]).
     pub fn parse<T: DeserializeOwned>(&self) -> Result<T, InputError> {
-        toml::from_str::<T>(&self.text).map_err(|e| self.translate(&e))
+        let parsed = toml::from_str::<T>(&self.text).map_err(|e| self.translate(&e))?;
+        check::reject_non_finite(self)?;
+        Ok(parsed)
     }
 
     /// An error positioned at the key at `path` (its name), or at the closest enclosing table

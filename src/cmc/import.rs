@@ -12,10 +12,17 @@
 //!   case they are only excluded from curvature constraints;
 //! - faces in a group whose name starts with `fixed` are not films: their vertices are fixed;
 //! - vertices that end up in no film are dropped.
+//!
+//! Checks shared with the glTF reader ([`assemble`]): at most [`MAX_IMPORT_SIZE`] vertices and
+//! as many faces, and every surface consistently wound ([`super::orientation`]): a face wound
+//! against its neighbours is an error naming it (reorienting silently would hide a modelling
+//! mistake, and which side is "out" is the modeller's choice, checked against the volumes'
+//! signs when the problem is built).
 
 use std::collections::BTreeMap;
 
 use super::mesh::{Mesh, MeshBuilder, MeshError, Point};
+use super::orientation::inconsistent_face;
 
 /// Why an OBJ file could not be read.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -34,7 +41,31 @@ pub enum ImportError {
     /// A glTF file could not be read or lacks what a start mesh needs.
     #[error("{0}")]
     Gltf(String),
+    /// A face is wound against its neighbours in the same surface.
+    #[error(
+        "face {} of surface `{surface}` is wound against its neighbour face {} (they traverse \
+         a shared edge in the same direction); reverse it",
+        face + 1,
+        neighbour + 1
+    )]
+    Orientation {
+        /// 0-based face index, in file order.
+        face: usize,
+        /// 0-based index of a neighbour it disagrees with.
+        neighbour: usize,
+        /// The surface both belong to.
+        surface: String,
+    },
+    /// The mesh is larger than [`MAX_IMPORT_SIZE`].
+    #[error("the mesh has more than {MAX_IMPORT_SIZE} {what}")]
+    TooLarge {
+        /// "vertices" or "faces".
+        what: &'static str,
+    },
 }
+
+/// Most vertices, and most faces, an imported mesh may have.
+pub const MAX_IMPORT_SIZE: usize = 200_000;
 
 /// Reads an OBJ text into a mesh (see the module header for the conventions).
 pub fn read_obj(text: &str) -> Result<Mesh, ImportError> {
@@ -63,6 +94,9 @@ pub fn read_obj(text: &str) -> Result<Mesh, ImportError> {
                 if c.iter().any(|v| !v.is_finite()) {
                     return Err(err("non-finite coordinate".into()));
                 }
+                if positions.len() == MAX_IMPORT_SIZE {
+                    return Err(ImportError::TooLarge { what: "vertices" });
+                }
                 positions.push(Point::new(c[0], c[1], c[2]));
             }
             "f" | "l" | "p" => {
@@ -78,6 +112,8 @@ pub fn read_obj(text: &str) -> Result<Mesh, ImportError> {
                     }
                     if lower.starts_with("fixed") {
                         fixed.extend(&indices);
+                    } else if faces.len() == MAX_IMPORT_SIZE {
+                        return Err(ImportError::TooLarge { what: "faces" });
                     } else {
                         faces.push((group.clone(), indices));
                     }
@@ -101,18 +137,32 @@ pub fn read_obj(text: &str) -> Result<Mesh, ImportError> {
             _ => {}
         }
     }
-    Ok(assemble(&positions, &faces, &fixed, &excluded)?)
+    assemble(&positions, &faces, &fixed, &excluded)
 }
 
 /// Builds the mesh of imported polygons: `faces` are `(surface name, vertex indices)` polygons
 /// (split into fans), `fixed` and `excluded` flag vertices. Only vertices used by faces are
-/// kept, renumbered in order of first use. Shared by the OBJ and glTF readers.
+/// kept, renumbered in order of first use. Shared by the OBJ and glTF readers, it checks the
+/// sizes and the winding (module header).
 pub(super) fn assemble(
     positions: &[Point],
     faces: &[(String, Vec<usize>)],
     fixed: &[usize],
     excluded: &[usize],
-) -> Result<Mesh, MeshError> {
+) -> Result<Mesh, ImportError> {
+    if positions.len() > MAX_IMPORT_SIZE {
+        return Err(ImportError::TooLarge { what: "vertices" });
+    }
+    if faces.len() > MAX_IMPORT_SIZE {
+        return Err(ImportError::TooLarge { what: "faces" });
+    }
+    if let Some(bad) = inconsistent_face(faces) {
+        return Err(ImportError::Orientation {
+            face: bad.face,
+            neighbour: bad.neighbour,
+            surface: faces[bad.face].0.clone(),
+        });
+    }
     let mut builder = MeshBuilder::new();
     let mut renumber: BTreeMap<usize, usize> = BTreeMap::new();
     for (name, poly) in faces {
@@ -139,7 +189,7 @@ pub(super) fn assemble(
             builder.flags_mut(id).excluded = true;
         }
     }
-    builder.build()
+    Ok(builder.build()?)
 }
 
 /// A 0-based vertex index from an OBJ reference (`7`, `7/1`, `7//2`, `-1`).

@@ -201,7 +201,7 @@ fn weld(parts: &[Part]) -> Result<Mesh, ImportError> {
             _ => fixed.extend(used),
         }
     }
-    Ok(assemble(&positions, &faces, &fixed, &excluded)?)
+    assemble(&positions, &faces, &fixed, &excluded)
 }
 
 #[cfg(test)]

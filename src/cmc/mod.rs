@@ -26,6 +26,7 @@ pub mod mesh;
 pub mod multilevel;
 pub mod nlp;
 pub mod octahedron;
+pub mod orientation;
 pub mod preview;
 pub mod remesh;
 pub mod spec;

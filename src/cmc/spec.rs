@@ -35,7 +35,16 @@ use super::octahedron::{self, OctahedronTopology};
 use super::volume::Region;
 use crate::error::InputError;
 use crate::solver::Options;
-use crate::spec::{Key, Source, validate_solver};
+use crate::spec::{Key, Source, is_positive as positive, validate_solver};
+
+/// Largest `resolution` and `[quality] coarse_resolution` (the face count is bounded too,
+/// [`MAX_FACES`]).
+pub const MAX_RESOLUTION: usize = 64;
+/// Most start-mesh faces a problem may ask for, estimated before the mesh is built
+/// ([`ShapeSpec::face_estimate`]).
+pub const MAX_FACES: usize = 500_000;
+/// Most corners of a regular polygon (`sides`).
+pub const MAX_SIDES: usize = 1_000;
 
 /// The whole file.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -121,11 +130,13 @@ pub enum ShapeSpec {
     /// The standard double bubble.
     DoubleBubble {
         /// The two volumes, m³.
+        #[serde(deserialize_with = "crate::spec::arrays::exact")]
         volumes: [f64; 2],
     },
     /// Three bubbles (wedges of a ball to start).
     TripleBubble {
         /// The three volumes, m³.
+        #[serde(deserialize_with = "crate::spec::arrays::exact")]
         volumes: [f64; 3],
     },
     /// Wire cube, with a central bubble or without (the central-square film).
@@ -195,6 +206,7 @@ pub enum ShapeSpec {
 #[serde(deny_unknown_fields)]
 pub struct RimToml {
     /// Centre (x, z), m.
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub centre: [f64; 2],
     /// Circumradius, m.
     pub radius: f64,
@@ -210,6 +222,7 @@ pub struct RimToml {
 #[serde(deny_unknown_fields)]
 pub struct PoleRingToml {
     /// Centre (x, z), m.
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub centre: [f64; 2],
     /// Ring radius, m.
     pub radius: f64,
@@ -229,6 +242,7 @@ pub struct PoleRingToml {
 #[serde(deny_unknown_fields)]
 pub struct PoleToml {
     /// Position (x, z), m.
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub at: [f64; 2],
     /// Height, m.
     pub height: f64,
@@ -243,6 +257,7 @@ pub struct TentToml {
     /// Surface name.
     pub name: String,
     /// Rim corners (x, y, z), m, counter-clockwise seen from above.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt_vec")]
     pub boundary: Option<Vec<[f64; 3]>>,
     /// Or a regular polygon rim.
     pub rim: Option<RimToml>,
@@ -261,6 +276,7 @@ pub struct CellToml {
     /// Surface name.
     pub name: String,
     /// Footprint corners (x, z), m, counter-clockwise seen from above.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt_vec")]
     pub footprint: Option<Vec<[f64; 2]>>,
     /// Or a regular polygon footprint (its `height` is ignored).
     pub circle: Option<RimToml>,
@@ -280,13 +296,50 @@ pub struct VolumeToml {
     /// Bounding surfaces; prefix `-` for surfaces whose normals point into the region.
     pub surfaces: Vec<String>,
     /// Reference point (m), on the fixed plane for regions closed by one; default origin.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact")]
     pub reference: [f64; 3],
     /// Volume, m³.
     pub volume: f64,
 }
 
 impl ShapeSpec {
+    /// An upper estimate of the start mesh's triangles at `resolution`, in floating point so
+    /// that absurd inputs cannot overflow: an icosphere has 20·4ʳ; the other generators grow
+    /// with r² per surface piece (a tent and each of its poles, a cell), at most 100·r² each,
+    /// times the aspect ratio where rows follow it (U wires: depth/width; quadrilateral tents
+    /// and cells: long/short side). Imports are bounded when read ([`super::import`]).
+    pub fn face_estimate(&self, resolution: usize) -> f64 {
+        let r = resolution as f64;
+        let pieces = match self {
+            ShapeSpec::Sphere { .. } => return 20.0 * 4f64.powf(r),
+            ShapeSpec::Obj { .. } | ShapeSpec::Gltf { .. } => return 0.0,
+            ShapeSpec::UWires { width, depth } => (depth / width).max(1.0),
+            ShapeSpec::Tents { tent } => tent
+                .iter()
+                .map(|t| {
+                    let ring_poles: f64 = t.pole_ring.iter().map(|p| p.count as f64).sum();
+                    let corners: Vec<[f64; 3]> = t.boundary.clone().unwrap_or_default();
+                    (1.0 + t.pole.len() as f64 + ring_poles) * quad_aspect(&corners)
+                })
+                .sum(),
+            ShapeSpec::Cells { cell } => cell
+                .iter()
+                .map(|c| {
+                    let corners: Vec<[f64; 3]> = (c.footprint.iter().flatten())
+                        .map(|&[x, z]| [x, 0.0, z])
+                        .collect();
+                    quad_aspect(&corners)
+                })
+                .sum(),
+            _ => 1.0,
+        };
+        // NaN (a zero width) counts as over every limit.
+        if pieces.is_nan() {
+            return f64::INFINITY;
+        }
+        100.0 * r * r * pieces
+    }
+
     /// The resolution used when the file gives none.
     pub fn default_resolution(&self) -> usize {
         match self {
@@ -317,10 +370,6 @@ pub fn parse(source: Source) -> Result<CmcSpec, InputError> {
     Ok(spec)
 }
 
-fn positive(v: f64) -> bool {
-    v > 0.0 && v.is_finite()
-}
-
 impl CmcSpec {
     fn err(&self, path: &[Key<'_>], message: impl Into<String>) -> InputError {
         self.source.error_at(path, message)
@@ -329,28 +378,23 @@ impl CmcSpec {
     fn validate(&self) -> Result<(), InputError> {
         let f = &self.file;
         validate_solver(&f.solver, &self.source, &[Key::Name("solver")])?;
-        if let Some(r) = f.resolution
-            && !(1..=64).contains(&r)
-        {
-            return Err(self.err(
-                &["resolution".into()],
-                format!("`resolution` must be between 1 and 64, got {r}"),
-            ));
+        let src = &self.source;
+        if let Some(r) = f.resolution {
+            src.count_in(&["resolution".into()], r, 1, MAX_RESOLUTION)?;
         }
-        if f.quality.flip_rounds > 10 {
-            return Err(self.err(
-                &["quality".into(), "flip_rounds".into()],
-                format!(
-                    "`flip_rounds` must be at most 10, got {}",
-                    f.quality.flip_rounds
-                ),
-            ));
-        }
-        if f.quality.coarse_resolution == Some(0) {
-            return Err(self.err(
+        src.count_in(
+            &["quality".into(), "flip_rounds".into()],
+            f.quality.flip_rounds,
+            0,
+            10,
+        )?;
+        if let Some(r) = f.quality.coarse_resolution {
+            src.count_in(
                 &["quality".into(), "coarse_resolution".into()],
-                "`coarse_resolution` must be at least 1",
-            ));
+                r,
+                1,
+                MAX_RESOLUTION,
+            )?;
         }
         if f.quality
             .refine
@@ -361,19 +405,12 @@ impl CmcSpec {
                 "`refine` must be a finite number ≥ 1 (a multiple of the median edge length)",
             ));
         }
-        if !(f.quality.tangential_weight >= 0.0 && f.quality.tangential_weight.is_finite()) {
-            return Err(self.err(
-                &["quality".into(), "tangential_weight".into()],
-                "`tangential_weight` must be a finite number ≥ 0",
-            ));
-        }
+        src.non_negative(
+            &["quality".into(), "tangential_weight".into()],
+            f.quality.tangential_weight,
+        )?;
         for (i, c) in f.chord.iter().enumerate() {
-            if !positive(c.length) {
-                return Err(self.err(
-                    &["chord".into(), i.into(), "length".into()],
-                    format!("chord length must be positive metres, got {}", c.length),
-                ));
-            }
+            src.positive(&["chord".into(), i.into(), "length".into()], c.length)?;
         }
         let shape = |key: &'static str| [Key::Name("shape"), Key::Name(key)];
         let check_volumes = |volumes: &[f64]| match volumes.iter().find(|v| !positive(**v)) {
@@ -383,17 +420,27 @@ impl CmcSpec {
             )),
             None => Ok(()),
         };
+        let resolution = f.resolution.unwrap_or_else(|| f.shape.default_resolution());
+        let sized_by: &[Key<'_>] = if f.resolution.is_some() {
+            &[Key::Name("resolution")]
+        } else {
+            &[Key::Name("shape")]
+        };
+        src.within_limit(
+            sized_by,
+            f.shape.face_estimate(resolution),
+            MAX_FACES as f64,
+            "start-mesh faces",
+        )?;
         match &f.shape {
-            ShapeSpec::Sphere { volume } => check_volumes(&[*volume])?,
+            ShapeSpec::Sphere { volume } => src.positive(&shape("volume"), *volume)?,
             ShapeSpec::DoubleBubble { volumes } => check_volumes(volumes)?,
             ShapeSpec::TripleBubble { volumes } => check_volumes(volumes)?,
             ShapeSpec::CubeFrame {
                 edge,
                 bubble_volume,
             } => {
-                if !positive(*edge) {
-                    return Err(self.err(&shape("edge"), "`edge` must be positive metres"));
-                }
+                src.positive(&shape("edge"), *edge)?;
                 if let Some(bubble_volume) = bubble_volume
                     && !(positive(*bubble_volume) && bubble_volume.cbrt() < 0.8 * edge)
                 {
@@ -405,11 +452,7 @@ impl CmcSpec {
             }
             ShapeSpec::Catenoid { radius, separation } => {
                 for (key, v) in [("radius", radius), ("separation", separation)] {
-                    if !positive(*v) {
-                        return Err(
-                            self.err(&shape(key), format!("`{key}` must be positive metres"))
-                        );
-                    }
+                    src.positive(&shape(key), *v)?;
                 }
                 if catenoid::exact_catenoid(*radius, *separation).is_none() {
                     return Err(self.err(
@@ -422,18 +465,10 @@ impl CmcSpec {
                     ));
                 }
             }
-            ShapeSpec::OctahedronFrame { edge, .. } => {
-                if !positive(*edge) {
-                    return Err(self.err(&shape("edge"), "`edge` must be positive metres"));
-                }
-            }
+            ShapeSpec::OctahedronFrame { edge, .. } => src.positive(&shape("edge"), *edge)?,
             ShapeSpec::UWires { width, depth } => {
                 for (key, v) in [("width", width), ("depth", depth)] {
-                    if !positive(*v) {
-                        return Err(
-                            self.err(&shape(key), format!("`{key}` must be positive metres"))
-                        );
-                    }
+                    src.positive(&shape(key), *v)?;
                 }
             }
             ShapeSpec::Tents { tent } => {
@@ -500,27 +535,21 @@ impl CmcSpec {
                     if let Some(fp) = &c.footprint {
                         self.check_polygon(fp, &at("footprint"))?;
                     }
-                    if !positive(c.volume) {
-                        return Err(self.err(&at("volume"), "`volume` must be positive m³"));
-                    }
-                    if c.height.is_some_and(|h| !positive(h)) {
-                        return Err(self.err(&at("height"), "`height` must be positive m"));
+                    src.positive(&at("volume"), c.volume)?;
+                    if let Some(h) = c.height {
+                        src.positive(&at("height"), h)?;
                     }
                 }
             }
             ShapeSpec::Obj { volume, .. } | ShapeSpec::Gltf { volume, .. } => {
                 for (i, v) in volume.iter().enumerate() {
-                    if !positive(v.volume) {
-                        return Err(self.err(
-                            &[
-                                Key::Name("shape"),
-                                Key::Name("volume"),
-                                Key::Index(i),
-                                Key::Name("volume"),
-                            ],
-                            "`volume` must be positive m³",
-                        ));
-                    }
+                    let at = [
+                        Key::Name("shape"),
+                        Key::Name("volume"),
+                        Key::Index(i),
+                        Key::Name("volume"),
+                    ];
+                    src.positive(&at, v.volume)?;
                 }
             }
         }
@@ -540,9 +569,12 @@ impl CmcSpec {
             ));
         }
         if let Some(r) = regular
-            && !(positive(r.radius) && r.sides >= 3 && r.height.is_finite())
+            && !(positive(r.radius) && (3..=MAX_SIDES).contains(&r.sides) && r.height.is_finite())
         {
-            return Err(self.err(path, "a regular polygon needs radius > 0 and sides ≥ 3"));
+            return Err(self.err(
+                path,
+                format!("a regular polygon needs radius > 0 and 3 to {MAX_SIDES} sides"),
+            ));
         }
         Ok(())
     }
@@ -703,20 +735,50 @@ impl CmcSpec {
                 })?;
                 boundary.push((s, sign));
             }
-            regions.push((
-                v.name.clone(),
-                Region {
-                    boundary,
-                    reference: Point::from(v.reference),
-                },
-                v.volume,
-            ));
+            let region = Region {
+                boundary,
+                reference: Point::from(v.reference),
+            };
+            let enclosed = region.volume(&mesh);
+            if enclosed.is_nan() || enclosed <= 0.0 {
+                return Err(self.err(
+                    &[
+                        Key::Name("shape"),
+                        Key::Name("volume"),
+                        Key::Index(i),
+                        Key::Name("surfaces"),
+                    ],
+                    format!(
+                        "the surfaces of volume `{}` enclose {enclosed:.3e} m³ as wound: their \
+                         normals must point out of the region (reverse the faces, or prefix a \
+                         surface whose normals point in with `-`)",
+                        v.name
+                    ),
+                ));
+            }
+            regions.push((v.name.clone(), region, v.volume));
         }
         Ok(Shape {
             mesh,
             volumes: regions,
         })
     }
+}
+
+/// The ratio of the longer to the shorter mean side of a quadrilateral (the generators grid it
+/// with rows along the short side); 1 for other polygons.
+fn quad_aspect(corners: &[[f64; 3]]) -> f64 {
+    if corners.len() != 4 {
+        return 1.0;
+    }
+    let len = |i: usize, j: usize| {
+        let d: f64 = (0..3)
+            .map(|k| (corners[i][k] - corners[j][k]).powi(2))
+            .sum();
+        d.sqrt()
+    };
+    let (u, v) = ((len(0, 1) + len(3, 2)) / 2.0, (len(1, 2) + len(0, 3)) / 2.0);
+    (u.max(v) / u.min(v)).max(1.0)
 }
 
 /// Corners of a regular polygon, counter-clockwise seen from above, first corner at +x.
@@ -783,5 +845,53 @@ fn cell_spec(c: &CellToml) -> CellSpec {
         footprint,
         height: c.height,
         volume: c.volume,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The face estimate that bounds a start mesh before it is built is an upper bound of the
+    /// real mesh for every shipped problem at resolutions 1 to 3.
+    #[test]
+    fn face_estimate_bounds_the_built_meshes() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/cmc");
+        let mut files: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+            .collect();
+        files.sort();
+        for file in files {
+            let spec = parse(Source::read(&file).unwrap()).unwrap();
+            for r in 1..=3 {
+                let (shape, _) = spec.build(r).unwrap();
+                let faces = shape.mesh.triangles().len() as f64;
+                let estimate = spec.file.shape.face_estimate(r);
+                if estimate > 0.0 {
+                    assert!(
+                        faces <= estimate,
+                        "{}: r{r} {faces} > {estimate}",
+                        file.display()
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn an_absurd_resolution_is_refused_before_building() {
+        let source = Source {
+            path: "s.toml".into(),
+            text: "resolution = 40\n[shape]\ntype = \"sphere\"\nvolume = 1.0\n".into(),
+        };
+        let e = parse(source).unwrap_err();
+        assert_eq!(e.position, Some((1, 1)));
+        assert!(
+            e.message
+                .starts_with("`resolution` would generate 2.4e25 start-mesh faces; limit 5e5"),
+            "{e}"
+        );
     }
 }

@@ -149,9 +149,10 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
     if let Some(k) = opts.trial
         && !(1..=count).contains(&k)
     {
-        return Err(Error::Runtime(format!(
-            "--trial {k}: {} has trials 1 to {count}",
-            problem.name
+        // A usage error (exit 2): the command line asks for a trial the file does not have.
+        return Err(Error::Input(InputError::whole_file(
+            Path::new(&problem.name),
+            format!("--trial {k}: the file has trials 1 to {count} (`[trials] count`)"),
         )));
     }
     let mut options = opts.solver_options(&problem.solver);

@@ -32,6 +32,7 @@ use std::collections::HashMap;
 
 use serde::Deserialize;
 
+use super::aba::Dynamics;
 use super::character::{
     Actuator, ContactParams, JointKind, Limits, Link, Model, Shape, Spring, shape_center,
     shape_inertia,
@@ -55,7 +56,10 @@ pub struct FileSpec {
     /// RK4 step (s).
     pub dt: f64,
     /// Gravity acceleration (m/s²); default `[0, −9.81, 0]`.
-    #[serde(default = "default_gravity")]
+    #[serde(
+        default = "default_gravity",
+        deserialize_with = "crate::spec::arrays::exact"
+    )]
     pub gravity: [f64; 3],
     /// Links, parents first.
     pub link: Vec<LinkSpec>,
@@ -146,16 +150,19 @@ pub struct LinkSpec {
     /// Mass (kg), positive.
     pub mass: f64,
     /// Centre of mass in link coordinates (m); default the shape's centre.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub com: Option<[f64; 3]>,
     /// Principal moments about the centre of mass along link axes `[Ixx, Iyy, Izz]` (kg·m²);
     /// default: the uniform solid `shape` of this mass.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub inertia: Option<[f64; 3]>,
     /// Products of inertia `[Ixy, Ixz, Iyz]` (kg·m²); default zero.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub inertia_products: Option<[f64; 3]>,
     /// Display shape (link coordinates, m).
     pub shape: ShapeSpec,
     /// Contact points in link coordinates (m).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_vec")]
     pub contacts: Vec<[f64; 3]>,
     /// The joint attaching this link to its parent (the root's: to the world).
     pub joint: JointSpec,
@@ -168,9 +175,10 @@ pub enum ShapeSpec {
     /// A box of full side lengths `size` (m) centred at `center` (m).
     Box {
         /// Side lengths (m).
+        #[serde(deserialize_with = "crate::spec::arrays::exact")]
         size: [f64; 3],
         /// Centre (m); default origin.
-        #[serde(default)]
+        #[serde(default, deserialize_with = "crate::spec::arrays::exact")]
         center: [f64; 3],
     },
     /// A capsule of `radius` (m) from `from` to `to` (m).
@@ -178,8 +186,10 @@ pub enum ShapeSpec {
         /// Radius (m).
         radius: f64,
         /// First end (m).
+        #[serde(deserialize_with = "crate::spec::arrays::exact")]
         from: [f64; 3],
         /// Second end (m).
+        #[serde(deserialize_with = "crate::spec::arrays::exact")]
         to: [f64; 3],
     },
     /// A sphere of `radius` (m) centred at `center`.
@@ -187,7 +197,7 @@ pub enum ShapeSpec {
         /// Radius (m).
         radius: f64,
         /// Centre (m); default origin.
-        #[serde(default)]
+        #[serde(default, deserialize_with = "crate::spec::arrays::exact")]
         center: [f64; 3],
     },
 }
@@ -235,11 +245,13 @@ pub struct JointSpec {
     /// Parent link's name; omitted for the root (attached to the world).
     pub parent: Option<String>,
     /// Joint frame origin in the parent's frame (m); default origin.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact")]
     pub origin: [f64; 3],
     /// Axis of a revolute or prismatic joint (parent frame; normalized); default `[0, 0, 1]`.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub axis: Option<[f64; 3]>,
     /// Coordinate limits `[lower, upper]` (rad or m) of a scalar joint.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub limits: Option<[f64; 2]>,
     /// Stiffness of the limit springs (N·m/rad or N/m); default 100.
     pub limit_stiffness: Option<f64>,
@@ -260,6 +272,7 @@ pub struct JointSpec {
     /// Planar root: initial rotation about z (rad).
     pub angle: Option<f64>,
     /// Floating root: initial orientation as a quaternion `[w, x, y, z]` (normalized).
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub orientation: Option<[f64; 4]>,
     /// Initial rate: scalar joints a number (rad/s or m/s); planar `[vx, vy]`, floating
     /// `[vx, vy, vz]` (m/s, world velocity of the link frame's origin).
@@ -278,6 +291,7 @@ pub struct ActuatorSpec {
     /// The link whose (scalar) joint it drives.
     pub joint: String,
     /// Force bounds `[lower, upper]` (N·m for revolute, N for prismatic joints).
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub bounds: [f64; 2],
     /// Starting guess: force at each control knot (N·m or N); default zeros.
     pub start: Option<Vec<f64>>,
@@ -382,6 +396,7 @@ pub struct TaskSpec {
     /// Link (point and airborne-free quantities) or joint (the link whose joint) name.
     pub link: Option<String>,
     /// Point on the link (m, link coordinates); default the link origin.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub point: Option<[f64; 3]>,
     /// World axis of a vector quantity.
     pub axis: Option<Axis>,
@@ -795,6 +810,7 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
     }
     let model = Model::new(links, actuators, file.gravity, contact);
     let initial = build_initial(source, &file, &model)?;
+    check_contacts_above_ground(source, &model, &initial)?;
 
     let knots = file.controls.knots.unwrap_or(6);
     if !(2..=100).contains(&knots) {
@@ -835,6 +851,12 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
             "`horizon` must be positive seconds (or give at least one task)".into(),
         ));
     }
+    source.within_limit(
+        &hat,
+        horizon / file.dt,
+        MAX_STEPS as f64,
+        "RK4 steps of `dt`",
+    )?;
     if last > horizon + 1e-12 {
         return Err(err(
             hat,
@@ -883,6 +905,50 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
         solver: file.solver,
         interrupt: Interrupt::new(),
     })
+}
+
+/// Most RK4 steps one rollout may take (task times and the horizon over `dt`): ten times the
+/// longest shipped motion, so that a `--check` or a solve never starts an hour-long rollout.
+pub const MAX_STEPS: usize = 50_000;
+
+/// How far, m, a contact point may start below the ground: the contact spring pushes
+/// exponentially harder with depth (e^{700·depth}), so a deeper start blows the simulation up.
+pub const MAX_START_PENETRATION: f64 = 0.01;
+
+/// Every contact point starts above the ground, or at most [`MAX_START_PENETRATION`] into it;
+/// the error points at the contact point and names its depth.
+fn check_contacts_above_ground(
+    source: &Source,
+    model: &Model,
+    initial: &State<f64>,
+) -> Result<(), InputError> {
+    let mut dynamics = Dynamics::<f64>::new(model);
+    dynamics.kinematics(model, &initial.q, &initial.v);
+    for (i, link) in model.links.iter().enumerate() {
+        for (c, point) in link.contacts.iter().enumerate() {
+            let y = dynamics.point_position(i, &Vec3::from_f64(*point)).0[1];
+            let depth = model.contact.ground - y;
+            if depth > MAX_START_PENETRATION || !depth.is_finite() {
+                return Err(source.error_at(
+                    &[
+                        Key::Name("link"),
+                        Key::Index(i),
+                        Key::Name("contacts"),
+                        Key::Index(c),
+                    ],
+                    format!(
+                        "contact point {} of link `{}` starts {depth:.3} m below the ground \
+                         (y = {} m) in the initial state; at most {MAX_START_PENETRATION} m \
+                         is allowed",
+                        c + 1,
+                        link.name,
+                        model.contact.ground
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Converts times (s) to RK4 steps of `dt`, `None` when not within 1e-9 of a step.
@@ -1269,6 +1335,7 @@ fn build_tasks(
                 ),
             ));
         }
+        source.within_limit(&at("time"), steps, MAX_STEPS as f64, "RK4 steps of `dt`")?;
         let step = steps.round() as usize;
         let (lower, upper) = match (t.value, t.min, t.max) {
             (Some(v), None, None) => (v, v),

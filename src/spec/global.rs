@@ -16,7 +16,7 @@
 
 use serde::Deserialize;
 
-use super::{Key, Source};
+use super::{Key, Source, is_positive as positive};
 use crate::error::InputError;
 use crate::solver::global::{AnnealOptions, GlobalMethod, MultistartOptions, StartGenerator};
 
@@ -90,10 +90,6 @@ const ANNEAL_KEYS: [&str; 13] = [
     "penalty_growth",
     "penalty_interval",
 ];
-
-fn positive(v: f64) -> bool {
-    v > 0.0 && v.is_finite()
-}
 
 impl GlobalSpec {
     /// The method asked for.
@@ -358,7 +354,7 @@ mod tests {
         let e = check("[global]\nstarts = 0\n").unwrap_err();
         assert_eq!(e.position, Some((2, 1)));
         let e = check("[global]\nperturbation = nan\n").unwrap_err();
-        assert!(e.message.contains("positive"), "{}", e.message);
+        assert!(e.message.contains("must be finite"), "{}", e.message);
     }
 
     #[test]

@@ -13,8 +13,8 @@ use super::model::{
     Beam, Joint, JointKind, Mirror, Objective, Obstacle, Settings, Structure, Support, Vec3,
 };
 use super::spec::{
-    Direction, GroundKind, JointKindSpec, LayerSource, MassKind, ObjectiveKind, ObstacleKind,
-    Region, SupportKind, TrussSpec,
+    Direction, GroundKind, JointKindSpec, LayerSource, MAX_JOINTS, MassKind, ObjectiveKind,
+    ObstacleKind, Region, SupportKind, TrussSpec,
 };
 use crate::error::InputError;
 use crate::spec::{Key, Source};
@@ -23,6 +23,26 @@ use crate::spec::{Key, Source};
 pub const DEFAULT_COMPRESSION_PENALTY: f64 = 2.0;
 /// Default steel density for the linear model, kg/m³.
 pub const STEEL_DENSITY: f64 = 7850.0;
+
+/// Most candidate beams (joints × `neighbours` + `extra`) a ground structure may have.
+pub const MAX_BEAMS: usize = 200_000;
+/// Largest distance, m, at which two joints count as one (smaller for structures under 1 km:
+/// 1e-9 of their size), whatever the structure's size: a far-away joint must not make the
+/// others coincide.
+pub const COINCIDENCE_TOLERANCE: f64 = 1e-6;
+
+/// The key whose value sizes the generated ground structure, named by the size-limit error.
+fn ground_size_key(spec: &TrussSpec) -> Vec<Key<'static>> {
+    use Key::Name as N;
+    let g = &spec.ground;
+    let key = match g.kind {
+        GroundKind::Layers => "layers",
+        GroundKind::Random => "count",
+        GroundKind::Lattice if g.margin.is_some() && g.min.is_none() => "margin",
+        GroundKind::Lattice | GroundKind::None => "spacing",
+    };
+    vec![N("ground"), N(key)]
+}
 
 /// The ground structure and settings built from a problem file.
 #[derive(Debug, Clone, PartialEq)]
@@ -41,7 +61,7 @@ pub fn build(spec: &TrussSpec, src: &Source, seed: u64) -> Result<Model, InputEr
     let cases = case_names(spec);
     let mut joints = user_joints(spec, cases.len());
     let scale = bounding_diagonal(&joints).max(spec.min_length);
-    let tol = 1e-9 * scale;
+    let tol = (1e-9 * scale).min(COINCIDENCE_TOLERANCE);
     check_distinct(spec, src, &joints, tol)?;
     let names = name_index(&joints);
     apply_load_cases(spec, src, &mut joints, &names)?;
@@ -74,6 +94,12 @@ pub fn build(spec: &TrussSpec, src: &Source, seed: u64) -> Result<Model, InputEr
 
     let user = joints.len();
     let placement = placement(spec, &joints, seed);
+    src.within_limit(
+        &ground_size_key(spec),
+        user as f64 + ground::candidate_count(&placement),
+        MAX_JOINTS as f64,
+        "joints (the user's and the ground structure's)",
+    )?;
     let points = ground::candidate_points(&placement, &joints);
     ground::add_free_joints(&mut joints, &points, &obstacles, cases.len(), tol);
 
@@ -96,6 +122,12 @@ pub fn build(spec: &TrussSpec, src: &Source, seed: u64) -> Result<Model, InputEr
     let forbidden = (spec.connect.forbidden.iter().enumerate())
         .map(|(i, p)| pair(p, "forbidden", i))
         .collect::<Result<BTreeSet<_>, _>>()?;
+    src.within_limit(
+        &[N("connect"), N("neighbours")],
+        (joints.len() * spec.connect.neighbours + extra.len()) as f64,
+        MAX_BEAMS as f64,
+        "candidate beams",
+    )?;
     let beams = ground::connect(
         &joints,
         spec.connect.neighbours,
@@ -211,7 +243,8 @@ fn check_distinct(
             return Err(src.error_at(
                 &[N("joint"), I(spec_entry(spec, i)), N("at")],
                 format!(
-                    "two joints at the same position {:?} (joint entries {} and {})",
+                    "two joints at the same position {:?} (joint entries {} and {} are within \
+                     {tol:.1e} m)",
                     j.position.as_slice(),
                     spec_entry(spec, k) + 1,
                     spec_entry(spec, i) + 1

@@ -83,7 +83,26 @@ pub enum Placement {
     None,
 }
 
-/// Candidate free-joint positions for `placement` (before skipping near-duplicates and obstacles).
+/// How many candidate points `placement` asks for, counted in floating point so that absurd
+/// sizes cannot overflow: the caller bounds it before [`candidate_points`] allocates them.
+pub fn candidate_count(placement: &Placement) -> f64 {
+    match placement {
+        Placement::Layers {
+            sources, layers, ..
+        } => sources.len() as f64 * *layers as f64,
+        Placement::Lattice { lo, hi, steps } => lattice_counts(lo, hi, steps).iter().product(),
+        Placement::RandomBox { count, .. } | Placement::RandomBall { count, .. } => *count as f64,
+        Placement::None => 0.0,
+    }
+}
+
+/// Lattice points per axis over `lo..hi` with `steps`, m.
+fn lattice_counts(lo: &Vec3, hi: &Vec3, steps: &[f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|k| ((hi[k] - lo[k]) / steps[k] + 1e-9).floor() + 1.0)
+}
+
+/// Candidate free-joint positions for `placement` (before skipping near-duplicates and obstacles);
+/// its size, [`candidate_count`], must have been bounded.
 pub fn candidate_points(placement: &Placement, joints: &[Joint]) -> Vec<Vec3> {
     match placement {
         Placement::Layers {
@@ -98,9 +117,7 @@ pub fn candidate_points(placement: &Placement, joints: &[Joint]) -> Vec<Vec3> {
             })
             .collect(),
         Placement::Lattice { lo, hi, steps } => {
-            let n: Vec<usize> = (0..3)
-                .map(|k| ((hi[k] - lo[k]) / steps[k] + 1e-9).floor() as usize + 1)
-                .collect();
+            let n = lattice_counts(lo, hi, steps).map(|c| c as usize);
             let mut points = Vec::with_capacity(n[0] * n[1] * n[2]);
             for i in 0..n[0] {
                 for j in 0..n[1] {

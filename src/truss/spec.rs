@@ -36,6 +36,14 @@ use crate::error::InputError;
 use crate::solver::Options;
 use crate::spec::{Key, Source, validate_solver};
 
+/// Most joints a problem may have: the user's joints with rows expanded plus the generated
+/// ground structure (the k-nearest connection costs O(n² log n)).
+pub const MAX_JOINTS: usize = 5_000;
+/// Largest `[connect] neighbours`.
+pub const MAX_NEIGHBOURS: usize = 64;
+/// Largest `[rounds] count` (and `--rounds`).
+pub const MAX_ROUNDS: usize = 100;
+
 /// The whole problem file.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -199,8 +207,10 @@ pub struct JointSpec {
     /// Anchor, load or free.
     pub kind: JointKindSpec,
     /// Position, m (the first of a row).
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub at: [f64; 3],
     /// End of a row, m.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub to: Option<[f64; 3]>,
     /// Number of joints in the row (≥ 2 with `to`).
     pub count: Option<usize>,
@@ -209,8 +219,10 @@ pub struct JointSpec {
     /// Anchor support type (default pinned).
     pub support: Option<SupportKind>,
     /// Roller reaction directions (one or two).
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt_vec")]
     pub reactions: Option<Vec<[f64; 3]>>,
     /// External force on a load joint, N.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub force: Option<[f64; 3]>,
     /// External mass on a load joint, kg (its weight acts downward).
     pub mass: Option<f64>,
@@ -262,8 +274,10 @@ pub struct GroundSpec {
     /// Layers: which joints are copied (default "loads").
     pub from: Option<LayerSource>,
     /// Lattice or random box: lower corner, m.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub min: Option<[f64; 3]>,
     /// Lattice or random box: upper corner, m.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub max: Option<[f64; 3]>,
     /// Growth of the default box beyond the user joints, m (default 0).
     pub margin: Option<f64>,
@@ -272,6 +286,7 @@ pub struct GroundSpec {
     /// Random: "box" (default) or "sphere".
     pub region: Option<Region>,
     /// Random sphere centre, m.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub center: Option<[f64; 3]>,
     /// Random sphere radius, m.
     pub radius: Option<f64>,
@@ -352,10 +367,10 @@ pub struct ConnectSpec {
     #[serde(default = "default_neighbours")]
     pub neighbours: usize,
     /// Extra beams by joint name.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_vec")]
     pub extra: Vec<[String; 2]>,
     /// Pairs never joined, by joint name.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_vec")]
     pub forbidden: Vec<[String; 2]>,
 }
 
@@ -378,8 +393,10 @@ fn default_neighbours() -> usize {
 #[serde(deny_unknown_fields)]
 pub struct MirrorSpec {
     /// A point on the plane, m.
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub point: [f64; 3],
     /// Plane normal (any length > 0).
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub normal: [f64; 3],
 }
 
@@ -390,10 +407,13 @@ pub struct ObstacleSpec {
     /// "half_space" or "sphere".
     pub kind: ObstacleKind,
     /// Half-space: a point on the plane, m.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub point: Option<[f64; 3]>,
     /// Half-space: normal pointing into the allowed side.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub normal: Option<[f64; 3]>,
     /// Sphere centre, m.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub center: Option<[f64; 3]>,
     /// Sphere radius, m.
     pub radius: Option<f64>,
@@ -434,6 +454,7 @@ pub struct CaseLoadSpec {
     /// Name of a load joint.
     pub joint: String,
     /// Force, N.
+    #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub force: Option<[f64; 3]>,
     /// Mass, kg (weight downward).
     pub mass: Option<f64>,
@@ -481,25 +502,15 @@ fn default_merge_tolerance() -> f64 {
 pub fn validate(spec: &TrussSpec, src: &Source) -> Result<(), InputError> {
     use Key::{Index as I, Name as N};
     let err = |path: &[Key<'_>], msg: String| src.error_at(path, msg);
-    let positive = |v: f64, path: &[Key<'_>], what: &str| {
-        if v.is_finite() && v > 0.0 {
-            Ok(())
-        } else {
-            Err(err(
-                path,
-                format!("`{what}` must be positive and finite, got {v}"),
-            ))
-        }
-    };
     if let Some(name) = &spec.name
         && name.trim().is_empty()
     {
         return Err(err(&[N("name")], "`name` must not be empty".into()));
     }
-    positive(spec.max_force, &[N("max_force")], "max_force")?;
-    positive(spec.min_length, &[N("min_length")], "min_length")?;
+    src.positive(&[N("max_force")], spec.max_force)?;
+    src.positive(&[N("min_length")], spec.min_length)?;
     if let Some(l) = spec.max_length {
-        positive(l, &[N("max_length")], "max_length")?;
+        src.positive(&[N("max_length")], l)?;
         if l <= spec.min_length {
             return Err(err(
                 &[N("max_length")],
@@ -512,7 +523,7 @@ pub fn validate(spec: &TrussSpec, src: &Source) -> Result<(), InputError> {
     }
     match (spec.objective, spec.compression_penalty) {
         (ObjectiveKind::MassTensionPreference, Some(p)) => {
-            positive(p, &[N("compression_penalty")], "compression_penalty")?
+            src.positive(&[N("compression_penalty")], p)?
         }
         (ObjectiveKind::MassTensionPreference, None) => {}
         (_, Some(_)) => {
@@ -539,12 +550,12 @@ pub fn validate(spec: &TrussSpec, src: &Source) -> Result<(), InputError> {
     validate_mass(&spec.mass, src)?;
     validate_joints(spec, src)?;
     validate_ground(&spec.ground, src)?;
-    if spec.connect.neighbours == 0 {
-        return Err(err(
-            &[N("connect"), N("neighbours")],
-            "`neighbours` must be at least 1".into(),
-        ));
-    }
+    src.count_in(
+        &[N("connect"), N("neighbours")],
+        spec.connect.neighbours,
+        1,
+        MAX_NEIGHBOURS,
+    )?;
     for (i, m) in spec.symmetry.iter().enumerate() {
         finite3(&m.point, src, &[N("symmetry"), I(i), N("point")])?;
         unit(&m.normal, src, &[N("symmetry"), I(i), N("normal")])?;
@@ -593,16 +604,11 @@ pub fn validate(spec: &TrussSpec, src: &Source) -> Result<(), InputError> {
             finite3(c, src, &at("center"))?;
         }
         if let Some(r) = o.radius {
-            positive(r, &at("radius"), "radius")?;
+            src.positive(&at("radius"), r)?;
         }
     }
     for (i, case) in spec.load_cases.iter().enumerate() {
-        if !case.factor.is_finite() {
-            return Err(err(
-                &[N("load_case"), I(i), N("factor")],
-                "`factor` must be finite".into(),
-            ));
-        }
+        src.finite(&[N("load_case"), I(i), N("factor")], case.factor)?;
         for (k, load) in case.loads.iter().enumerate() {
             let at = [N("load_case"), I(i), N("loads"), I(k)];
             if load.force.is_none() && load.mass.is_none() {
@@ -611,10 +617,8 @@ pub fn validate(spec: &TrussSpec, src: &Source) -> Result<(), InputError> {
             if let Some(f) = &load.force {
                 finite3(f, src, &at)?;
             }
-            if let Some(m) = load.mass
-                && !(m.is_finite() && m >= 0.0)
-            {
-                return Err(err(&at, format!("`mass` must be ≥ 0, got {m}")));
+            if let Some(m) = load.mass {
+                src.non_negative(&[&at[..], &[N("mass")]].concat(), m)?;
             }
         }
     }
@@ -625,18 +629,8 @@ pub fn validate(spec: &TrussSpec, src: &Source) -> Result<(), InputError> {
             format!("`prune` must be in [0, 1), got {}", r.prune),
         ));
     }
-    if !(r.merge_tolerance.is_finite() && r.merge_tolerance >= 0.0) {
-        return Err(err(
-            &[N("rounds"), N("merge_tolerance")],
-            format!("`merge_tolerance` must be ≥ 0, got {}", r.merge_tolerance),
-        ));
-    }
-    if r.count == 0 {
-        return Err(err(
-            &[N("rounds"), N("count")],
-            "`count` must be at least 1".into(),
-        ));
-    }
+    src.non_negative(&[N("rounds"), N("merge_tolerance")], r.merge_tolerance)?;
+    src.count_in(&[N("rounds"), N("count")], r.count, 1, MAX_ROUNDS)?;
     validate_solver(&spec.solver, src, &[N("solver")])
 }
 
@@ -667,13 +661,8 @@ fn validate_mass(m: &MassSpec, src: &Source) -> Result<(), InputError> {
         } else {
             value(k)
         };
-        if let Some(v) = v
-            && !(v.is_finite() && v > 0.0)
-        {
-            return Err(src.error_at(
-                &[N("mass"), N(k)],
-                format!("`{k}` must be positive and finite, got {v}"),
-            ));
+        if let Some(v) = v {
+            src.positive(&[N("mass"), N(k)], v)?;
         }
     }
     if m.model == MassKind::Linear && (m.sigma_t.is_none() || m.sigma_c.is_none()) {
@@ -687,16 +676,19 @@ fn validate_mass(m: &MassSpec, src: &Source) -> Result<(), InputError> {
 
 fn validate_joints(spec: &TrussSpec, src: &Source) -> Result<(), InputError> {
     use Key::{Index as I, Name as N};
+    let mut total = 0.0;
     for (i, j) in spec.joints.iter().enumerate() {
         let at = |k: &'static str| [N("joint"), I(i), N(k)];
         let here = [N("joint"), I(i)];
         finite3(&j.at, src, &at("at"))?;
+        total += j.count.unwrap_or(1) as f64;
         match (j.to, j.count) {
             (Some(to), Some(n)) => {
                 finite3(&to, src, &at("to"))?;
                 if n < 2 {
                     return Err(src.error_at(&at("count"), "a row needs `count` ≥ 2"));
                 }
+                src.within_limit(&at("count"), total, MAX_JOINTS as f64, "joints")?;
             }
             (None, None) => {}
             (Some(_), None) => {
@@ -733,10 +725,8 @@ fn validate_joints(spec: &TrussSpec, src: &Source) -> Result<(), InputError> {
                 ));
             }
         }
-        if let Some(m) = j.mass
-            && !(m.is_finite() && m >= 0.0)
-        {
-            return Err(src.error_at(&at("mass"), format!("`mass` must be ≥ 0, got {m}")));
+        if let Some(m) = j.mass {
+            src.non_negative(&at("mass"), m)?;
         }
         let roller = j.support == Some(SupportKind::Roller);
         match (&j.reactions, roller) {
@@ -811,21 +801,17 @@ fn validate_ground(g: &GroundSpec, src: &Source) -> Result<(), InputError> {
     }
     if let Some(s) = g.spacing {
         for h in s.steps() {
-            if !(h.is_finite() && h > 0.0) {
-                return Err(src.error_at(&at("spacing"), format!("`spacing` must be > 0, got {h}")));
-            }
+            src.positive(&at("spacing"), h)?;
         }
     }
     if matches!(g.kind, GroundKind::Layers | GroundKind::Lattice) && g.spacing.is_none() {
         return Err(src.error_at(&[N("ground")], "this ground kind needs `spacing`"));
     }
-    if g.layers == Some(0) {
-        return Err(src.error_at(&at("layers"), "`layers` must be at least 1"));
+    if let Some(n) = g.layers {
+        src.at_least(&at("layers"), n, 1)?;
     }
-    if let Some(m) = g.margin
-        && !(m.is_finite() && m >= 0.0)
-    {
-        return Err(src.error_at(&at("margin"), format!("`margin` must be ≥ 0, got {m}")));
+    if let Some(m) = g.margin {
+        src.non_negative(&at("margin"), m)?;
     }
     if let (Some(lo), Some(hi)) = (g.min, g.max) {
         finite3(&lo, src, &at("min"))?;
@@ -847,9 +833,7 @@ fn validate_ground(g: &GroundSpec, src: &Source) -> Result<(), InputError> {
             match (g.center, g.radius) {
                 (Some(c), Some(r)) => {
                     finite3(&c, src, &at("center"))?;
-                    if !(r.is_finite() && r > 0.0) {
-                        return Err(src.error_at(&at("radius"), "`radius` must be > 0"));
-                    }
+                    src.positive(&at("radius"), r)?;
                 }
                 _ => {
                     return Err(src.error_at(

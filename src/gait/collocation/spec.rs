@@ -31,7 +31,7 @@ use serde::Deserialize;
 
 use crate::error::InputError;
 use crate::solver::Options;
-use crate::spec::{Key, Source, validate_solver};
+use crate::spec::{Key, Source, is_positive as positive, validate_solver};
 
 /// The whole file.
 #[derive(Debug, Clone, Deserialize)]
@@ -84,8 +84,10 @@ fn default_gravity() -> f64 {
 #[serde(deny_unknown_fields)]
 pub struct StartSpec {
     /// m.
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub position: [f64; 2],
     /// m/s.
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub velocity: [f64; 2],
 }
 
@@ -94,6 +96,7 @@ pub struct StartSpec {
 #[serde(deny_unknown_fields)]
 pub struct EndSpec {
     /// m.
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub position: [f64; 2],
 }
 
@@ -204,10 +207,6 @@ pub fn selects_collocation(source: &Source) -> bool {
 pub fn load_source(source: &Source) -> Result<Problem, InputError> {
     let file: FileSpec = source.parse()?;
     build(source, file)
-}
-
-fn positive(v: f64) -> bool {
-    v > 0.0 && v.is_finite()
 }
 
 fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
