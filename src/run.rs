@@ -1,4 +1,4 @@
-//! The dispatcher: a problem kind's [`Application`] runs its file. The one entry point shared
+//! The dispatcher: a problem kind's [`Application`](crate::application::Application) runs its file. The one entry point shared
 //! by the command line and the golden tests; the shared run types live in
 //! [`crate::outcome`], the shared load → check → run contract in [`crate::application`].
 

@@ -73,7 +73,7 @@ impl Source {
     }
 
     /// Deserializes the whole file into `T`, mapping toml/serde errors to positioned messages;
-    /// then rejects every float that is not finite, wherever it sits ([`check`]).
+    /// then rejects every float that is not finite, wherever it sits (`check`).
     pub fn parse<T: DeserializeOwned>(&self) -> Result<T, InputError> {
         let parsed = toml::from_str::<T>(&self.text).map_err(|e| self.translate(&e))?;
         check::reject_non_finite(self)?;

@@ -13,7 +13,7 @@
 //! - faces in a group whose name starts with `fixed` are not films: their vertices are fixed;
 //! - vertices that end up in no film are dropped.
 //!
-//! Checks shared with the glTF reader ([`assemble`]): at most [`MAX_IMPORT_SIZE`] vertices and
+//! Checks shared with the glTF reader (`assemble`): at most [`MAX_IMPORT_SIZE`] vertices and
 //! as many faces, and every surface consistently wound ([`super::orientation`]): a face wound
 //! against its neighbours is an error naming it (reorienting silently would hide a modelling
 //! mistake, and which side is "out" is the modeller's choice, checked against the volumes'

@@ -100,7 +100,7 @@ impl Axis {
     }
 }
 
-/// The plot of `log` for `problem`, the objective panel titled `objective` (e.g. "mass [kg]").
+/// The plot of `log` for `problem`, the objective panel titled `objective` (e.g. "mass \[kg\]").
 pub fn convergence_svg(problem: &str, objective: &str, log: &[IterationRecord]) -> String {
     let panels: [(String, Vec<f64>, Axis); 3] = {
         let column = |f: fn(&IterationRecord) -> f64| log.iter().map(f).collect::<Vec<f64>>();

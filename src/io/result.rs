@@ -98,7 +98,7 @@ pub fn iterations_csv(file_name: &str, log: &[IterationRecord]) -> Artifact {
 }
 
 /// The run's iteration files: `iterations.csv` and `convergence.svg` (see [`super::plot`]),
-/// the objective panel named after the headline ("mass [kg]").
+/// the objective panel named after the headline ("mass \[kg\]").
 pub fn iteration_files(
     problem: &str,
     headline: &Headline,
