@@ -289,8 +289,9 @@ mod tests {
         assert_eq!(c.shift, 0.0);
         assert!(c.row_weight > 0.0);
         assert!(c.matrix.cholesky().is_some());
-        // Indefinite on the null space of the row: shifted on top of the augmentation, by
-        // less than the shift of h alone.
+        // Indefinite on the null space of the row: shifted there only (the row's own direction
+        // keeps its curvature −2, lifted by the augmentation), by less than the shift of h
+        // alone.
         let h3 = assemble_dense(3, &[0, 1, 2], &[0, 1, 2], &[1.0, -2.0, -0.01]);
         let rows3 = DMatrix::from_row_slice(1, 3, &[0.0, 1.0, 0.0]);
         // The schedule starts at δ₀ = 1 and falls by 1/3 per call while it suffices: on top of
@@ -298,8 +299,9 @@ mod tests {
         let (mut on_rows, mut alone) = (InertiaShift::default(), InertiaShift::default());
         for _ in 0..4 {
             let c = on_rows.convexify_with_rows(&h3, &rows3, 1).unwrap();
+            assert_eq!(c.row_weight, 1e2 * 2.0);
+            assert_eq!(c.matrix[(1, 1)], -2.0 + 1e2 * 2.0);
             assert!(c.matrix.cholesky().is_some());
-            assert_eq!(c.row_weight, FALLBACK_GAMMA * 2.0);
             alone.convexify(&h3).unwrap();
         }
         assert!(on_rows.last() < 0.05 && on_rows.last() > 0.0);
@@ -310,7 +312,8 @@ mod tests {
     fn the_shift_follows_the_reduced_hessian_despite_a_strong_coupling_across_the_row() {
         // h = [[0, 100], [100, −0.01]] with the row (1, 0): the reduced Hessian is −0.01, but
         // the coupling 100 across the row leaks through the term γ·e₀e₀ᵀ as −100²/γ, so that
-        // with γ = 1e2 a shift of ~1e2 was needed; with γ = FALLBACK_GAMMA it is 0.01 + 1e4/γ.
+        // with γ = 1e2 a shift of ~1e2 was needed; with γ = PROJECTED_GAMMA it is
+        // 0.01 + 1e4/γ.
         let h = assemble_dense(2, &[0, 1, 1], &[0, 0, 1], &[0.0, 100.0, -0.01]);
         let rows = DMatrix::from_row_slice(1, 2, &[1.0, 0.0]);
         let mut shift = InertiaShift::default();
@@ -320,7 +323,7 @@ mod tests {
         }
         // The schedule settles within its factor 8 of the least shift, 0.01 + 1e4/γ.
         // (Hessian scale 1, so shifts are absolute here.)
-        let least = 0.01 + 1e4 / FALLBACK_GAMMA;
+        let least = 0.01 + 1e4 / PROJECTED_GAMMA;
         let last = shift.last();
         assert!(last >= least && last < 8.0 * least, "{last} vs {least}");
     }
