@@ -31,22 +31,6 @@
 //! instead of Optimal. Inequality rows are left out of that base: an inequality the QP should
 //! leave would be held by the γ term (with them HS108 ends at another KKT point).
 //!
-//! When no γ alone succeeds, the shift is first confined to the null space of all those rows
-//! (equalities and expected-active inequalities): `H + δ(I − QQᵀ) + γ·Σₖuₖuₖᵀ`, Q an
-//! orthonormal basis of the rows' span (a thin QR of the unit rows, O(n·k²) per iteration),
-//! with the same δ schedule and γ up to [`PROJECTED_GAMMA`]. On the QP's feasible set of those
-//! rows the QP step is then the Newton step of the reduced Hessian shifted by δ, and no step
-//! across an active row is shortened. A shift of H alone (or of the reduced Hessian over the
-//! equalities only) also damps the directions the active inequalities block, every iteration:
-//! HS114 (variables from 1.5 to 16,000, a bilinear objective) crawled to its iteration limit
-//! with shifts of 0.05–0.7 and steps of 0.01–0.3 where x₂ must move 3,800; with the projected
-//! shift it ends Optimal in 18 iterations. Tried and not kept (docs/notes/solver.md): a
-//! diagonal metric `Dⱼ = |Hⱼⱼ| + Σᵢ Aᵢⱼ²` for the shift (unit-invariant, but HS114 took 274
-//! iterations and a catenoid film 70× longer), and flipping only the negative eigenvalues of
-//! the reduced Hessian (HS114 in 11 iterations, but near-zero tangential curvature of mesh
-//! vertices left undamped: catenoid 4× slower, its steps cut by the line search).
-//! Only when no projected shift works does the fallback below run.
-//!
 //! Multipliers: the QP with `H + γΣuₖuₖᵀ` returns row multipliers offset by `γ·uₖᵀd/‖aₖ‖`,
 //! nonzero where the linearized residual is (see [`Convexified::row_weight`]); the SQP adds
 //! them back, or γ ≫ 1 times an infeasibility would enter the next Hessian and the penalty
@@ -112,10 +96,6 @@ const DELTA_MAX: f64 = 1e40;
 const PIVOT_MIN: f64 = 1e-10;
 /// Augmentation weights tried, relative to the Hessian scale over the row scale.
 const GAMMAS: [f64; 3] = [1.0, 1e2, 1e4];
-/// Largest augmentation weight of the projected shift (relative), tried after [`GAMMAS`]: the
-/// shift lifts the null space, so the weight only has to overcome the coupling across the rows
-/// (see the module header), which grows as the rows' smallest singular value falls.
-const PROJECTED_GAMMA: f64 = 1e6;
 /// Augmentation weight under the shift when none of `GAMMAS` suffices (relative; see the
 /// module header for why it is large, and not larger).
 pub const FALLBACK_GAMMA: f64 = 1e4;
@@ -134,46 +114,6 @@ fn safely_definite(h: &DMatrix<f64>, scale: f64) -> bool {
 }
 
 impl InertiaShift {
-    /// `h + δ·(I − QQᵀ) + γ·Σₖ uₖuₖᵀ` with Q an orthonormal basis of the span of the unit rows
-    /// `unit` (equalities and expected-active inequalities): the shift of the δ schedule acts
-    /// on their null space only, where the second-order conditions ask for positive
-    /// curvature, and γ ∈ [`GAMMAS`] or [`PROJECTED_GAMMA`] (relative to `scale`) makes the
-    /// whole positive definite across the rows. None when no δ up to `DELTA_MAX` works.
-    fn projected_shift(
-        &mut self,
-        h: &DMatrix<f64>,
-        unit: &DMatrix<f64>,
-        scale: f64,
-    ) -> Option<Convexified> {
-        let n = h.nrows();
-        let q = unit.transpose().qr().q();
-        let projector = DMatrix::identity(n, n) - &q * q.transpose();
-        let gram = unit.tr_mul(unit);
-        let first = self.last == 0.0;
-        let mut delta = if first {
-            DELTA_0
-        } else {
-            (self.last / 3.0).max(DELTA_MIN)
-        };
-        while delta <= DELTA_MAX {
-            let shifted = h + &projector * (delta * scale);
-            for g in GAMMAS.iter().chain(&[PROJECTED_GAMMA]) {
-                let augmented = &shifted + &gram * (g * scale);
-                if safely_definite(&augmented, scale) {
-                    self.last = delta;
-                    return Some(Convexified {
-                        matrix: augmented,
-                        shift: delta,
-                        row_weight: g * scale,
-                        weighted_rows: unit.nrows(),
-                    });
-                }
-            }
-            delta *= if first { 100.0 } else { 8.0 };
-        }
-        None
-    }
-
     /// Last δ used (0 when none was needed).
     pub fn last(&self) -> f64 {
         self.last
@@ -229,9 +169,6 @@ impl InertiaShift {
                         weighted_rows: rows.nrows(),
                     });
                 }
-            }
-            if let Some(c) = self.projected_shift(h, &unit, scale) {
-                return Some(c);
             }
             if equalities > 0 {
                 let eq = unit.rows(0, equalities);
@@ -289,9 +226,8 @@ mod tests {
         assert_eq!(c.shift, 0.0);
         assert!(c.row_weight > 0.0);
         assert!(c.matrix.cholesky().is_some());
-        // Indefinite on the null space of the row: shifted there only (the row's own direction
-        // keeps its curvature −2, lifted by the augmentation), by less than the shift of h
-        // alone.
+        // Indefinite on the null space of the row: shifted on top of the augmentation, by
+        // less than the shift of h alone.
         let h3 = assemble_dense(3, &[0, 1, 2], &[0, 1, 2], &[1.0, -2.0, -0.01]);
         let rows3 = DMatrix::from_row_slice(1, 3, &[0.0, 1.0, 0.0]);
         // The schedule starts at δ₀ = 1 and falls by 1/3 per call while it suffices: on top of
@@ -299,9 +235,8 @@ mod tests {
         let (mut on_rows, mut alone) = (InertiaShift::default(), InertiaShift::default());
         for _ in 0..4 {
             let c = on_rows.convexify_with_rows(&h3, &rows3, 1).unwrap();
-            assert_eq!(c.row_weight, 1e2 * 2.0);
-            assert_eq!(c.matrix[(1, 1)], -2.0 + 1e2 * 2.0);
             assert!(c.matrix.cholesky().is_some());
+            assert_eq!(c.row_weight, FALLBACK_GAMMA * 2.0);
             alone.convexify(&h3).unwrap();
         }
         assert!(on_rows.last() < 0.05 && on_rows.last() > 0.0);
@@ -312,8 +247,7 @@ mod tests {
     fn the_shift_follows_the_reduced_hessian_despite_a_strong_coupling_across_the_row() {
         // h = [[0, 100], [100, −0.01]] with the row (1, 0): the reduced Hessian is −0.01, but
         // the coupling 100 across the row leaks through the term γ·e₀e₀ᵀ as −100²/γ, so that
-        // with γ = 1e2 a shift of ~1e2 was needed; with γ = PROJECTED_GAMMA it is
-        // 0.01 + 1e4/γ.
+        // with γ = 1e2 a shift of ~1e2 was needed; with γ = FALLBACK_GAMMA it is 0.01 + 1e4/γ.
         let h = assemble_dense(2, &[0, 1, 1], &[0, 0, 1], &[0.0, 100.0, -0.01]);
         let rows = DMatrix::from_row_slice(1, 2, &[1.0, 0.0]);
         let mut shift = InertiaShift::default();
@@ -323,7 +257,7 @@ mod tests {
         }
         // The schedule settles within its factor 8 of the least shift, 0.01 + 1e4/γ.
         // (Hessian scale 1, so shifts are absolute here.)
-        let least = 0.01 + 1e4 / PROJECTED_GAMMA;
+        let least = 0.01 + 1e4 / FALLBACK_GAMMA;
         let last = shift.last();
         assert!(last >= least && last < 8.0 * least, "{last} vs {least}");
     }
