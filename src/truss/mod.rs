@@ -16,6 +16,7 @@ pub mod geometry;
 pub mod ground;
 pub mod lp;
 pub mod mass;
+pub mod member_adding;
 pub mod model;
 pub mod nlp;
 pub mod plastic;
@@ -147,12 +148,13 @@ impl Problem {
             };
             return Ok((self.nlp(model, seed)?, json!({ "method": method })));
         }
-        let layout = start::layout_start(&model.structure, &model.settings)
+        let layout = start::layout_start(&model.structure, &model.settings, model.full.as_ref())
             .map_err(|e| e.to_string())
             .and_then(|layout| {
                 let report = json!({
                     "method": "layout",
-                    "lp_cost": layout.cost,
+                    "lp_cost": layout.lp.cost,
+                    "lp": layout.lp,
                     "dropped_beams": layout.dropped_beams,
                     "dropped_joints": layout.dropped_joints,
                 });

@@ -274,7 +274,7 @@ fn with_linear_mass_the_layout_start_balances_self_weight() {
     let mut settings = p.model().settings.clone();
     settings.mass = super::mass::MassModel::linear(2.5e8, 2.5e8, 7850.0);
     assert!(settings.self_weight);
-    let start = super::start::layout_start(&p.model().structure, &settings).unwrap();
+    let start = super::start::layout_start(&p.model().structure, &settings, None).unwrap();
     let nlp = super::nlp::TrussNlp::with_parts(
         start.structure,
         settings.clone(),
@@ -288,7 +288,7 @@ fn with_linear_mass_the_layout_start_balances_self_weight() {
     assert!(residual < 1e-8, "relative residual {residual:e}");
     // Without self-weight in the LP the same start is off by the beams' weight.
     settings.self_weight = false;
-    let light = super::start::layout_start(&p.model().structure, &settings).unwrap();
+    let light = super::start::layout_start(&p.model().structure, &settings, None).unwrap();
     settings.self_weight = true;
     let nlp =
         super::nlp::TrussNlp::with_parts(light.structure, settings, light.forces, light.parts)

@@ -23,7 +23,7 @@
 //!           "pinned" | "roller", reactions = [[dx, dy, dz], ...]; loads: force = [..] N,
 //!           mass = kg (weight M·g)
 //! [ground] kind = "layers" | "lattice" | "random" | "none" (see [`GroundSpec`])
-//! [connect] neighbours = 8, extra = [["a", "b"]], forbidden = [["a", "b"]]
+//! [connect] neighbours = 8, extra = [["a", "b"]], forbidden = [["a", "b"]], full = false
 //! [[symmetry]] point, normal       [[obstacle]] kind = "half_space" | "sphere"
 //! [[load_case]] name, factor (on the joints' own loads), loads = [{ joint, force, mass }]
 //! [rounds] count, prune, remove_crossings, merge_tolerance
@@ -372,6 +372,11 @@ pub struct ConnectSpec {
     /// Pairs never joined, by joint name.
     #[serde(default, deserialize_with = "crate::spec::arrays::exact_vec")]
     pub forbidden: Vec<[String; 2]>,
+    /// Every admissible pair of joints is a potential beam: the layout start prices them all
+    /// and adds the ones that lower its LP (member adding), from the k-nearest beams (default
+    /// false).
+    #[serde(default)]
+    pub full: bool,
 }
 
 impl Default for ConnectSpec {
@@ -380,6 +385,7 @@ impl Default for ConnectSpec {
             neighbours: default_neighbours(),
             extra: Vec::new(),
             forbidden: Vec::new(),
+            full: false,
         }
     }
 }
@@ -556,6 +562,13 @@ pub fn validate(spec: &TrussSpec, src: &Source) -> Result<(), InputError> {
         1,
         MAX_NEIGHBOURS,
     )?;
+    if spec.connect.full && spec.start_forces != StartForces::Layout {
+        return Err(err(
+            &[N("connect"), N("full")],
+            "`full` connectivity needs start_forces = \"layout\" (the layout LP adds its members)"
+                .into(),
+        ));
+    }
     for (i, m) in spec.symmetry.iter().enumerate() {
         finite3(&m.point, src, &[N("symmetry"), I(i), N("point")])?;
         unit(&m.normal, src, &[N("symmetry"), I(i), N("normal")])?;
