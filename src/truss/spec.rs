@@ -470,12 +470,12 @@ pub struct CaseLoadSpec {
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RoundsSpec {
-    /// Number of solve + clean-up rounds (default 1; `--rounds` overrides).
-    #[serde(default = "default_rounds")]
-    pub count: usize,
-    /// Drop beams whose largest |λ| is below this fraction of the largest |λ| (default 0: keep,
-    /// as the seed prefers).
-    #[serde(default)]
+    /// At most this many solve + clean-up rounds (`--rounds` overrides); by default the rounds
+    /// run until the design stops changing, at most `ROUND_CAP` (src/truss/mod.rs).
+    pub count: Option<usize>,
+    /// Drop beams whose largest |λ| is below this fraction of the largest |λ| (default 1e-6:
+    /// zero-force members).
+    #[serde(default = "default_prune")]
     pub prune: f64,
     /// Remove the weaker of two crossing beams.
     #[serde(default)]
@@ -488,16 +488,16 @@ pub struct RoundsSpec {
 impl Default for RoundsSpec {
     fn default() -> Self {
         RoundsSpec {
-            count: default_rounds(),
-            prune: 0.0,
+            count: None,
+            prune: default_prune(),
             remove_crossings: false,
             merge_tolerance: default_merge_tolerance(),
         }
     }
 }
 
-fn default_rounds() -> usize {
-    1
+fn default_prune() -> f64 {
+    1e-6
 }
 
 fn default_merge_tolerance() -> f64 {
@@ -643,7 +643,9 @@ pub fn validate(spec: &TrussSpec, src: &Source) -> Result<(), InputError> {
         ));
     }
     src.non_negative(&[N("rounds"), N("merge_tolerance")], r.merge_tolerance)?;
-    src.count_in(&[N("rounds"), N("count")], r.count, 1, MAX_ROUNDS)?;
+    if let Some(count) = r.count {
+        src.count_in(&[N("rounds"), N("count")], count, 1, MAX_ROUNDS)?;
+    }
     validate_solver(&spec.solver, src, &[N("solver")])
 }
 
