@@ -177,6 +177,45 @@ fn a_minimal_file_loads_and_errors_are_positioned() {
 
     let e = load_text(&format!("{MINIMAL}[connect]\nextra = [[\"a\", \"b\"]]\n")).unwrap_err();
     assert!(e.message.contains("no joint named `a`"), "{e}");
+
+    let full = format!("start_forces = \"zero\"\n{MINIMAL}[connect]\nfull = true\n");
+    let e = load_text(&full).unwrap_err();
+    assert!(e.message.contains("start_forces = \"layout\""), "{e}");
+    assert_eq!(e.position.map(|p| p.0), Some(16), "{e}");
+}
+
+#[test]
+fn a_fink_roof_posed_against_the_lp_ends_optimal_below_its_certified_optimum() {
+    // fink_roof_linear: `linear` mass, every pair of lattice joints priced (`[connect] full`),
+    // default rounds and solver settings.
+    let p = problem("fink_roof_linear");
+    let opts = RunOptions {
+        quiet: true,
+        ..Default::default()
+    };
+    let outcome = crate::application::run_problem::<super::Truss>(&p, &opts).unwrap();
+    assert_eq!(outcome.summary.status, "Optimal");
+    let figures = &outcome.summary.figures;
+    let lp = &figures["start"]["lp"];
+    assert_eq!(lp["all_pairs"], true);
+    let (cost, bound) = (
+        lp["cost"][0].as_f64().unwrap(),
+        lp["lower_bound"][0].as_f64().unwrap(),
+    );
+    assert!(bound <= cost && bound > cost * (1.0 - 1e-5), "{lp}");
+    let quality = &figures["quality"];
+    assert_eq!(quality["kept_start"], false);
+    assert_eq!(quality["start_feasible"], true);
+    let mass = figures["mass_kg"].as_f64().unwrap();
+    assert!((quality["final_value"].as_f64().unwrap() - mass).abs() < 1e-9 * mass);
+    // Linear mass with self-weight: the start is the LP design, and moving the joints gains.
+    assert!((quality["start_value"].as_f64().unwrap() - cost).abs() < 1e-6 * cost);
+    assert!(mass < bound, "{mass} kg vs LP bound {bound} kg");
+    assert!(
+        outcome.summary.status_message.contains("lower bound"),
+        "{}",
+        outcome.summary.status_message
+    );
 }
 
 #[test]
