@@ -26,6 +26,7 @@ pub mod sim;
 pub mod spatial;
 pub mod spec;
 pub mod spline;
+pub mod step_check;
 pub mod task;
 pub mod trials;
 
@@ -307,6 +308,8 @@ mod tests {
             x: vec![],
             start: None,
             end: Some(end),
+            fine: None,
+            downgrade: None,
             status,
             solver_status,
             iterations: 0,

@@ -52,6 +52,7 @@ use super::feasibility::{FeasibilitySettings, restore};
 use super::formulation::Formulation;
 use super::shaping::shape;
 use super::spec::Problem;
+use super::step_check::confirm;
 use crate::solver::log::{Buffer, LogTarget, ObjectiveUnit};
 use crate::solver::{Evaluations, IterationRecord, Nlp, Options, Solution, Status, solve};
 
@@ -129,7 +130,12 @@ pub struct TrialResult {
     pub start: Option<Assessment>,
     /// The final assessment.
     pub end: Option<Assessment>,
-    /// Classification.
+    /// The final motion's assessment at `dt/4` ([`crate::gait::step_check`]); `None` unless
+    /// the trial is a Success or Marginal at `dt`.
+    pub fine: Option<Assessment>,
+    /// Why the class at `dt` fell at `dt/4`, when it did.
+    pub downgrade: Option<String>,
+    /// Classification (confirmed at `dt/4`).
     pub status: TrialStatus,
     /// Solver status.
     #[serde(skip)]
@@ -314,11 +320,20 @@ pub fn solve_trial(
                 log: Vec::new(),
             };
             x.truncate(f.reduced().parameters());
+            let check = confirm(
+                problem,
+                &x,
+                end.as_ref(),
+                classify(start.as_ref(), end.as_ref(), tol),
+                tol,
+            );
             return TrialResult {
                 trial,
                 origin: if trial == 1 { "hand-made" } else { "random" },
                 x,
-                status: classify(start.as_ref(), end.as_ref(), tol),
+                status: check.status,
+                fine: check.fine,
+                downgrade: check.downgrade,
                 start,
                 end,
                 solver_status,
@@ -410,8 +425,14 @@ pub fn solve_trial(
         }
         nlp = f.starting_at(&x);
     }
-    let status = classify(start.as_ref(), end.as_ref(), tol);
     x.truncate(f.reduced().parameters());
+    let check = confirm(
+        problem,
+        &x,
+        end.as_ref(),
+        classify(start.as_ref(), end.as_ref(), tol),
+        tol,
+    );
     let mut solution = last.expect("at least one solve");
     solution.log = log;
     let solver_status = solution.status;
@@ -421,7 +442,9 @@ pub fn solve_trial(
         x,
         start,
         end,
-        status,
+        fine: check.fine,
+        downgrade: check.downgrade,
+        status: check.status,
         solver_status,
         iterations,
         seconds: clock.elapsed().as_secs_f64(),
@@ -597,13 +620,29 @@ pub fn best(results: &[TrialResult]) -> Option<usize> {
     })
 }
 
-/// The table of the seed's Table 3.7 as text.
+/// The largest violation of an assessment as table text ("-" when there is none).
+fn max_text(a: Option<&Assessment>) -> String {
+    a.map_or("-".to_string(), |a| format!("{:.2e}", a.max()))
+}
+
+/// The table of the seed's Table 3.7 as text, with the largest violation at the file's step
+/// and at `dt/4` ([`crate::gait::step_check`]), followed by the reason of every class that fell
+/// at `dt/4`.
 pub fn table(results: &[TrialResult], tol: f64) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:>5}  {:<9}  {:>12}  {:>8}  {:>12}  {:>8}  {:>5}  {:<10}  solver",
-        "trial", "start", "cost N²s", "violated", "sum viol.", "time s", "iter", "status"
+        "{:>5}  {:<9}  {:>12}  {:>8}  {:>12}  {:>9}  {:>9}  {:>8}  {:>5}  {:<10}  solver",
+        "trial",
+        "start",
+        "cost N²s",
+        "violated",
+        "sum viol.",
+        "max dt",
+        "max dt/4",
+        "time s",
+        "iter",
+        "status"
     );
     for r in results {
         let violated = r
@@ -612,17 +651,24 @@ pub fn table(results: &[TrialResult], tol: f64) -> String {
             .map_or("-".to_string(), |a| a.violated(tol).to_string());
         let _ = writeln!(
             s,
-            "{:>5}  {:<9}  {:>12.4}  {:>8}  {:>12.3e}  {:>8.2}  {:>5}  {:<10}  {:?}",
+            "{:>5}  {:<9}  {:>12.4}  {:>8}  {:>12.3e}  {:>9}  {:>9}  {:>8.2}  {:>5}  {:<10}  {:?}",
             r.trial,
             r.origin,
             r.cost(),
             violated,
             r.violation_sum(),
+            max_text(r.end.as_ref()),
+            max_text(r.fine.as_ref()),
             r.seconds,
             r.iterations,
             format!("{:?}", r.status),
             r.solver_status
         );
+    }
+    for r in results {
+        if let Some(why) = &r.downgrade {
+            let _ = writeln!(s, "trial {}: {why}", r.trial);
+        }
     }
     s
 }
@@ -640,6 +686,8 @@ pub fn table_json(results: &[TrialResult], tol: f64) -> serde_json::Value {
                     "violated": r.end.as_ref().map(|a| a.violated(tol)),
                     "violation_sum": r.violation_sum(),
                     "max_violation": r.end.as_ref().map(|a| a.max()),
+                    "max_violation_quarter_step": r.fine.as_ref().map(|a| a.max()),
+                    "downgrade": r.downgrade,
                     "seconds": r.seconds,
                     "iterations": r.iterations,
                     "status": format!("{:?}", r.status),
