@@ -14,12 +14,14 @@
 
 pub mod aba;
 pub mod character;
+pub mod cmaes;
 pub mod collocation;
 pub mod contact;
 pub mod continuation;
 pub mod export;
 pub mod feasibility;
 pub mod formulation;
+pub mod global;
 pub mod reduced;
 pub mod shaping;
 pub mod sim;
@@ -238,6 +240,10 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
             "unimproved": counts(trials::TrialStatus::Unimproved),
             "trials": trials::table_json(&results, tol),
             "median_trial_seconds": median(results.iter().map(|r| r.seconds).collect()),
+            "global_seconds": results
+                .iter()
+                .map(|r| r.global.as_ref().map_or(0.0, |g| g.seconds))
+                .sum::<f64>(),
         }),
     };
     Ok(Outcome {
@@ -304,7 +310,8 @@ mod tests {
         };
         TrialResult {
             trial: 1,
-            origin: "hand-made",
+            origin: "hand-made".into(),
+            global: None,
             x: vec![],
             start: None,
             end: Some(end),
