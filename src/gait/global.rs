@@ -239,4 +239,22 @@ mod tests {
         );
         assert_ne!(one.x, search(&p, &settings, &x0, 8, 2, None).x);
     }
+
+    /// A raised interrupt ends the search after its current generation, whose rollouts stop
+    /// at once and score +∞: the start is returned.
+    #[test]
+    fn an_interrupt_stops_the_search() {
+        let p = golden("pogo_jump_short");
+        p.interrupt.raise();
+        let settings = GlobalSettings {
+            generations: 100,
+            evaluations: 10_000,
+            population: Some(8),
+            sigma: 0.5,
+        };
+        let x0 = vec![0.0; p.motion_parameters()];
+        let r = search(&p, &settings, &x0, 8, 1, None);
+        assert_eq!((r.stop, r.generations), (Stop::Stopped, 1));
+        assert_eq!(r.x, x0);
+    }
 }
