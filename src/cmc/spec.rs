@@ -12,6 +12,9 @@
 //! flip_rounds = 1               # edge-flip + re-solve rounds after the first solve (cmc::remesh)
 //! coarse_resolution = 1         # optional: solve coarse first, then refine (cmc::multilevel)
 //! refine = 1.5                  # optional: in those rounds split edges > 1.5 × median start edge
+//! [refine]                      # optional refinement study (cmc::refinement)
+//! levels = 4                    # the resolution, then 3 levels each subdivided ×2
+//! expected_order = 2.0          # order the area is expected to converge at
 //! [[chord]]                     # optional chord-length constraints between vertex indices
 //! a = 0
 //! b = 12
@@ -59,6 +62,9 @@ pub struct CmcFile {
     /// Mesh-quality settings.
     #[serde(default)]
     pub quality: QualitySpec,
+    /// Refinement study.
+    #[serde(default)]
+    pub refine: RefineSpec,
     /// Chord-length constraints.
     #[serde(default)]
     pub chord: Vec<ChordSpec>,
@@ -102,6 +108,39 @@ impl Default for QualitySpec {
             flip_rounds: default_flip_rounds(),
             coarse_resolution: None,
             refine: None,
+        }
+    }
+}
+
+/// `[refine]`: a refinement study ([`super::refinement`]).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RefineSpec {
+    /// Levels solved: the file's resolution, then `levels − 1` ×2 subdivisions (1–6);
+    /// default 1 (no study).
+    #[serde(default = "default_levels")]
+    pub levels: usize,
+    /// Expected order of convergence of the area in the edge length (0.5–8); default 2.
+    #[serde(default = "default_order")]
+    pub expected_order: f64,
+}
+
+/// Most levels of a refinement study.
+pub const MAX_REFINE_LEVELS: usize = 6;
+
+fn default_levels() -> usize {
+    1
+}
+
+fn default_order() -> f64 {
+    2.0
+}
+
+impl Default for RefineSpec {
+    fn default() -> Self {
+        RefineSpec {
+            levels: default_levels(),
+            expected_order: default_order(),
         }
     }
 }
@@ -405,6 +444,19 @@ impl CmcSpec {
                 "`refine` must be a finite number ≥ 1 (a multiple of the median edge length)",
             ));
         }
+        src.count_in(
+            &["refine".into(), "levels".into()],
+            f.refine.levels,
+            1,
+            MAX_REFINE_LEVELS,
+        )?;
+        let order = f.refine.expected_order;
+        if !(order.is_finite() && (0.5..=8.0).contains(&order)) {
+            return Err(self.err(
+                &["refine".into(), "expected_order".into()],
+                "`expected_order` must be a number from 0.5 to 8",
+            ));
+        }
         src.non_negative(
             &["quality".into(), "tangential_weight".into()],
             f.quality.tangential_weight,
@@ -426,11 +478,16 @@ impl CmcSpec {
         } else {
             &[Key::Name("shape")]
         };
+        let study_faces = 4f64.powi(f.refine.levels as i32 - 1);
         src.within_limit(
             sized_by,
-            f.shape.face_estimate(resolution),
+            f.shape.face_estimate(resolution) * study_faces,
             MAX_FACES as f64,
-            "start-mesh faces",
+            if f.refine.levels > 1 {
+                "faces at the finest refinement level"
+            } else {
+                "start-mesh faces"
+            },
         )?;
         match &f.shape {
             ShapeSpec::Sphere { volume } => src.positive(&shape("volume"), *volume)?,
