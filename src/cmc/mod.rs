@@ -30,7 +30,9 @@ pub mod orientation;
 pub mod preview;
 pub mod refinement;
 pub mod remesh;
+pub mod ring_tent;
 pub mod spec;
+pub mod stability;
 pub mod subdivide;
 pub mod volume;
 
@@ -275,6 +277,22 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     summary.figures = figures_json(&nlp, &mesh, &solution.x)?;
     if let Some(obj) = summary.figures.as_object_mut() {
         obj.insert("flip_rounds".into(), rounds.into());
+        let regions: Vec<&volume::Region> = nlp.volumes().iter().map(|v| &v.region).collect();
+        let stability = stability::analyse(&mesh, &regions);
+        opts.say(&format!(
+            "stability: {} (smallest eigenvalues [{}] 1/m², {} normal degrees of freedom)",
+            stability.verdict,
+            stability
+                .smallest_eigenvalues
+                .iter()
+                .map(|e| format!("{e:.4e}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            stability.degrees_of_freedom
+        ));
+        let value = serde_json::to_value(&stability)
+            .map_err(|e| Error::Runtime(format!("stability: {e}")))?;
+        obj.insert("stability".into(), value);
         if let Some(study) = &study {
             let value = serde_json::to_value(study)
                 .map_err(|e| Error::Runtime(format!("refinement study: {e}")))?;
@@ -542,8 +560,10 @@ mod tests {
         if name == "circus_tent" { 6 } else { 3 }
     }
 
-    const PROBLEMS: [&str; 16] = [
+    const PROBLEMS: [&str; 18] = [
         "u_wires",
+        "ring_tent",
+        "ring_tent_pinch",
         "double_bubble",
         "double_bubble_gltf",
         "triple_bubble",

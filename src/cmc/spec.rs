@@ -35,6 +35,7 @@ use super::generators::{self, CellSpec, Pole, Shape, TentSpec};
 use super::mesh::Point;
 use super::nlp::Chord;
 use super::octahedron::{self, OctahedronTopology};
+use super::ring_tent;
 use super::volume::Region;
 use crate::error::InputError;
 use crate::solver::Options;
@@ -205,6 +206,15 @@ pub enum ShapeSpec {
         width: f64,
         /// Depth of each U, m.
         depth: f64,
+    },
+    /// The film from a square wire at y = 0 to a raised horizontal ring about the y axis.
+    RingTent {
+        /// Half the side of the square wire, m.
+        half_width: f64,
+        /// Radius of the ring, m (below `half_width`).
+        ring_radius: f64,
+        /// Height of the ring above the square, m.
+        ring_height: f64,
     },
     /// Membranes over polygons, lifted by poles.
     Tents {
@@ -386,6 +396,7 @@ impl ShapeSpec {
             ShapeSpec::DoubleBubble { .. } | ShapeSpec::TripleBubble { .. } => 8,
             ShapeSpec::CubeFrame { .. } | ShapeSpec::OctahedronFrame { .. } => 8,
             ShapeSpec::UWires { .. } => 16,
+            ShapeSpec::RingTent { .. } => 4,
             ShapeSpec::Tents { .. } | ShapeSpec::Cells { .. } => 10,
             ShapeSpec::Obj { .. } | ShapeSpec::Gltf { .. } => 1,
         }
@@ -504,6 +515,26 @@ impl CmcSpec {
                     return Err(self.err(
                         &shape("bubble_volume"),
                         "`bubble_volume` must be positive and its cube root below 0.8·edge",
+                    ));
+                }
+            }
+            ShapeSpec::RingTent {
+                half_width,
+                ring_radius,
+                ring_height,
+            } => {
+                src.positive(&shape("half_width"), *half_width)?;
+                src.positive(&shape("ring_radius"), *ring_radius)?;
+                if ring_radius >= half_width {
+                    return Err(self.err(
+                        &shape("ring_radius"),
+                        "`ring_radius` must be below `half_width` (the ring inside the square)",
+                    ));
+                }
+                if !(ring_height.is_finite() && ring_height.abs() <= 100.0 * half_width) {
+                    return Err(self.err(
+                        &shape("ring_height"),
+                        "`ring_height` must be a finite height within 100·half_width",
                     ));
                 }
             }
@@ -699,6 +730,12 @@ impl CmcSpec {
             ShapeSpec::Catenoid { radius, separation } => {
                 catenoid::catenoid(*radius, *separation, resolution).map_err(|e| at_shape(&e))?
             }
+            ShapeSpec::RingTent {
+                half_width,
+                ring_radius,
+                ring_height,
+            } => ring_tent::ring_tent(*half_width, *ring_radius, *ring_height, resolution)
+                .map_err(|e| at_shape(&e))?,
             ShapeSpec::OctahedronFrame { edge, topology } => {
                 octahedron::octahedron_frame(*edge, *topology, resolution)
                     .map_err(|e| at_shape(&e))?
