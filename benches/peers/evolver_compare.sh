@@ -13,6 +13,9 @@
 # time is user + system from /usr/bin/time, the best of the rounds. Prints facets, both areas
 # (cm²), their relative difference, both CPU times and the ratio optimize / Evolver.
 #
+# QP=sparse (or dense) sets optimize's `[solver] qp` for every case (default: the file's own
+# setting, i.e. the solver's automatic choice: dense below 2000 variables).
+#
 # Usage: benches/peers/evolver_compare.sh [CASE ...]   CASE = file:resolution
 # Default cases: double bubble V = 1, 2 cm³ at 648, 3,042 and 11,250 facets and the bubble-free
 # cube frame film at 792, 3,168 and 10,648 facets.
@@ -63,6 +66,14 @@ for c in "${cases[@]}"; do
         sed -i -e '/^\[quality\]/a flip_rounds = 0' -e '/^flip_rounds = [1-9]/d' "$work/$name.toml"
     else
         printf '\n[quality]\nflip_rounds = 0\n' >> "$work/$name.toml"
+    fi
+    if [ -n "${QP:-}" ]; then
+        if grep -q '^\[solver\]' "$work/$name.toml"; then
+            sed -i -e '/^qp = /d' "$work/$name.toml"
+            sed -i -e "/^\[solver\]/a qp = \"$QP\"" "$work/$name.toml"
+        else
+            printf '\n[solver]\nqp = "%s"\n' "$QP" >> "$work/$name.toml"
+        fi
     fi
     ours=""; theirs=""
     for _ in $(seq "$ROUNDS"); do
