@@ -8,8 +8,11 @@
 //! usually a triangle folded flat, whose opposite edge a flip removes) → result figures
 //! ([`figures`]) and an SVG preview ([`preview`]). `result.json` lists each flip round's
 //! areas (before flips, after flips, after the re-solve): the effect of the mesh-quality
-//! mechanism on the area. With `[quality] coarse_resolution` the start is a coarse solution
-//! refined level by level ([`multilevel`], [`subdivide`]).
+//! mechanism on the area; a round whose re-solve fails after a converged solve is rejected.
+//! With `[quality] coarse_resolution` the start is a coarse solution refined level by level
+//! ([`multilevel`], [`subdivide`]); with `[refine] levels` the solution is refined ×2 level
+//! after level and the areas' convergence judged ([`refinement`]). Every solution's stability
+//! (smallest eigenvalues of the area's second variation) is reported ([`stability`]).
 //! The final mesh is also written as `model.glb` ([`export`]).
 
 pub mod area;
