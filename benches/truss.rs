@@ -76,7 +76,10 @@ fn layout(c: &mut Criterion) {
         let problem = load(&path(name)).expect("loads");
         let model = problem.model();
         c.bench_function(&format!("truss layout LP {name}"), |b| {
-            b.iter(|| start::layout_start(&model.structure, &model.settings).expect("solves"))
+            b.iter(|| {
+                start::layout_start(&model.structure, &model.settings, model.full.as_ref())
+                    .expect("solves")
+            })
         });
     }
 }

@@ -8,8 +8,10 @@
 #[path = "../../tests/common/hs.rs"]
 mod hs;
 
+use optimize::solver::log::LogTarget;
 use optimize::solver::qp::QpMethod;
 use optimize::solver::{Globalization, HessianMode, Options, solve};
+use std::sync::{Arc, Mutex};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -62,6 +64,7 @@ fn main() {
     let options = Options {
         hessian: mode,
         verbosity,
+        log: LogTarget::to(Arc::new(Mutex::new(std::io::stderr())), false),
         max_iterations: iterations,
         globalization,
         qp_method: match std::env::var("QP").as_deref() {

@@ -14,18 +14,21 @@
 
 pub mod aba;
 pub mod character;
+pub mod cmaes;
 pub mod collocation;
 pub mod contact;
 pub mod continuation;
 pub mod export;
 pub mod feasibility;
 pub mod formulation;
+pub mod global;
 pub mod reduced;
 pub mod shaping;
 pub mod sim;
 pub mod spatial;
 pub mod spec;
 pub mod spline;
+pub mod step_check;
 pub mod task;
 pub mod trials;
 
@@ -237,6 +240,10 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
             "unimproved": counts(trials::TrialStatus::Unimproved),
             "trials": trials::table_json(&results, tol),
             "median_trial_seconds": median(results.iter().map(|r| r.seconds).collect()),
+            "global_seconds": results
+                .iter()
+                .map(|r| r.global.as_ref().map_or(0.0, |g| g.seconds))
+                .sum::<f64>(),
         }),
     };
     Ok(Outcome {
@@ -303,10 +310,13 @@ mod tests {
         };
         TrialResult {
             trial: 1,
-            origin: "hand-made",
+            origin: "hand-made".into(),
+            global: None,
             x: vec![],
             start: None,
             end: Some(end),
+            fine: None,
+            downgrade: None,
             status,
             solver_status,
             iterations: 0,

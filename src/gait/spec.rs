@@ -78,6 +78,11 @@ pub struct FileSpec {
     /// Trials (several starts) and their success test.
     #[serde(default)]
     pub trials: TrialsSpec,
+    /// The trials' low-knowledge starts.
+    #[serde(default)]
+    pub start: StartSpec,
+    /// The derivative-free global phase before each trial's solves (none without the table).
+    pub global: Option<GlobalPhaseSpec>,
     /// Solver options.
     #[serde(default)]
     pub solver: Options,
@@ -112,6 +117,67 @@ pub struct TrialsSpec {
     /// met in stages of growing horizon, each stage's rows approached in N steps of their
     /// bounds, without the effort; default 0 (one shaped solve with the effort).
     pub shaping_stages: Option<usize>,
+}
+
+/// What a trial's start is built from (`[start] kind`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum StartKind {
+    /// The hand-made knot forces `[[actuator]] start` (zeros where an actuator has none).
+    #[default]
+    Given,
+    /// Zero force on every actuator.
+    Zero,
+    /// Knot values drawn uniformly in ±`amplitude`·(half the force range), for every trial.
+    Random,
+}
+
+/// The `[start]` table: the low-knowledge starts the trials (and their global phase) begin
+/// from.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StartSpec {
+    /// "given" (default), "zero" or "random".
+    pub kind: Option<StartKind>,
+    /// `kind = "random"`: fraction of half the force range; default 0.3, in [0, 1].
+    pub amplitude: Option<f64>,
+}
+
+/// Validated `[start]` settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StartSettings {
+    /// What trial starts are built from.
+    pub kind: StartKind,
+    /// Random knot amplitude, a fraction of half the force range (`kind = "random"`).
+    pub amplitude: f64,
+}
+
+/// The `[global]` table: a CMA-ES phase over rollouts before each trial's solves
+/// ([`crate::gait::global`]).
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GlobalPhaseSpec {
+    /// Most generations per trial; default 300, in 1..=100000.
+    pub generations: Option<usize>,
+    /// Most rollouts per trial; default 3000, in 1..=10000000.
+    pub evaluations: Option<usize>,
+    /// Candidates per generation (λ); default `4 + ⌊3 ln n⌋`, in 2..=10000.
+    pub population: Option<usize>,
+    /// Initial step size, a fraction of half the force range; default 0.3, in (0, 2].
+    pub sigma: Option<f64>,
+}
+
+/// Validated `[global]` settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GlobalSettings {
+    /// Most generations per trial.
+    pub generations: usize,
+    /// Most rollouts per trial.
+    pub evaluations: usize,
+    /// Candidates per generation (`None`: CMA-ES's default).
+    pub population: Option<usize>,
+    /// Initial step size (fraction of half the force range).
+    pub sigma: f64,
 }
 
 /// Validated `[trials]` settings.
@@ -448,6 +514,10 @@ pub struct Problem {
     pub shaping: Vec<PoseConstraint>,
     /// Trial settings.
     pub trials: TrialSettings,
+    /// What the trials start from.
+    pub starts: StartSettings,
+    /// The global phase, when the file asks for one.
+    pub global: Option<GlobalSettings>,
     /// Solver options table.
     pub solver: Options,
     /// The run's interrupt flag, polled by every rollout of this problem's NLPs (a run sets it
@@ -888,6 +958,12 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
     };
     let initial_box = build_initial_box(source, &file, &model, &initial)?;
     let trials = build_trials(source, &file.trials)?;
+    let starts = build_start(source, &file.start)?;
+    let global = file
+        .global
+        .as_ref()
+        .map(|g| build_global(source, g))
+        .transpose()?;
     Ok(Problem {
         name,
         model,
@@ -902,6 +978,8 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
         constraints,
         shaping,
         trials,
+        starts,
+        global,
         solver: file.solver,
         interrupt: Interrupt::new(),
     })
@@ -1109,6 +1187,65 @@ fn build_trials(source: &Source, t: &TrialsSpec) -> Result<TrialSettings, InputE
         feasibility_first: t.feasibility_first.unwrap_or(false),
         continuation_stages,
         shaping_stages,
+    })
+}
+
+fn build_start(source: &Source, s: &StartSpec) -> Result<StartSettings, InputError> {
+    let kind = s.kind.unwrap_or_default();
+    if s.amplitude.is_some() && kind != StartKind::Random {
+        return Err(source.error_at(
+            &[Key::Name("start"), Key::Name("amplitude")],
+            "`amplitude` applies to `kind = \"random\"` only".to_string(),
+        ));
+    }
+    let amplitude = s.amplitude.unwrap_or(0.3);
+    if !(0.0..=1.0).contains(&amplitude) {
+        return Err(source.error_at(
+            &[Key::Name("start"), Key::Name("amplitude")],
+            format!("`amplitude` must be in [0, 1], got {amplitude}"),
+        ));
+    }
+    Ok(StartSettings { kind, amplitude })
+}
+
+fn build_global(source: &Source, g: &GlobalPhaseSpec) -> Result<GlobalSettings, InputError> {
+    let at = |key: &'static str, msg: String| {
+        source.error_at(&[Key::Name("global"), Key::Name(key)], msg)
+    };
+    let generations = g.generations.unwrap_or(300);
+    if !(1..=100_000).contains(&generations) {
+        return Err(at(
+            "generations",
+            format!("`generations` must be in 1..=100000, got {generations}"),
+        ));
+    }
+    let evaluations = g.evaluations.unwrap_or(3000);
+    if !(1..=10_000_000).contains(&evaluations) {
+        return Err(at(
+            "evaluations",
+            format!("`evaluations` must be in 1..=10000000, got {evaluations}"),
+        ));
+    }
+    if let Some(p) = g.population
+        && !(2..=10_000).contains(&p)
+    {
+        return Err(at(
+            "population",
+            format!("`population` must be in 2..=10000, got {p}"),
+        ));
+    }
+    let sigma = g.sigma.unwrap_or(0.3);
+    if !(sigma > 0.0 && sigma <= 2.0) {
+        return Err(at(
+            "sigma",
+            format!("`sigma` must be in (0, 2], got {sigma}"),
+        ));
+    }
+    Ok(GlobalSettings {
+        generations,
+        evaluations,
+        population: g.population,
+        sigma,
     })
 }
 
@@ -1609,6 +1746,54 @@ min = 0.1
                 bad.contains(key) || bad.contains("[[task]]") || bad.contains("quantity"),
                 "{to}: `{bad}`"
             );
+        }
+    }
+
+    #[test]
+    fn start_and_global_tables_load_and_bad_keys_point_at_them() {
+        let p = load(BASE).unwrap();
+        assert_eq!(p.starts.kind, StartKind::Given);
+        assert!(p.global.is_none());
+        let text = BASE.to_string()
+            + "[start]\nkind = \"random\"\namplitude = 0.5\n[global]\nevaluations = 400\n";
+        let p = load(&text).unwrap();
+        assert_eq!(
+            p.starts,
+            StartSettings {
+                kind: StartKind::Random,
+                amplitude: 0.5
+            }
+        );
+        let g = p.global.unwrap();
+        assert_eq!(
+            (g.generations, g.evaluations, g.population, g.sigma),
+            (300, 400, None, 0.3)
+        );
+        for (table, says, key) in [
+            (
+                "[start]\nkind = \"zero\"\namplitude = 0.5",
+                "applies to",
+                "amplitude",
+            ),
+            (
+                "[start]\nkind = \"random\"\namplitude = 1.5",
+                "in [0, 1]",
+                "amplitude",
+            ),
+            ("[start]\nkind = \"searched\"", "unknown variant", "kind"),
+            ("[global]\npopulation = 1", "2..=10000", "population"),
+            ("[global]\nsigma = 0.0", "(0, 2]", "sigma"),
+            ("[global]\ngenerations = 0", "1..=100000", "generations"),
+            ("[global]\nevaluations = 0", "1..=10000000", "evaluations"),
+            (
+                "[global]\nmethod = \"anneal\"",
+                "unknown key `method`",
+                "method",
+            ),
+        ] {
+            let (message, at) = error_and_line(&format!("{BASE}{table}\n"));
+            assert!(message.contains(says), "{table}: {message}");
+            assert!(at.contains(key), "{table}: `{at}`");
         }
     }
 

@@ -50,8 +50,10 @@ use serde::Serialize;
 use super::continuation::stage_problems;
 use super::feasibility::{FeasibilitySettings, restore};
 use super::formulation::Formulation;
+use super::global::{GlobalReport, search};
 use super::shaping::shape;
-use super::spec::Problem;
+use super::spec::{Problem, StartKind};
+use super::step_check::confirm;
 use crate::solver::log::{Buffer, LogTarget, ObjectiveUnit};
 use crate::solver::{Evaluations, IterationRecord, Nlp, Options, Solution, Status, solve};
 
@@ -121,15 +123,23 @@ pub fn assess(f: &Formulation<'_>, x: &[f64]) -> Option<Assessment> {
 pub struct TrialResult {
     /// Trial number (1-based).
     pub trial: usize,
-    /// "hand-made" or "random".
-    pub origin: &'static str,
+    /// Where the start came from ([`TrialStart::origin`]).
+    pub origin: String,
+    /// The global phase before the solves, when the file asks for one.
+    #[serde(skip)]
+    pub global: Option<GlobalReport>,
     /// Final spline parameters (physical units).
     pub x: Vec<f64>,
     /// The start's assessment.
     pub start: Option<Assessment>,
     /// The final assessment.
     pub end: Option<Assessment>,
-    /// Classification.
+    /// The final motion's assessment at `dt/4` ([`crate::gait::step_check`]); `None` unless
+    /// the trial is a Success or Marginal at `dt`.
+    pub fine: Option<Assessment>,
+    /// Why the class at `dt` fell at `dt/4`, when it did.
+    pub downgrade: Option<String>,
+    /// Classification (confirmed at `dt/4`).
     pub status: TrialStatus,
     /// Solver status.
     #[serde(skip)]
@@ -178,29 +188,62 @@ pub fn classify(start: Option<&Assessment>, end: Option<&Assessment>, tol: f64) 
     }
 }
 
-/// The starting spline parameters (physical units) of every trial, in trial order (without
-/// segment start states: [`Formulation::starting_at`] rolls them out).
-pub fn starts(problem: &Problem, f: &Formulation<'_>, seed: u64) -> Vec<Vec<f64>> {
+/// A trial's start before any solve.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrialStart {
+    /// Motion parameters (physical units; without segment start states:
+    /// [`Formulation::starting_at`] rolls them out).
+    pub x: Vec<f64>,
+    /// "hand-made", "zero" or "random" (`[start] kind`), with "±" when the knots were
+    /// perturbed by `[trials] spread` (trials k ≥ 2).
+    pub origin: String,
+}
+
+/// The start of every trial, in trial order (module header): the `[start]` kind's forces
+/// (the hand-made ones, zero, or random knot values of `[start] amplitude`, drawn for every
+/// trial), plus for trial `k ≥ 2` a uniform perturbation of every knot value by up to
+/// `spread`·(half the force range); slopes zero, clamped into the spline box. Drawn up front
+/// from one `ChaCha8Rng` seeded with `seed`.
+pub fn starts(problem: &Problem, f: &Formulation<'_>, seed: u64) -> Vec<TrialStart> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let hand = f.hand_made_start()[..f.reduced().parameters()].to_vec();
+    let given = f.hand_made_start()[..f.reduced().parameters()].to_vec();
     let grid = f.reduced().grid();
     let (k, block) = (grid.knots, grid.per_actuator());
     let (lo, hi) = f.physical_bounds();
     let spread = problem.trials.spread;
+    let kind = problem.starts.kind;
+    let name = match kind {
+        StartKind::Given => "hand-made",
+        StartKind::Zero => "zero",
+        StartKind::Random => "random",
+    };
+    let mut draw = |x: &mut [f64], amplitude: f64| {
+        for (a, act) in problem.model.actuators.iter().enumerate() {
+            let half = 0.5 * (act.bounds[1] - act.bounds[0]);
+            for i in 0..k {
+                let j = a * block + i;
+                let r: f64 = rng.random_range(-1.0..=1.0);
+                x[j] = (x[j] + r * amplitude * half).clamp(lo[j], hi[j]);
+            }
+        }
+    };
     (0..problem.trials.count)
         .map(|t| {
-            let mut x = hand.clone();
-            if t > 0 {
-                for (a, act) in problem.model.actuators.iter().enumerate() {
-                    let half = 0.5 * (act.bounds[1] - act.bounds[0]);
-                    for i in 0..k {
-                        let j = a * block + i;
-                        let r: f64 = rng.random_range(-1.0..=1.0);
-                        x[j] = (x[j] + r * spread * half).clamp(lo[j], hi[j]);
-                    }
-                }
+            let mut x = given.clone();
+            if kind != StartKind::Given {
+                x[..problem.spline_parameters()].fill(0.0);
             }
-            x
+            if kind == StartKind::Random {
+                draw(&mut x, problem.starts.amplitude);
+            }
+            let perturbed = t > 0 && spread > 0.0;
+            if perturbed {
+                draw(&mut x, spread);
+            }
+            TrialStart {
+                x,
+                origin: format!("{name}{}", if perturbed { "±" } else { "" }),
+            }
         })
         .collect()
 }
@@ -314,11 +357,21 @@ pub fn solve_trial(
                 log: Vec::new(),
             };
             x.truncate(f.reduced().parameters());
+            let check = confirm(
+                problem,
+                &x,
+                end.as_ref(),
+                classify(start.as_ref(), end.as_ref(), tol),
+                tol,
+            );
             return TrialResult {
                 trial,
-                origin: if trial == 1 { "hand-made" } else { "random" },
+                origin: String::new(),
+                global: None,
                 x,
-                status: classify(start.as_ref(), end.as_ref(), tol),
+                status: check.status,
+                fine: check.fine,
+                downgrade: check.downgrade,
                 start,
                 end,
                 solver_status,
@@ -410,18 +463,27 @@ pub fn solve_trial(
         }
         nlp = f.starting_at(&x);
     }
-    let status = classify(start.as_ref(), end.as_ref(), tol);
     x.truncate(f.reduced().parameters());
+    let check = confirm(
+        problem,
+        &x,
+        end.as_ref(),
+        classify(start.as_ref(), end.as_ref(), tol),
+        tol,
+    );
     let mut solution = last.expect("at least one solve");
     solution.log = log;
     let solver_status = solution.status;
     TrialResult {
         trial,
-        origin: if trial == 1 { "hand-made" } else { "random" },
+        origin: String::new(),
+        global: None,
         x,
         start,
         end,
-        status,
+        fine: check.fine,
+        downgrade: check.downgrade,
+        status: check.status,
         solver_status,
         iterations,
         seconds: clock.elapsed().as_secs_f64(),
@@ -470,7 +532,8 @@ pub fn run_trials(
         o
     };
     if let [k] = chosen[..] {
-        let result = solve_trial(problem, &f, k, &all[k - 1], &trial_options(k, None));
+        let options = trial_options(k, None);
+        let result = run_trial(problem, &f, k, &all[k - 1], seed, &options);
         progress.finished(0, &result, String::new());
         return vec![result];
     }
@@ -479,17 +542,38 @@ pub fn run_trials(
         .enumerate()
         .map(|(i, &k)| {
             let buffer = Buffer::default();
-            let result = solve_trial(
-                problem,
-                &f,
-                k,
-                &all[k - 1],
-                &trial_options(k, Some(&buffer)),
-            );
+            let options = trial_options(k, Some(&buffer));
+            let result = run_trial(problem, &f, k, &all[k - 1], seed, &options);
             progress.finished(i, &result, buffer.text());
             result
         })
         .collect()
+}
+
+/// Trial `trial` from `start`: the global phase first when the file asks for one
+/// ([`crate::gait::global`]; progress lines with a solver log), then [`solve_trial`] from its
+/// best candidate. The trial's time includes the global phase's.
+fn run_trial(
+    problem: &Problem,
+    f: &Formulation<'_>,
+    trial: usize,
+    start: &TrialStart,
+    seed: u64,
+    options: &Options,
+) -> TrialResult {
+    let global = problem.global.as_ref().map(|settings| {
+        let log = (options.verbosity >= 1).then_some(&options.log);
+        search(problem, settings, &start.x, seed, trial, log)
+    });
+    let x0 = global.as_ref().map_or(&start.x, |g| &g.x);
+    let mut result = solve_trial(problem, f, trial, x0, options);
+    result.origin = match &global {
+        Some(_) => format!("{}+CMA", start.origin),
+        None => start.origin.clone(),
+    };
+    result.seconds += global.as_ref().map_or(0.0, |g| g.seconds);
+    result.global = global;
+    result
 }
 
 /// What parallel trials show while they run (see [`run_trials`]).
@@ -597,13 +681,30 @@ pub fn best(results: &[TrialResult]) -> Option<usize> {
     })
 }
 
-/// The table of the seed's Table 3.7 as text.
+/// The largest violation of an assessment as table text ("-" when there is none).
+fn max_text(a: Option<&Assessment>) -> String {
+    a.map_or("-".to_string(), |a| format!("{:.2e}", a.max()))
+}
+
+/// The table of the seed's Table 3.7 as text, with the largest violation at the file's step
+/// and at `dt/4` ([`crate::gait::step_check`]), followed by the reason of every class that fell
+/// at `dt/4`.
 pub fn table(results: &[TrialResult], tol: f64) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:>5}  {:<9}  {:>12}  {:>8}  {:>12}  {:>8}  {:>5}  {:<10}  solver",
-        "trial", "start", "cost N²s", "violated", "sum viol.", "time s", "iter", "status"
+        "{:>5}  {:<14}  {:>12}  {:>8}  {:>12}  {:>9}  {:>9}  {:>8}  {:>8}  {:>5}  {:<10}  solver",
+        "trial",
+        "start",
+        "cost N²s",
+        "violated",
+        "sum viol.",
+        "max dt",
+        "max dt/4",
+        "global s",
+        "time s",
+        "iter",
+        "status"
     );
     for r in results {
         let violated = r
@@ -612,17 +713,27 @@ pub fn table(results: &[TrialResult], tol: f64) -> String {
             .map_or("-".to_string(), |a| a.violated(tol).to_string());
         let _ = writeln!(
             s,
-            "{:>5}  {:<9}  {:>12.4}  {:>8}  {:>12.3e}  {:>8.2}  {:>5}  {:<10}  {:?}",
+            "{:>5}  {:<14}  {:>12.4}  {:>8}  {:>12.3e}  {:>9}  {:>9}  {:>8}  {:>8.2}  {:>5}  {:<10}  {:?}",
             r.trial,
             r.origin,
             r.cost(),
             violated,
             r.violation_sum(),
+            max_text(r.end.as_ref()),
+            max_text(r.fine.as_ref()),
+            r.global
+                .as_ref()
+                .map_or("-".to_string(), |g| format!("{:.2}", g.seconds)),
             r.seconds,
             r.iterations,
             format!("{:?}", r.status),
             r.solver_status
         );
+    }
+    for r in results {
+        if let Some(why) = &r.downgrade {
+            let _ = writeln!(s, "trial {}: {why}", r.trial);
+        }
     }
     s
 }
@@ -640,6 +751,15 @@ pub fn table_json(results: &[TrialResult], tol: f64) -> serde_json::Value {
                     "violated": r.end.as_ref().map(|a| a.violated(tol)),
                     "violation_sum": r.violation_sum(),
                     "max_violation": r.end.as_ref().map(|a| a.max()),
+                    "max_violation_quarter_step": r.fine.as_ref().map(|a| a.max()),
+                    "downgrade": r.downgrade,
+                    "global": r.global.as_ref().map(|g| serde_json::json!({
+                        "seconds": g.seconds,
+                        "rollouts": g.evaluations,
+                        "generations": g.generations,
+                        "fitness": g.fitness,
+                        "stop": format!("{:?}", g.stop),
+                    })),
                     "seconds": r.seconds,
                     "iterations": r.iterations,
                     "status": format!("{:?}", r.status),
@@ -671,14 +791,40 @@ mod tests {
         let a = starts(&p, &f, 8);
         assert_eq!(a, starts(&p, &f, 8));
         assert_ne!(a[1], starts(&p, &f, 9)[1]);
-        assert_eq!(a[0], f.hand_made_start()[..f.reduced().parameters()]);
+        assert_eq!(a[0].x, f.hand_made_start()[..f.reduced().parameters()]);
+        assert_eq!(
+            (a[0].origin.as_str(), a[1].origin.as_str()),
+            ("hand-made", "hand-made±")
+        );
         let (lo, hi) = f.physical_bounds();
-        for x in &a {
-            for j in 0..x.len() {
-                assert!(x[j] >= lo[j] && x[j] <= hi[j]);
+        for s in &a {
+            for j in 0..s.x.len() {
+                assert!(s.x[j] >= lo[j] && s.x[j] <= hi[j]);
             }
         }
         assert!(a[1] != a[2]);
+        // Zero starts: trial 1 exactly zero; random starts: every trial drawn, within the
+        // amplitude.
+        let mut p = p.clone();
+        p.starts.kind = StartKind::Zero;
+        let z = starts(&p, &Formulation::new(&p), 8);
+        assert!(z[0].x.iter().all(|&v| v == 0.0));
+        assert_eq!(z[0].origin, "zero");
+        p.starts = crate::gait::spec::StartSettings {
+            kind: StartKind::Random,
+            amplitude: 0.2,
+        };
+        p.trials.spread = 0.0;
+        let r = starts(&p, &Formulation::new(&p), 8);
+        assert!(r[0].x.iter().any(|&v| v != 0.0));
+        assert_eq!(r[1].origin, "random");
+        let grid = p.knot_grid();
+        for (a, act) in p.model.actuators.iter().enumerate() {
+            let bound = 0.2 * 0.5 * (act.bounds[1] - act.bounds[0]);
+            for i in 0..grid.knots {
+                assert!(r[0].x[a * grid.per_actuator() + i].abs() <= bound);
+            }
+        }
     }
 
     /// A short solve gives bit-identical results on one thread and on two.

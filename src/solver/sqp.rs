@@ -57,7 +57,6 @@
 //! form; elastic and least-violation subproblems use the same method.
 
 use std::cell::RefCell;
-use std::io::Write;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
@@ -241,6 +240,7 @@ fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
             dense: None,
             sparse: None,
             row_weights: Vec::new(),
+            inertia: 0.0,
         },
         _ => Model::Bfgs(DenseBfgs::new(n)),
     };
@@ -544,10 +544,10 @@ impl<'a> Sqp<'a> {
                 LineSearch::Accepted { point: next, alpha } => {
                     reset_done = false;
                     if !self.model.is_quasi_newton()
-                        && self.sparse_qp()
                         && !step.elastic
                         && self.options.globalization == Globalization::LineSearch
                     {
+                        let dhd = dhd - self.model.augmentation_curvature(&jac, d);
                         self.damp_exact_steps(alpha, dhd, d);
                     }
                     self.lambda = lambda_qp;
@@ -617,7 +617,14 @@ impl<'a> Sqp<'a> {
     fn damp_exact_steps(&mut self, alpha: f64, dhd: f64, d: &[f64]) {
         let dd: f64 = d.iter().map(|v| v * v).sum();
         // The curvature along d without the inertia correction above the floor.
-        let correction = (self.warm.convexification() - self.warm.shift_floor()).max(0.0);
+        let correction = match &self.model {
+            Model::Exact {
+                dense: Some(_),
+                inertia,
+                ..
+            } => *inertia,
+            _ => (self.warm.convexification() - self.warm.shift_floor()).max(0.0),
+        };
         let curvature = dhd - correction * dd;
         let floor = if alpha <= self.tuning.damping_cut && dd > 0.0 && curvature > 0.0 {
             self.warm
@@ -1273,6 +1280,7 @@ impl<'a> Sqp<'a> {
             dense,
             sparse,
             row_weights,
+            inertia,
         } = &mut self.model
         else {
             unreachable!()
@@ -1297,27 +1305,29 @@ impl<'a> Sqp<'a> {
                     a[(position[r], c)] += point.derivatives.jac[k];
                 }
             }
+            let floor = self.warm.shift_floor();
             let convexified = shift
-                .convexify_with_rows(&h, &a, equalities)
+                .convexify_with_rows(&h, &a, equalities, floor)
                 .ok_or_else(|| EvalError::Domain("Hessian not finite".into()))?;
             if self.options.verbosity >= 2 {
-                let _ = writeln!(
-                    std::io::stderr(),
+                self.live.borrow_mut().message(&format!(
                     "      Hessian shift {:.2e} (augmented rows: {}, held at bounds: {}, weight {:.2e})",
                     convexified.shift,
                     a.nrows(),
                     held.len(),
                     convexified.row_weight
-                );
+                ));
             }
-            *row_weights = active
+            *inertia = convexified.shift * hessian::scale_of(&h);
+            *row_weights = convexified
+                .weighted
                 .iter()
-                .enumerate()
-                .take(convexified.weighted_rows)
-                .filter_map(|(k, &i)| {
+                .filter_map(|&k| {
                     let norm2 = a.row(k).norm_squared();
-                    (convexified.row_weight > 0.0 && norm2 > 0.0)
-                        .then(|| (i, convexified.row_weight / norm2, is_equality(i)))
+                    (convexified.row_weight > 0.0 && norm2 > 0.0).then(|| {
+                        let i = active[k];
+                        (i, convexified.row_weight / norm2, is_equality(i))
+                    })
                 })
                 .collect();
             *dense = Some(convexified.matrix);
@@ -1334,7 +1344,9 @@ impl<'a> Sqp<'a> {
                 held
             };
             if self.options.verbosity >= 2 {
-                let _ = writeln!(std::io::stderr(), "      held at bounds: {}", held.len());
+                self.live
+                    .borrow_mut()
+                    .message(&format!("      held at bounds: {}", held.len()));
             }
             let (r, c, v) = hessian::decouple_triplets(n, rows, cols, &values, &held);
             *sparse = Some(hessian::assemble_sparse_lower(n, &r, &c, &v));

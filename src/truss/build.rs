@@ -53,6 +53,9 @@ pub struct Model {
     pub settings: Settings,
     /// Number of user joints (they come first in `structure.joints`).
     pub user_joints: usize,
+    /// With `[connect] full`: every admissible pair is a potential beam (the layout LP prices
+    /// them); `structure.beams` is then the first member set.
+    pub full: Option<ground::FullConnectivity>,
 }
 
 /// Builds the model; `seed` drives random ground structures.
@@ -146,10 +149,15 @@ pub fn build(spec: &TrussSpec, src: &Source, seed: u64) -> Result<Model, InputEr
         tol,
     );
     let structure = Structure { joints, beams };
+    let full = spec
+        .connect
+        .full
+        .then_some(ground::FullConnectivity { forbidden, tol });
     Ok(Model {
         structure,
         settings,
         user_joints: user,
+        full,
     })
 }
 

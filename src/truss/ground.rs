@@ -32,7 +32,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::geometry::segment_point_distance;
-use super::model::{Beam, Joint, JointKind, Mirror, Obstacle, Vec3};
+use super::model::{Beam, Joint, JointKind, Mirror, Obstacle, Settings, Vec3};
 
 /// How free joints are placed.
 #[derive(Debug, Clone, PartialEq)]
@@ -284,18 +284,28 @@ fn admissible(
     tol: f64,
 ) -> bool {
     let [a, b] = beam.ends;
+    let (pa, pb) = (joints[a].position, joints[b].position);
+    let through_joint = joints
+        .iter()
+        .enumerate()
+        .any(|(k, j)| k != a && k != b && segment_point_distance(&pa, &pb, &j.position).0 <= tol);
+    !through_joint && admissible_ends(joints, beam, forbidden, obstacles)
+}
+
+/// The rules of [`admissible`] besides "no joint on the segment": not two anchors, not a
+/// forbidden pair, and a beam between two fixed joints clear of every obstacle.
+fn admissible_ends(
+    joints: &[Joint],
+    beam: Beam,
+    forbidden: &BTreeSet<Beam>,
+    obstacles: &[Obstacle],
+) -> bool {
+    let [a, b] = beam.ends;
     let (ja, jb) = (&joints[a], &joints[b]);
     if ja.is_anchor() && jb.is_anchor() || forbidden.contains(&beam) {
         return false;
     }
     let (pa, pb) = (ja.position, jb.position);
-    let through_joint = joints
-        .iter()
-        .enumerate()
-        .any(|(k, j)| k != a && k != b && segment_point_distance(&pa, &pb, &j.position).0 <= tol);
-    if through_joint {
-        return false;
-    }
     if !ja.is_free() && !jb.is_free() {
         return obstacles.iter().all(|o| match o {
             Obstacle::HalfSpace { .. } => o.clearance(&pa) >= 0.0 && o.clearance(&pb) >= 0.0,
@@ -305,6 +315,36 @@ fn admissible(
         });
     }
     true
+}
+
+/// The full ground structure (`[connect] full`): every admissible pair of joints is a potential
+/// beam. It is never built; the layout LP prices it ([`super::member_adding`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FullConnectivity {
+    /// Pairs never joined.
+    pub forbidden: BTreeSet<Beam>,
+    /// Distance, m, within which a joint lies on a segment.
+    pub tol: f64,
+}
+
+impl FullConnectivity {
+    /// Whether `beam` passes the admissibility rules other than "no joint on the segment"
+    /// (which member adding tests by direction).
+    pub fn admits_ends(&self, joints: &[Joint], beam: Beam, obstacles: &[Obstacle]) -> bool {
+        admissible_ends(joints, beam, &self.forbidden, obstacles)
+    }
+
+    /// `beams` closed under the problem's mirror planes ([`mirror_closure`]), sorted.
+    pub fn close(&self, joints: &[Joint], beams: Vec<Beam>, settings: &Settings) -> Vec<Beam> {
+        mirror_closure(
+            joints,
+            beams,
+            &settings.symmetry,
+            &self.forbidden,
+            &settings.obstacles,
+            self.tol,
+        )
+    }
 }
 
 #[cfg(test)]

@@ -16,9 +16,11 @@ pub mod geometry;
 pub mod ground;
 pub mod lp;
 pub mod mass;
+pub mod member_adding;
 pub mod model;
 pub mod nlp;
 pub mod plastic;
+pub mod quality;
 pub mod spec;
 pub mod start;
 pub mod topology;
@@ -48,7 +50,9 @@ use crate::spec::{Key, Source};
 use build::Model;
 use design::Design;
 use nlp::{SetupError, TrussNlp};
+use quality::Quality;
 use spec::{StartForces, TrussSpec};
+use start::LpReport;
 use topology::RoundSettings;
 
 /// A loaded, validated truss problem.
@@ -139,20 +143,21 @@ impl Problem {
         &self,
         model: &Model,
         seed: u64,
-    ) -> Result<(TrussNlp, serde_json::Value), InputError> {
+    ) -> Result<(TrussNlp, serde_json::Value, Option<LpReport>), InputError> {
         if self.spec.start_forces != StartForces::Layout {
             let method = match self.spec.start_forces {
                 StartForces::Zero => "zero",
                 _ => "random",
             };
-            return Ok((self.nlp(model, seed)?, json!({ "method": method })));
+            return Ok((self.nlp(model, seed)?, json!({ "method": method }), None));
         }
-        let layout = start::layout_start(&model.structure, &model.settings)
+        let layout = start::layout_start(&model.structure, &model.settings, model.full.as_ref())
             .map_err(|e| e.to_string())
             .and_then(|layout| {
                 let report = json!({
                     "method": "layout",
-                    "lp_cost": layout.cost,
+                    "lp_cost": layout.lp.cost,
+                    "lp": layout.lp,
                     "dropped_beams": layout.dropped_beams,
                     "dropped_joints": layout.dropped_joints,
                 });
@@ -163,7 +168,7 @@ impl Problem {
                     layout.forces,
                     layout.parts,
                 )
-                .map(|nlp| (nlp, report))
+                .map(|nlp| (nlp, report, Some(layout.lp)))
                 .map_err(|e| e.to_string())
             });
         match layout {
@@ -171,6 +176,7 @@ impl Problem {
             Err(e) => Ok((
                 self.nlp(model, seed)?,
                 json!({ "method": "random", "layout_failed": e }),
+                None,
             )),
         }
     }
@@ -244,10 +250,16 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let started = Instant::now();
     let model = problem.model_for(seed)?;
     let mut timings = BTreeMap::new();
-    let (mut nlp, start_report) = problem.staged_nlp(&model, seed)?;
+    let (mut nlp, start_report, lp) = problem.staged_nlp(&model, seed)?;
+    let start = quality::Point::start(&nlp)
+        .ok()
+        .map(|point| (nlp.clone(), point));
     timings.insert("build".to_string(), started.elapsed().as_secs_f64());
     let options = opts.solver_options(&problem.spec.solver);
-    let rounds = opts.rounds.unwrap_or(problem.spec.rounds.count).max(1);
+    let count = opts.rounds.or(problem.spec.rounds.count);
+    let rounds = count.unwrap_or(ROUND_CAP).max(1);
+    // Default rounds: non-converged rounds in a row whose clean-up changed nothing.
+    let mut restarts = 0;
     let initial = (model.structure.joints.len(), model.structure.beams.len());
     let mut reports = Vec::new();
     let mut iterations = 0;
@@ -289,9 +301,15 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             &nlp.forces(&solution.x),
             &settings,
         );
-        if optimal && report.changes_nothing() {
-            // Another solve would start at this optimum of the same model.
-            break;
+        if report.changes_nothing() {
+            // Another solve would start at this optimum of the same model; by default a
+            // non-converged round on an unchanged model is restarted once (fresh Hessian).
+            restarts += 1;
+            if optimal || (count.is_none() && restarts > DEFAULT_RESTARTS) {
+                break;
+            }
+        } else {
+            restarts = 0;
         }
         reports.push(report);
         nlp = TrussNlp::new(structure, model.settings.clone(), forces)
@@ -309,14 +327,42 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         nlp = converged_nlp;
         solution = converged_solution;
     }
+    let unit = nlp.objective_unit();
+    let final_value = solution.objective * unit.scale;
+    let mut kept_start = false;
+    let start_figures = start.map(|(start_nlp, point)| {
+        let feasible = point.violation <= options.constraint_tolerance;
+        let start_value = point.objective * start_nlp.objective_unit().scale;
+        if quality::keeps_start(&point, solution.objective, options.constraint_tolerance) {
+            kept_start = true;
+            nlp = start_nlp;
+            solution.x = point.x;
+            solution.objective = point.objective;
+            solution.constraints = point.constraints;
+            solution.max_violation = point.violation;
+        }
+        (start_value, feasible)
+    });
     timings.insert("solve".to_string(), solve_start.elapsed().as_secs_f64());
 
     let export_start = Instant::now();
     let design = Design::from_point(&nlp, &solution.x);
     let figures = design.figures(nlp.settings());
     let mut summary = ResultSummary::from_solution(problem.name(), Kind::Truss, seed, &solution);
-    let unit = nlp.objective_unit();
     summary.headline = Headline::of(&unit, solution.objective * unit.scale);
+    let quality = start_figures.map(|(start_value, feasible)| {
+        let q = Quality::new(
+            nlp.settings(),
+            lp.as_ref(),
+            &unit.unit,
+            final_value,
+            start_value,
+            feasible,
+            kept_start,
+        );
+        summary.status_message = format!("{} {}", summary.status_message, q.sentence());
+        q
+    });
     summary.iterations = iterations;
     summary.evaluations = evaluations;
     summary.figures = json!({
@@ -332,6 +378,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         "max_force_ratio": figures.max_force_ratio,
         "load_cases": nlp.settings().load_cases,
         "start": start_report,
+        "quality": quality,
         "rounds": reports,
         "rounds_run": rounds_run,
         "result_round": result_round,
@@ -373,6 +420,16 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         artifacts,
     })
 }
+
+/// Most solve + clean-up rounds by default (without `[rounds] count` or `--rounds`): rounds
+/// run until the design stops changing, this cap only guards against a clean-up that never
+/// settles.
+pub const ROUND_CAP: usize = 20;
+
+/// By default, a round that did not converge and whose clean-up changed nothing is solved
+/// again from its end point this many times (the solver's Hessian state starts afresh), then
+/// the rounds stop.
+pub const DEFAULT_RESTARTS: usize = 1;
 
 /// Largest violation (the solver's scaled measure) of a round's end point after which its
 /// clean-up may merge joints and tension runs. Merging moves joints and adds forces; at a point

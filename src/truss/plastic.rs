@@ -23,7 +23,7 @@ use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
 use super::lp::{self, LpError};
 use super::mass::gravity;
-use super::model::Structure;
+use super::model::{Structure, Vec3};
 use super::nlp::balance_basis;
 
 /// The LP optimum on a fixed ground structure.
@@ -48,9 +48,12 @@ pub struct PlasticLayout {
 pub enum LpMethod {
     /// The dense two-phase simplex method: a vertex solution, for small reference problems.
     Simplex,
-    /// The sparse interior-point method: a point of the optimal face, for whole ground
+    /// The sparse interior-point method with a crossover to a vertex, for whole ground
     /// structures.
     InteriorPoint,
+    /// The sparse interior-point method alone: a point of the optimal face (its forces spread
+    /// over tied members), for member adding on thousands of members.
+    InteriorFace,
 }
 
 /// Solves the plastic layout LP (module header) for load case `case` by the dense simplex
@@ -128,7 +131,8 @@ pub fn layout_with_costs(
         .collect();
     let s = match method {
         LpMethod::Simplex => lp::solve(&DMatrix::from(&a), &b, &cost)?,
-        LpMethod::InteriorPoint => lp::solve_sparse(&CsrMatrix::from(&a), &b, &cost)?,
+        LpMethod::InteriorPoint => lp::solve_sparse(&CsrMatrix::from(&a), &b, &cost, true)?,
+        LpMethod::InteriorFace => lp::solve_sparse(&CsrMatrix::from(&a), &b, &cost, false)?,
     };
     let forces = (0..beams).map(|j| s.x[j] - s.x[beams + j]).collect();
     let dual_volume = s.y.iter().zip(&b).map(|(y, b)| y * b).sum();
@@ -140,6 +144,23 @@ pub fn layout_with_costs(
         primal_residual: s.primal_residual,
         dual_infeasibility: s.dual_infeasibility,
     })
+}
+
+/// Virtual displacements of the joints from the duals of [`layout_with_costs`] (same `axes`):
+/// u_i = Σ_r y_r·r over joint i's balance directions r, zero at a pinned anchor (dual units:
+/// cost per newton).
+pub fn virtual_displacements(structure: &Structure, axes: usize, duals: &[f64]) -> Vec<Vec3> {
+    let mut row = 0;
+    (structure.joints.iter())
+        .map(|joint| {
+            let mut u = Vec3::zeros();
+            for r in balance_basis(&joint.kind, axes) {
+                u += duals[row] * r;
+                row += 1;
+            }
+            u
+        })
+        .collect()
 }
 
 /// Michell's circle-supported cantilever: V* = 2·P·L·ln(L/r)/σ, m³.

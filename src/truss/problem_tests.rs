@@ -177,6 +177,45 @@ fn a_minimal_file_loads_and_errors_are_positioned() {
 
     let e = load_text(&format!("{MINIMAL}[connect]\nextra = [[\"a\", \"b\"]]\n")).unwrap_err();
     assert!(e.message.contains("no joint named `a`"), "{e}");
+
+    let full = format!("start_forces = \"zero\"\n{MINIMAL}[connect]\nfull = true\n");
+    let e = load_text(&full).unwrap_err();
+    assert!(e.message.contains("start_forces = \"layout\""), "{e}");
+    assert_eq!(e.position.map(|p| p.0), Some(16), "{e}");
+}
+
+#[test]
+fn a_fink_roof_posed_against_the_lp_ends_optimal_below_its_certified_optimum() {
+    // fink_roof_linear: `linear` mass, every pair of lattice joints priced (`[connect] full`),
+    // default rounds and solver settings.
+    let p = problem("fink_roof_linear");
+    let opts = RunOptions {
+        quiet: true,
+        ..Default::default()
+    };
+    let outcome = crate::application::run_problem::<super::Truss>(&p, &opts).unwrap();
+    assert_eq!(outcome.summary.status, "Optimal");
+    let figures = &outcome.summary.figures;
+    let lp = &figures["start"]["lp"];
+    assert_eq!(lp["all_pairs"], true);
+    let (cost, bound) = (
+        lp["cost"][0].as_f64().unwrap(),
+        lp["lower_bound"][0].as_f64().unwrap(),
+    );
+    assert!(bound <= cost && bound > cost * (1.0 - 1e-5), "{lp}");
+    let quality = &figures["quality"];
+    assert_eq!(quality["kept_start"], false);
+    assert_eq!(quality["start_feasible"], true);
+    let mass = figures["mass_kg"].as_f64().unwrap();
+    assert!((quality["final_value"].as_f64().unwrap() - mass).abs() < 1e-9 * mass);
+    // Linear mass with self-weight: the start is the LP design, and moving the joints gains.
+    assert!((quality["start_value"].as_f64().unwrap() - cost).abs() < 1e-6 * cost);
+    assert!(mass < bound, "{mass} kg vs LP bound {bound} kg");
+    assert!(
+        outcome.summary.status_message.contains("lower bound"),
+        "{}",
+        outcome.summary.status_message
+    );
 }
 
 #[test]
@@ -229,7 +268,7 @@ fn the_layout_start_keeps_the_mirror_images_of_kept_joints() {
     // mirror symmetric. Its layout start must keep every free joint's images so that the
     // symmetry rows can be built (else the run falls back to the random start).
     let p = problem("eiffel_tower");
-    let (nlp, report) = p.staged_nlp(p.model(), 0).unwrap();
+    let (nlp, report, _) = p.staged_nlp(p.model(), 0).unwrap();
     assert_eq!(report["method"], "layout", "{report}");
     let joints = &nlp.structure().joints;
     let symmetry = &p.model().settings.symmetry;
@@ -274,7 +313,7 @@ fn with_linear_mass_the_layout_start_balances_self_weight() {
     let mut settings = p.model().settings.clone();
     settings.mass = super::mass::MassModel::linear(2.5e8, 2.5e8, 7850.0);
     assert!(settings.self_weight);
-    let start = super::start::layout_start(&p.model().structure, &settings).unwrap();
+    let start = super::start::layout_start(&p.model().structure, &settings, None).unwrap();
     let nlp = super::nlp::TrussNlp::with_parts(
         start.structure,
         settings.clone(),
@@ -288,7 +327,7 @@ fn with_linear_mass_the_layout_start_balances_self_weight() {
     assert!(residual < 1e-8, "relative residual {residual:e}");
     // Without self-weight in the LP the same start is off by the beams' weight.
     settings.self_weight = false;
-    let light = super::start::layout_start(&p.model().structure, &settings).unwrap();
+    let light = super::start::layout_start(&p.model().structure, &settings, None).unwrap();
     settings.self_weight = true;
     let nlp =
         super::nlp::TrussNlp::with_parts(light.structure, settings, light.forces, light.parts)
@@ -301,9 +340,10 @@ fn with_linear_mass_the_layout_start_balances_self_weight() {
 
 #[test]
 fn rounds_stop_once_an_optimal_round_leaves_nothing_to_clean() {
-    // michell solves to Optimal in its first round and its clean-up (no pruning, nothing at
-    // minimum length, no dangling joint) changes nothing: a second solve would start at the
-    // optimum, so four requested rounds run one.
+    // michell solves to Optimal in its first round; its clean-up prunes the members left at
+    // zero force (the default `prune`), the second round solves to Optimal again and its
+    // clean-up changes nothing: a third solve would start at the optimum, so four requested
+    // rounds run two.
     let p = problem("michell");
     let opts = RunOptions {
         quiet: true,
@@ -313,9 +353,14 @@ fn rounds_stop_once_an_optimal_round_leaves_nothing_to_clean() {
     let outcome = crate::application::run_problem::<super::Truss>(&p, &opts).unwrap();
     assert_eq!(outcome.summary.status, "Optimal");
     let figures = &outcome.summary.figures;
-    assert_eq!(figures["rounds_run"], 1);
-    assert_eq!(figures["result_round"], 1);
-    assert!(figures["rounds"].as_array().unwrap().is_empty());
+    assert_eq!(figures["rounds_run"], 2);
+    assert_eq!(figures["result_round"], 2);
+    let rounds = figures["rounds"].as_array().unwrap();
+    assert_eq!(rounds.len(), 1);
+    assert!(
+        rounds[0]["pruned_beams"].as_u64().unwrap() > 0,
+        "{rounds:?}"
+    );
 }
 
 #[test]

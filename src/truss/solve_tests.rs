@@ -90,8 +90,8 @@ fn linear_sizing_equals_the_plastic_lp_and_geometry_improves_on_it() {
         lp.volume
     );
     // Geometry from the staged start: the layout LP's members with their LP forces and signs.
-    let staged = start::layout_start(&s, &linear_settings(true)).unwrap();
-    assert!((staged.cost[0] - lp.volume).abs() <= 1e-6 * lp.volume);
+    let staged = start::layout_start(&s, &linear_settings(true), None).unwrap();
+    assert!((staged.lp.cost[0] - lp.volume).abs() <= 1e-6 * lp.volume);
     let geometry = TrussNlp::with_parts(
         staged.structure,
         linear_settings(true),
@@ -117,7 +117,7 @@ fn linear_sizing_equals_the_plastic_lp_and_geometry_improves_on_it() {
 #[test]
 fn design_from_a_solve_reports_consistent_figures() {
     let s = half_wheel(0.5);
-    let staged = start::layout_start(&s, &linear_settings(true)).unwrap();
+    let staged = start::layout_start(&s, &linear_settings(true), None).unwrap();
     let nlp = TrussNlp::with_parts(
         staged.structure,
         linear_settings(true),

@@ -23,7 +23,7 @@
 //!           "pinned" | "roller", reactions = [[dx, dy, dz], ...]; loads: force = [..] N,
 //!           mass = kg (weight M·g)
 //! [ground] kind = "layers" | "lattice" | "random" | "none" (see [`GroundSpec`])
-//! [connect] neighbours = 8, extra = [["a", "b"]], forbidden = [["a", "b"]]
+//! [connect] neighbours = 8, extra = [["a", "b"]], forbidden = [["a", "b"]], full = false
 //! [[symmetry]] point, normal       [[obstacle]] kind = "half_space" | "sphere"
 //! [[load_case]] name, factor (on the joints' own loads), loads = [{ joint, force, mass }]
 //! [rounds] count, prune, remove_crossings, merge_tolerance
@@ -372,6 +372,11 @@ pub struct ConnectSpec {
     /// Pairs never joined, by joint name.
     #[serde(default, deserialize_with = "crate::spec::arrays::exact_vec")]
     pub forbidden: Vec<[String; 2]>,
+    /// Every admissible pair of joints is a potential beam: the layout start prices them all
+    /// and adds the ones that lower its LP (member adding), from the k-nearest beams (default
+    /// false).
+    #[serde(default)]
+    pub full: bool,
 }
 
 impl Default for ConnectSpec {
@@ -380,6 +385,7 @@ impl Default for ConnectSpec {
             neighbours: default_neighbours(),
             extra: Vec::new(),
             forbidden: Vec::new(),
+            full: false,
         }
     }
 }
@@ -464,12 +470,12 @@ pub struct CaseLoadSpec {
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RoundsSpec {
-    /// Number of solve + clean-up rounds (default 1; `--rounds` overrides).
-    #[serde(default = "default_rounds")]
-    pub count: usize,
-    /// Drop beams whose largest |λ| is below this fraction of the largest |λ| (default 0: keep,
-    /// as the seed prefers).
-    #[serde(default)]
+    /// At most this many solve + clean-up rounds (`--rounds` overrides); by default the rounds
+    /// run until the design stops changing, at most `ROUND_CAP` (src/truss/mod.rs).
+    pub count: Option<usize>,
+    /// Drop beams whose largest |λ| is below this fraction of the largest |λ| (default 1e-6:
+    /// zero-force members).
+    #[serde(default = "default_prune")]
     pub prune: f64,
     /// Remove the weaker of two crossing beams.
     #[serde(default)]
@@ -482,16 +488,16 @@ pub struct RoundsSpec {
 impl Default for RoundsSpec {
     fn default() -> Self {
         RoundsSpec {
-            count: default_rounds(),
-            prune: 0.0,
+            count: None,
+            prune: default_prune(),
             remove_crossings: false,
             merge_tolerance: default_merge_tolerance(),
         }
     }
 }
 
-fn default_rounds() -> usize {
-    1
+fn default_prune() -> f64 {
+    1e-6
 }
 
 fn default_merge_tolerance() -> f64 {
@@ -556,6 +562,13 @@ pub fn validate(spec: &TrussSpec, src: &Source) -> Result<(), InputError> {
         1,
         MAX_NEIGHBOURS,
     )?;
+    if spec.connect.full && spec.start_forces != StartForces::Layout {
+        return Err(err(
+            &[N("connect"), N("full")],
+            "`full` connectivity needs start_forces = \"layout\" (the layout LP adds its members)"
+                .into(),
+        ));
+    }
     for (i, m) in spec.symmetry.iter().enumerate() {
         finite3(&m.point, src, &[N("symmetry"), I(i), N("point")])?;
         unit(&m.normal, src, &[N("symmetry"), I(i), N("normal")])?;
@@ -630,7 +643,9 @@ pub fn validate(spec: &TrussSpec, src: &Source) -> Result<(), InputError> {
         ));
     }
     src.non_negative(&[N("rounds"), N("merge_tolerance")], r.merge_tolerance)?;
-    src.count_in(&[N("rounds"), N("count")], r.count, 1, MAX_ROUNDS)?;
+    if let Some(count) = r.count {
+        src.count_in(&[N("rounds"), N("count")], count, 1, MAX_ROUNDS)?;
+    }
     validate_solver(&spec.solver, src, &[N("solver")])
 }
 

@@ -64,11 +64,13 @@
 //! Obstacles: beams that cut a sphere obstacle, and joints inside one, are left out of the LP when
 //! the rest can carry the loads.
 
+use super::ground::FullConnectivity;
 use super::lp::LpError;
 use super::mass::Compression;
+use super::member_adding::{self, Growth, MemberPrice};
 use super::model::{Beam, Mirror, Objective, Obstacle, Settings, Structure};
 use super::nlp::ForceParts;
-use super::plastic::{self, LpMethod};
+use super::plastic::LpMethod;
 
 /// Beams carrying at most this fraction of the largest |λ| in every case are idle.
 pub const IDLE_FRACTION: f64 = 1e-6;
@@ -90,65 +92,79 @@ pub struct LayoutStart {
     pub forces: Vec<f64>,
     /// The sign of each LP force (both parts where a case leaves the beam idle), case-major.
     pub parts: Vec<ForceParts>,
-    /// LP objective per case (the model's units: kg, or m·N for the length objective).
-    pub cost: Vec<f64>,
+    /// What the last layout LP solved and certified.
+    pub lp: LpReport,
     /// Beams dropped as idle or cutting an obstacle.
     pub dropped_beams: usize,
     /// Free joints dropped.
     pub dropped_joints: usize,
 }
 
-/// Per-newton LP costs of every beam at its start length (module header).
-pub fn beam_costs(structure: &Structure, settings: &Settings, force_scale: f64) -> Vec<(f64, f64)> {
+/// The layout LP's optimum and certificate (the model's units: kg, or m·N for the length
+/// objective; with Euler compression the LP prices by the secant, so its cost is an estimate).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct LpReport {
+    /// LP objective per case.
+    pub cost: Vec<f64>,
+    /// Lower bound per case on the LP optimum over every priced member, from the duals
+    /// ([`member_adding::Layouts::lower_bound`]).
+    pub lower_bound: Vec<f64>,
+    /// Whether every admissible pair of joints was priced (`[connect] full`), or only the
+    /// ground structure's beams.
+    pub all_pairs: bool,
+    /// Largest relative violation of the dual constraints over the priced members (the
+    /// bound divides the dual objective by 1 + this).
+    pub max_violation: f64,
+    /// Members in the last LP.
+    pub members: usize,
+    /// Members added by pricing (every pass).
+    pub members_added: usize,
+    /// LP solves per case (every pass).
+    pub solves: usize,
+}
+
+/// Per-newton LP cost of a beam of `length` m, (tension, compression) (module header).
+pub fn cost_per_newton(length: f64, settings: &Settings, force_scale: f64) -> (f64, f64) {
+    if settings.objective == Objective::Length {
+        return (length, length);
+    }
     let weight = match settings.objective {
         Objective::MassTensionPreference(w) => w,
         _ => 1.0,
     };
-    let masses = masses_per_newton(structure, settings, force_scale);
-    (0..structure.beams.len())
-        .map(|j| {
-            if settings.objective == Objective::Length {
-                let length = structure.length(j);
-                return (length, length);
-            }
-            (masses[j].0, weight * masses[j].1)
-        })
-        .collect()
+    let (t, c) = mass_per_newton(length, settings, force_scale);
+    (t, weight * c)
 }
 
-/// Every beam's mass per newton of tension and of compression at its start length, kg/N: the
-/// tension law, and the linear law or the Euler secant through the largest load
-/// `force_scale` (module header). The LP's self-weight uses these.
-pub fn masses_per_newton(
+/// A beam's mass per newton of (tension, compression) at `length` m, kg/N: the tension law,
+/// and the linear law or the Euler secant through the largest load `force_scale` (module
+/// header). The LP's self-weight uses these.
+pub fn mass_per_newton(length: f64, settings: &Settings, force_scale: f64) -> (f64, f64) {
+    let mass = &settings.mass;
+    let compression = match mass.compression {
+        Compression::Linear { k_c } => k_c * length,
+        Compression::Euler { k_c } => k_c * length * length / force_scale.sqrt(),
+    };
+    (mass.k_t * length, compression)
+}
+
+/// Stage 1 on `structure` (module header); with `full`, the LP is over every admissible pair of
+/// joints by member adding, starting from the structure's beams. Fails only if no subset
+/// tried can carry the loads.
+pub fn layout_start(
     structure: &Structure,
     settings: &Settings,
-    force_scale: f64,
-) -> Vec<(f64, f64)> {
-    let mass = &settings.mass;
-    (0..structure.beams.len())
-        .map(|j| {
-            let length = structure.length(j);
-            let compression = match mass.compression {
-                Compression::Linear { k_c } => k_c * length,
-                Compression::Euler { k_c } => k_c * length * length / force_scale.sqrt(),
-            };
-            (mass.k_t * length, compression)
-        })
-        .collect()
-}
-
-/// Stage 1 on `structure` (module header). Fails only if no subset tried can carry the loads.
-pub fn layout_start(structure: &Structure, settings: &Settings) -> Result<LayoutStart, LpError> {
+    full: Option<&FullConnectivity>,
+) -> Result<LayoutStart, LpError> {
     let clear: Vec<bool> = (structure.beams.iter())
         .map(|b| clears_spheres(structure, b, &settings.obstacles))
         .collect();
-    let attempt = |self_weight: bool| match solve_on(structure, settings, &clear, self_weight) {
-        Err(_) if clear.iter().any(|&c| !c) => solve_on(
-            structure,
-            settings,
-            &vec![true; structure.beams.len()],
-            self_weight,
-        ),
+    let lp = |usable: &[bool], self_weight| {
+        let grow = full.map(|f| (f, usable == clear.as_slice()));
+        solve_on(structure, settings, usable, self_weight, grow)
+    };
+    let attempt = |self_weight: bool| match lp(&clear, self_weight) {
+        Err(_) if clear.iter().any(|&c| !c) => lp(&vec![true; structure.beams.len()], self_weight),
         result => result,
     };
     match attempt(settings.self_weight) {
@@ -171,38 +187,45 @@ fn clears_spheres(structure: &Structure, beam: &Beam, obstacles: &[Obstacle]) ->
 }
 
 /// Solves the LP on the beams marked `usable` (with the beams' estimated weight lumped on their
-/// ends if `self_weight`), symmetrizes, replaces tension runs by single members and solves
-/// again on the ground structure with those members added (at most `RUN_PASSES` times: the new
-/// members need no hangers, which the LP then drops), prunes.
+/// ends if `self_weight`; growing the member set over every admissible pair with `grow`, whose
+/// flag says whether added members must clear the sphere obstacles), symmetrizes, replaces
+/// tension runs by single members and solves again on the ground structure with those members
+/// added (at most `RUN_PASSES` times: the new members need no hangers, which the LP then
+/// drops), prunes.
 fn solve_on(
     structure: &Structure,
     settings: &Settings,
     usable: &[bool],
     self_weight: bool,
+    grow: Option<(&FullConnectivity, bool)>,
 ) -> Result<LayoutStart, LpError> {
-    let mut ground = structure.clone();
     let mut usable = usable.to_vec();
-    let (mut forces, mut cost) = lp_forces(&ground, settings, &usable, self_weight)?;
+    let (mut ground, mut forces, mut lp) =
+        lp_forces(structure, settings, &usable, self_weight, grow)?;
     for _ in 0..RUN_PASSES {
+        usable.resize(ground.beams.len(), true);
         let Some((merged, _)) = merge_tension_runs(&ground, forces.clone(), settings.max_length)
         else {
             break;
         };
         usable.resize(merged.beams.len(), true);
-        ground = merged;
-        (forces, cost) = lp_forces(&ground, settings, &usable, self_weight)?;
+        let (added, solves) = (lp.members_added, lp.solves);
+        (ground, forces, lp) = lp_forces(&merged, settings, &usable, self_weight, grow)?;
+        lp.members_added += added;
+        lp.solves += solves;
     }
-    Ok(prune(&ground, forces, cost, &settings.symmetry))
+    Ok(prune(&ground, forces, lp, &settings.symmetry))
 }
 
-/// The LP forces (N, `[case][beam]`, symmetrized) and cost per case of [`solve_on`].
+/// The LP of [`solve_on`]: the ground structure with the members pricing added (appended), its
+/// forces (N, `[case][beam]`, symmetrized) and the LP's report.
 fn lp_forces(
     structure: &Structure,
     settings: &Settings,
     usable: &[bool],
     self_weight: bool,
-) -> Result<(Vec<Vec<f64>>, Vec<f64>), LpError> {
-    let kept: Vec<usize> = (0..structure.beams.len()).filter(|&j| usable[j]).collect();
+    grow: Option<(&FullConnectivity, bool)>,
+) -> Result<(Structure, Vec<Vec<f64>>, LpReport), LpError> {
     let force_scale = (structure.joints.iter())
         .flat_map(|j| j.loads.iter())
         .map(|f| f.norm())
@@ -219,37 +242,63 @@ fn lp_forces(
                 j
             })
             .collect(),
-        beams: kept.iter().map(|&j| structure.beams[j]).collect(),
+        beams: (structure.beams.iter().zip(usable))
+            .filter_map(|(b, &u)| u.then_some(*b))
+            .collect(),
     };
-    let costs = beam_costs(&sub, settings, force_scale);
-    let self_weight = self_weight.then(|| masses_per_newton(&sub, settings, force_scale));
-    let cost_scale = costs
-        .iter()
-        .map(|c| c.0.max(c.1))
+    let cost_scale = (0..sub.beams.len())
+        .map(|j| {
+            let c = cost_per_newton(sub.length(j), settings, force_scale);
+            c.0.max(c.1)
+        })
         .fold(0.0, f64::max)
         .max(f64::MIN_POSITIVE);
-    let scaled: Vec<(f64, f64)> = (costs.iter())
-        .map(|c| (c.0 / cost_scale, c.1 / cost_scale))
+    let price = |length: f64| {
+        let (t, c) = cost_per_newton(length, settings, force_scale);
+        MemberPrice {
+            cost: (t / cost_scale, c / cost_scale),
+            weight: self_weight.then(|| mass_per_newton(length, settings, force_scale)),
+        }
+    };
+    let sub_ref = &sub;
+    let growth = grow.map(|(full, must_clear)| {
+        let admits = move |beam: Beam| {
+            full.admits_ends(&sub_ref.joints, beam, &settings.obstacles)
+                && (!must_clear || clears_spheres(sub_ref, &beam, &settings.obstacles))
+        };
+        let close = move |beams: Vec<Beam>| full.close(&sub_ref.joints, beams, settings);
+        (admits, close)
+    });
+    let growth = growth
+        .as_ref()
+        .map(|(admits, close)| Growth { admits, close });
+    let axes = settings.balance_axes();
+    // Thousands of members: the crossover's dense simplex would dominate (`lp::solve_sparse`).
+    let method = match growth {
+        Some(_) => LpMethod::InteriorFace,
+        None => LpMethod::InteriorPoint,
+    };
+    let layouts = member_adding::solve(&sub, axes, &price, growth.as_ref(), method)?;
+    let mut ground = structure.clone();
+    let mut index: std::collections::HashMap<Beam, usize> = (ground.beams.iter().enumerate())
+        .map(|(j, b)| (*b, j))
         .collect();
-    let cases = settings.load_cases.len();
-    let mut forces = vec![vec![0.0; structure.beams.len()]; cases];
-    let mut cost = Vec::with_capacity(cases);
-    for (c, case_forces) in forces.iter_mut().enumerate() {
-        let sol = plastic::layout_with_costs(
-            &sub,
-            c,
-            settings.balance_axes(),
-            &scaled,
-            self_weight.as_deref(),
-            LpMethod::InteriorPoint,
-        )?;
-        for (k, &j) in kept.iter().enumerate() {
+    let columns: Vec<usize> = (layouts.beams.iter())
+        .map(|b| {
+            *index.entry(*b).or_insert_with(|| {
+                ground.beams.push(*b);
+                ground.beams.len() - 1
+            })
+        })
+        .collect();
+    let mut forces = vec![vec![0.0; ground.beams.len()]; layouts.cases.len()];
+    for (case_forces, sol) in forces.iter_mut().zip(&layouts.cases) {
+        for (k, &j) in columns.iter().enumerate() {
             case_forces[j] = sol.forces[k] * force_scale;
         }
-        cost.push(sol.volume * cost_scale * force_scale);
     }
     for mirror in &settings.symmetry {
-        if let Some(image) = mirror_beams(structure, mirror) {
+        if let Some(image) = mirror_beams(&ground, mirror) {
             for case_forces in forces.iter_mut() {
                 let old = case_forces.clone();
                 for (j, f) in case_forces.iter_mut().enumerate() {
@@ -258,7 +307,17 @@ fn lp_forces(
             }
         }
     }
-    Ok((forces, cost))
+    let unscale = cost_scale * force_scale;
+    let report = LpReport {
+        cost: layouts.cases.iter().map(|c| c.volume * unscale).collect(),
+        lower_bound: layouts.lower_bound().iter().map(|b| b * unscale).collect(),
+        all_pairs: layouts.all_pairs,
+        max_violation: layouts.violation,
+        members: layouts.beams.len(),
+        members_added: layouts.added,
+        solves: layouts.iterations,
+    };
+    Ok((ground, forces, report))
 }
 
 /// Replaces every tension run through a free joint by one member (module header, "Tension
@@ -400,7 +459,7 @@ fn mirror_beams(structure: &Structure, mirror: &Mirror) -> Option<Vec<usize>> {
 fn prune(
     structure: &Structure,
     forces: Vec<Vec<f64>>,
-    cost: Vec<f64>,
+    lp: LpReport,
     mirrors: &[Mirror],
 ) -> LayoutStart {
     let largest = (forces.iter().flatten())
@@ -451,7 +510,7 @@ fn prune(
         structure: Structure { joints, beams },
         forces: start,
         parts,
-        cost,
+        lp,
     }
 }
 

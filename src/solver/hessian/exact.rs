@@ -31,12 +31,37 @@
 //! instead of Optimal. Inequality rows are left out of that base: an inequality the QP should
 //! leave would be held by the γ term (with them HS108 ends at another KKT point).
 //!
+//! When no γ alone succeeds, the shift is first confined to the null space of all those rows
+//! (equalities and expected-active inequalities): `H + δ(I − QQᵀ) + γ·Σₖuₖuₖᵀ`, Q an
+//! orthonormal basis of the span of the independent rows (modified Gram–Schmidt, O(n·k·r)
+//! per iteration; dependent rows are left out of Q and of the γ term), with the same δ
+//! schedule and γ up to [`PROJECTED_GAMMA`]. On the QP's feasible set of those
+//! rows the QP step is then the Newton step of the reduced Hessian shifted by δ, and no step
+//! across an active row is shortened. A shift of H alone (or of the reduced Hessian over the
+//! equalities only) also damps the directions the active inequalities block, every iteration:
+//! HS114 (variables from 1.5 to 16,000, a bilinear objective) crawled to its iteration limit
+//! with shifts of 0.05–0.7 and steps of 0.01–0.3 where x₂ must move 3,800; with the projected
+//! shift it ends Optimal in 18 iterations. Tried and not kept (docs/notes/solver.md): a
+//! diagonal metric `Dⱼ = |Hⱼⱼ| + Σᵢ Aᵢⱼ²` for the shift (unit-invariant, but HS114 took 274
+//! iterations and a catenoid film 70× longer), and flipping only the negative eigenvalues of
+//! the reduced Hessian (HS114 in 11 iterations, but near-zero tangential curvature of mesh
+//! vertices left undamped: catenoid 4× slower, its steps cut by the line search).
+//! Only when no projected shift works does the fallback below run.
+//!
+//! Damping floor: the SQP passes a floor δ_f (absolute) that it raises after a Newton step its
+//! line search had to cut severely and lowers after full steps (`Sqp::damp_exact_steps`,
+//! shared with the sparse path); it is added on the same null space, `H + δ_f(I − QQᵀ)`,
+//! before the tests above. Without it, HS114 took 63 iterations with 40 steps cut to 2–5 %
+//! (full Newton steps of length ~2,000 on a bilinear problem); with it, 18. Its curvature
+//! measure leaves out the γ term (γ‖A d‖², of the linearized residual, not of the problem):
+//! with it in, roof_warren.toml ended Stalled.
+//!
 //! Multipliers: the QP with `H + γΣuₖuₖᵀ` returns row multipliers offset by `γ·uₖᵀd/‖aₖ‖`,
 //! nonzero where the linearized residual is (see [`Convexified::row_weight`]); the SQP adds
 //! them back, or γ ≫ 1 times an infeasibility would enter the next Hessian and the penalty
 //! weights.
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 use nalgebra_sparse::{CooMatrix, CscMatrix};
 
 /// Dense symmetric matrix from lower-triangle triplets (duplicates summed).
@@ -75,12 +100,12 @@ pub struct Convexified {
     /// The shift δ, relative to `max(1, maxᵢ|Hᵢᵢ|)` (0 when none was needed).
     pub shift: f64,
     /// The weight γ (absolute) of the term `γ·Σₖ uₖuₖᵀ` over the unit rows `uₖ = aₖ/‖aₖ‖`,
-    /// k < `weighted_rows`, that the matrix contains, 0 when none. A QP solved with it
+    /// k ∈ `weighted`, that the matrix contains, 0 when none. A QP solved with it
     /// returns row multipliers λ̃ₖ; those of the unmodified H are
     /// `λₖ = λ̃ₖ + γ·aₖᵀd/‖aₖ‖²` (the term's gradient `γ uₖ uₖᵀd` moved to the rows).
     pub row_weight: f64,
-    /// How many of the leading rows carry `row_weight`.
-    pub weighted_rows: usize,
+    /// The rows (indices into those given) that carry `row_weight`: an independent subset.
+    pub weighted: Vec<usize>,
 }
 
 /// The remembered inertia-correction shift.
@@ -96,12 +121,54 @@ const DELTA_MAX: f64 = 1e40;
 const PIVOT_MIN: f64 = 1e-10;
 /// Augmentation weights tried, relative to the Hessian scale over the row scale.
 const GAMMAS: [f64; 3] = [1.0, 1e2, 1e4];
+/// Largest augmentation weight of the projected shift (relative), tried after [`GAMMAS`]: the
+/// shift lifts the null space, so the weight only has to overcome the coupling across the rows
+/// (see the module header), which grows as the rows' smallest singular value falls.
+const PROJECTED_GAMMA: f64 = 1e6;
 /// Augmentation weight under the shift when none of `GAMMAS` suffices (relative; see the
 /// module header for why it is large, and not larger).
 pub const FALLBACK_GAMMA: f64 = 1e4;
 
-/// `max(1, maxᵢ|Hᵢᵢ|)`.
-fn scale_of(h: &DMatrix<f64>) -> f64 {
+/// The rows' independent subset and `I − QQᵀ`, Q an orthonormal basis of their span (`rows`
+/// k×n, unit or any scaling): the projector onto their null space. Q by modified Gram–Schmidt
+/// over the unit rows in order (two passes, for orthogonality to working precision), O(n·k·r);
+/// a row within [`RANK_TOLERANCE`] of the span of those before it is left out. (A thin QR of
+/// dependent rows returns k columns spanning more than the rows, and leaves part of their
+/// null space unshifted.)
+fn independent_rows(rows: &DMatrix<f64>) -> (Vec<usize>, DMatrix<f64>) {
+    let n = rows.ncols();
+    let mut basis: Vec<DVector<f64>> = Vec::new();
+    let mut kept = Vec::new();
+    for (k, row) in rows.row_iter().enumerate() {
+        let norm = row.norm();
+        if norm == 0.0 || !norm.is_finite() {
+            continue;
+        }
+        let mut v: DVector<f64> = row.transpose() / norm;
+        for _ in 0..2 {
+            for q in &basis {
+                let c = q.dot(&v);
+                v.axpy(-c, q, 1.0);
+            }
+        }
+        let residual = v.norm();
+        if residual > RANK_TOLERANCE {
+            basis.push(v / residual);
+            kept.push(k);
+        }
+    }
+    let mut projector = DMatrix::identity(n, n);
+    for q in &basis {
+        projector.ger(-1.0, q, q, 1.0);
+    }
+    (kept, projector)
+}
+
+/// Relative residual below which a unit row counts as dependent on the rows before it.
+const RANK_TOLERANCE: f64 = 1e-8;
+
+/// `max(1, maxᵢ|Hᵢᵢ|)`: the scale shifts are relative to.
+pub fn scale_of(h: &DMatrix<f64>) -> f64 {
     h.diagonal().iter().fold(1.0_f64, |a, v| a.max(v.abs()))
 }
 
@@ -114,6 +181,30 @@ fn safely_definite(h: &DMatrix<f64>, scale: f64) -> bool {
 }
 
 impl InertiaShift {
+    /// `h + δ·(I − QQᵀ) + γ·Σₖ uₖuₖᵀ` with Q an orthonormal basis of the span of the unit rows
+    /// `unit` (equalities and expected-active inequalities): the shift of the δ schedule acts
+    /// on their null space only, where the second-order conditions ask for positive
+    /// curvature, and γ ∈ [`GAMMAS`] or [`PROJECTED_GAMMA`] (relative to `scale`) makes the
+    /// whole positive definite across the rows. None when no δ up to `DELTA_MAX` works.
+    fn projected_shift(
+        &mut self,
+        h: &DMatrix<f64>,
+        unit: &DMatrix<f64>,
+        projector: &DMatrix<f64>,
+        scale: f64,
+    ) -> Option<(DMatrix<f64>, f64, f64)> {
+        let gram = unit.tr_mul(unit);
+        let ((matrix, weight), delta) = shift_schedule(self.last, |delta| {
+            let shifted = h + projector * (delta * scale);
+            GAMMAS.iter().chain(&[PROJECTED_GAMMA]).find_map(|g| {
+                let augmented = &shifted + &gram * (g * scale);
+                safely_definite(&augmented, scale).then_some((augmented, g * scale))
+            })
+        })?;
+        self.last = delta;
+        Some((matrix, delta, weight))
+    }
+
     /// Last δ used (0 when none was needed).
     pub fn last(&self) -> f64 {
         self.last
@@ -122,41 +213,51 @@ impl InertiaShift {
     /// `h + δI` with the smallest δ of the schedule that makes it positive definite, or None
     /// when h is not finite.
     pub fn convexify(&mut self, h: &DMatrix<f64>) -> Option<(DMatrix<f64>, f64)> {
-        self.convexify_with_rows(h, &DMatrix::zeros(0, h.nrows()), 0)
+        self.convexify_with_rows(h, &DMatrix::zeros(0, h.nrows()), 0, 0.0)
             .map(|c| (c.matrix, c.shift))
     }
 
     /// As [`InertiaShift::convexify`], trying `h + γ·rowsᵀrows` first (rows k×n normalized),
-    /// and, when no γ succeeds, shifting h plus the term of the first `equalities` rows (the
-    /// equality rows) with γ = [`FALLBACK_GAMMA`] (see the module header).
+    /// then the projected shift, and, when neither succeeds, shifting h plus the term of the
+    /// first `equalities` rows (the equality rows) with γ = [`FALLBACK_GAMMA`] (see the module
+    /// header). `floor` (absolute, ≥ 0) is the SQP's damping of Newton steps its line search
+    /// had to cut, added on the rows' null space before any of these, `δ_f(I − QQᵀ)`;
+    /// `shift` reports the inertia correction on top of it.
     pub fn convexify_with_rows(
         &mut self,
         h: &DMatrix<f64>,
         rows: &DMatrix<f64>,
         equalities: usize,
+        floor: f64,
     ) -> Option<Convexified> {
         if !h.iter().all(|v| v.is_finite()) {
             return None;
         }
         let scale = scale_of(h);
+        let damped;
+        let h = if floor > 0.0 {
+            damped = h + independent_rows(rows).1 * floor;
+            &damped
+        } else {
+            h
+        };
         if safely_definite(h, scale) {
             self.last = 0.0;
             return Some(Convexified {
                 matrix: h.clone(),
                 shift: 0.0,
                 row_weight: 0.0,
-                weighted_rows: 0,
+                weighted: Vec::new(),
             });
         }
-        let mut base = (h.clone(), 0.0, 0);
+        let mut base = (h.clone(), 0.0, Vec::new());
         if rows.nrows() > 0 {
-            // Unit rows, so that a short row counts as much as a long one.
-            let mut unit = rows.clone();
+            // The independent rows, scaled to unit length so that a short row counts as much
+            // as a long one.
+            let (kept, projector) = independent_rows(rows);
+            let mut unit = rows.select_rows(&kept);
             for mut r in unit.row_iter_mut() {
-                let norm = r.norm();
-                if norm > 0.0 {
-                    r /= norm;
-                }
+                r /= r.norm();
             }
             let gram = unit.tr_mul(&unit);
             for g in GAMMAS {
@@ -166,45 +267,65 @@ impl InertiaShift {
                         matrix: augmented,
                         shift: 0.0,
                         row_weight: g * scale,
-                        weighted_rows: rows.nrows(),
+                        weighted: kept,
                     });
                 }
             }
-            if equalities > 0 {
-                let eq = unit.rows(0, equalities);
+            if let Some((matrix, shift, row_weight)) =
+                self.projected_shift(h, &unit, &projector, scale)
+            {
+                return Some(Convexified {
+                    matrix,
+                    shift,
+                    row_weight,
+                    weighted: kept,
+                });
+            }
+            let equality_rows = kept.iter().take_while(|&&k| k < equalities).count();
+            if equality_rows > 0 {
+                let eq = unit.rows(0, equality_rows);
                 let gram = eq.tr_mul(&eq);
                 base = (
                     h + &gram * (FALLBACK_GAMMA * scale),
                     FALLBACK_GAMMA * scale,
-                    equalities,
+                    kept[..equality_rows].to_vec(),
                 );
             }
         }
         let base_scale = scale_of(&base.0);
-        let first = self.last == 0.0;
-        let mut delta = if first {
-            DELTA_0
-        } else {
-            (self.last / 3.0).max(DELTA_MIN)
-        };
-        while delta <= DELTA_MAX {
+        let (matrix, delta) = shift_schedule(self.last, |delta| {
             let mut shifted = base.0.clone();
             for i in 0..h.nrows() {
                 shifted[(i, i)] += delta * scale;
             }
-            if safely_definite(&shifted, base_scale) {
-                self.last = delta;
-                return Some(Convexified {
-                    matrix: shifted,
-                    shift: delta,
-                    row_weight: base.1,
-                    weighted_rows: base.2,
-                });
-            }
-            delta *= if first { 100.0 } else { 8.0 };
-        }
-        None
+            safely_definite(&shifted, base_scale).then_some(shifted)
+        })?;
+        self.last = delta;
+        Some(Convexified {
+            matrix,
+            shift: delta,
+            row_weight: base.1,
+            weighted: base.2,
+        })
     }
+}
+
+/// The δ schedule (module header): from the remembered shift `last` (or δ₀), growing until
+/// `works` accepts one; its result and the δ taken.
+fn shift_schedule<T>(last: f64, mut works: impl FnMut(f64) -> Option<T>) -> Option<(T, f64)> {
+    let first = last == 0.0;
+    let mut delta = if first {
+        DELTA_0
+    } else {
+        (last / 3.0).max(DELTA_MIN)
+    };
+    while delta <= DELTA_MAX {
+        if let Some(found) = works(delta) {
+            return Some((found, delta));
+        }
+        delta *= if first { 100.0 } else { 8.0 };
+    }
+    None
 }
 
 #[cfg(test)]
@@ -222,21 +343,23 @@ mod tests {
         assert!(d2 > 2.0 && d2 <= d * 8.0);
         // Positive definite on the null space of the row (1, 0): augmentation, no shift.
         let rows = DMatrix::from_row_slice(1, 2, &[0.0, 1.0]);
-        let c = shift.convexify_with_rows(&h, &rows, 1).unwrap();
+        let c = shift.convexify_with_rows(&h, &rows, 1, 0.0).unwrap();
         assert_eq!(c.shift, 0.0);
         assert!(c.row_weight > 0.0);
         assert!(c.matrix.cholesky().is_some());
-        // Indefinite on the null space of the row: shifted on top of the augmentation, by
-        // less than the shift of h alone.
+        // Indefinite on the null space of the row: shifted there only (the row's own direction
+        // keeps its curvature −2, lifted by the augmentation), by less than the shift of h
+        // alone.
         let h3 = assemble_dense(3, &[0, 1, 2], &[0, 1, 2], &[1.0, -2.0, -0.01]);
         let rows3 = DMatrix::from_row_slice(1, 3, &[0.0, 1.0, 0.0]);
         // The schedule starts at δ₀ = 1 and falls by 1/3 per call while it suffices: on top of
         // the augmentation δ·2 > 0.01 suffices, for h alone δ·2 > 2 is needed.
         let (mut on_rows, mut alone) = (InertiaShift::default(), InertiaShift::default());
         for _ in 0..4 {
-            let c = on_rows.convexify_with_rows(&h3, &rows3, 1).unwrap();
+            let c = on_rows.convexify_with_rows(&h3, &rows3, 1, 0.0).unwrap();
+            assert_eq!(c.row_weight, 1e2 * 2.0);
+            assert_eq!(c.matrix[(1, 1)], -2.0 + 1e2 * 2.0);
             assert!(c.matrix.cholesky().is_some());
-            assert_eq!(c.row_weight, FALLBACK_GAMMA * 2.0);
             alone.convexify(&h3).unwrap();
         }
         assert!(on_rows.last() < 0.05 && on_rows.last() > 0.0);
@@ -247,17 +370,18 @@ mod tests {
     fn the_shift_follows_the_reduced_hessian_despite_a_strong_coupling_across_the_row() {
         // h = [[0, 100], [100, −0.01]] with the row (1, 0): the reduced Hessian is −0.01, but
         // the coupling 100 across the row leaks through the term γ·e₀e₀ᵀ as −100²/γ, so that
-        // with γ = 1e2 a shift of ~1e2 was needed; with γ = FALLBACK_GAMMA it is 0.01 + 1e4/γ.
+        // with γ = 1e2 a shift of ~1e2 was needed; with γ = PROJECTED_GAMMA it is
+        // 0.01 + 1e4/γ.
         let h = assemble_dense(2, &[0, 1, 1], &[0, 0, 1], &[0.0, 100.0, -0.01]);
         let rows = DMatrix::from_row_slice(1, 2, &[1.0, 0.0]);
         let mut shift = InertiaShift::default();
         for _ in 0..12 {
-            let c = shift.convexify_with_rows(&h, &rows, 1).unwrap();
+            let c = shift.convexify_with_rows(&h, &rows, 1, 0.0).unwrap();
             assert!(c.matrix.cholesky().is_some());
         }
         // The schedule settles within its factor 8 of the least shift, 0.01 + 1e4/γ.
         // (Hessian scale 1, so shifts are absolute here.)
-        let least = 0.01 + 1e4 / FALLBACK_GAMMA;
+        let least = 0.01 + 1e4 / PROJECTED_GAMMA;
         let last = shift.last();
         assert!(last >= least && last < 8.0 * least, "{last} vs {least}");
     }

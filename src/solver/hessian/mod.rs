@@ -18,7 +18,9 @@ mod lbfgs;
 mod model;
 
 pub use bfgs::DenseBfgs;
-pub use exact::{Convexified, FALLBACK_GAMMA, InertiaShift, assemble_dense, assemble_sparse_lower};
+pub use exact::{
+    Convexified, FALLBACK_GAMMA, InertiaShift, assemble_dense, assemble_sparse_lower, scale_of,
+};
 pub use held::{decouple_dense, decouple_triplets, held_at_bounds};
 pub use lbfgs::Lbfgs;
 pub use model::Model;

@@ -26,6 +26,8 @@ pub enum Model {
         /// equalities: the QP's multiplier of an active row k is short by `weight·aₖᵀd` (see
         /// [`super::Convexified::row_weight`]).
         row_weights: Vec<(usize, f64, bool)>,
+        /// The inertia correction in `dense` (absolute, on top of the damping floor).
+        inertia: f64,
     },
 }
 
@@ -109,20 +111,25 @@ impl Model {
             if !equality && lambda[k] == 0.0 {
                 continue;
             }
-            let row = a.row(k);
-            let ad: f64 = row
-                .col_indices()
-                .iter()
-                .zip(row.values())
-                .map(|(&j, v)| v * d[j])
-                .sum();
-            let restored = lambda[k] + weight * ad;
+            let restored = lambda[k] + weight * row_product(a, k, d);
             lambda[k] = if equality || restored * lambda[k] > 0.0 {
                 restored
             } else {
                 0.0
             };
         }
+    }
+
+    /// `dᵀ(γ·Σₖ uₖuₖᵀ)d`: the curvature the augmentation of an exact Hessian adds along d
+    /// (0 for the other models).
+    pub fn augmentation_curvature(&self, a: &CsrMatrix<f64>, d: &[f64]) -> f64 {
+        let Model::Exact { row_weights, .. } = self else {
+            return 0.0;
+        };
+        row_weights
+            .iter()
+            .map(|&(k, weight, _)| weight * row_product(a, k, d).powi(2))
+            .sum()
     }
 
     pub fn is_quasi_newton(&self) -> bool {
@@ -146,4 +153,14 @@ impl Model {
             Model::Exact { .. } => {}
         }
     }
+}
+
+/// `aₖᵀd` for row k of `a`.
+fn row_product(a: &CsrMatrix<f64>, k: usize, d: &[f64]) -> f64 {
+    let row = a.row(k);
+    row.col_indices()
+        .iter()
+        .zip(row.values())
+        .map(|(&j, v)| v * d[j])
+        .sum()
 }
