@@ -1,24 +1,39 @@
 #!/usr/bin/env bash
-# Surface Evolver vs optimize on the same CMC start meshes (not run in CI).
+# Surface Evolver vs optimize side by side on the same CMC start meshes, one core, CPU time
+# (not run in CI).
 #
 # For each case: the problem file's start mesh at the given resolution is written as an Evolver
 # datafile (benches/peers/evolver_export.rs, lengths in cm) and minimized by `evolver-nox-d`
-# (20 gradient steps, 10 Newton steps with line search `hessian_seek`, then plain Newton
-# steps `hessian` until the energy changes by less than 1e-12 relative);
-# optimize solves the same file at the same resolution with no edge flips (so both keep the
-# start's connectivity). Prints both areas (cm²), their relative difference and both wall times.
+# (20 gradient steps, then Newton steps with line search `hessian_seek` until the energy
+# changes by less than 1e-12 relative, at most 40: plain `hessian` steps diverge on the cube
+# film, whose Hessian with tangential motion is indefinite); optimize solves the
+# same file at the same resolution with no edge flips (so both keep the start's connectivity),
+# `-q --threads 1`. The two programs run alternately (optimize, Evolver, optimize, ... for
+# ROUNDS rounds, default 1) pinned to one core (`taskset -c ${CORE:-0}` when available); CPU
+# time is user + system from /usr/bin/time, the best of the rounds. Prints facets, both areas
+# (cm²), their relative difference, both CPU times and the ratio optimize / Evolver.
+#
+# QP=sparse (or dense) sets optimize's `[solver] qp` for every case (default: the file's own
+# setting, i.e. the solver's automatic choice: dense below 2000 variables).
 #
 # Usage: benches/peers/evolver_compare.sh [CASE ...]   CASE = file:resolution
+# Default cases: double bubble V = 1, 2 cm³ at 648, 3,042 and 11,250 facets and the bubble-free
+# cube frame film at 792, 3,168 and 10,648 facets.
 # Needs: evolver-nox-d (Debian/Ubuntu: apt-get install -y evolver-nox).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 EVOLVER=${EVOLVER:-evolver-nox-d}
+ROUNDS=${ROUNDS:-1}
+LIMIT=${LIMIT:-600}
 command -v "$EVOLVER" >/dev/null || { echo "$EVOLVER not found (apt-get install -y evolver-nox)"; exit 1; }
+pin=()
+command -v taskset >/dev/null && pin=(taskset -c "${CORE:-0}")
 cases=("$@")
 if [ ${#cases[@]} -eq 0 ]; then
-    cases=(problems/cmc/double_bubble.toml:3 problems/cmc/double_bubble.toml:5
-           problems/cmc/cube_frame.toml:2 problems/cmc/cube_frame.toml:3
-           problems/cmc/cube_frame_film.toml:3)
+    cases=(problems/cmc/double_bubble.toml:6 problems/cmc/double_bubble.toml:13
+           problems/cmc/double_bubble.toml:25
+           problems/cmc/cube_frame_film.toml:6 problems/cmc/cube_frame_film.toml:12
+           problems/cmc/cube_frame_film.toml:22)
 fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -27,19 +42,24 @@ bin=target/release/optimize
 export_bin=target/release/examples/evolver_export
 cat > "$work/run.cmd" <<'CMD'
 g 20;
-for ( inx := 1 ; inx <= 10 ; inx += 1 ) { hessian_seek };
-for ( inx := 1 ; inx <= 20 ; inx += 1 ) {
-    oldE := total_energy; hessian;
+for ( inx := 1 ; inx <= 40 ; inx += 1 ) {
+    oldE := total_energy; hessian_seek;
     if abs(oldE - total_energy) < 1e-12 * abs(total_energy) then break;
 };
 printf "EVOLVER_AREA %.12f\n", total_area;
 q
 CMD
-printf "%-34s %5s %8s %14s %14s %9s %9s %9s\n" case res vertices "optimize cm²" "evolver cm²" "diff %" "opt s" "evol s"
+# CPU seconds (user + system) of a command, its output to $1.
+cpu() {
+    local out=$1; shift
+    /usr/bin/time -f "%U %S" -o "$work/time" timeout "$LIMIT" "${pin[@]}" "$@" > "$out" 2>&1 || true
+    awk '{ print $1 + $2 }' "$work/time" | tail -1
+}
+printf "%-34s %7s %14s %14s %9s %9s %9s %7s\n" case facets "optimize cm²" "evolver cm²" "diff %" "opt CPU" "evol CPU" ratio
 for c in "${cases[@]}"; do
-    file=${c%%:*}; res=${c##*:}; name=$(basename "$file" .toml)
+    file=${c%%:*}; res=${c##*:}; name=$(basename "$file" .toml)_$res
     "$export_bin" "$file" "$work/$name.fe" "$res" 100 2>"$work/export.log"
-    vertices=$(grep -o '[0-9]* vertices' "$work/export.log" | cut -d' ' -f1)
+    facets=$(grep -o '[0-9]* triangles' "$work/export.log" | cut -d' ' -f1)
     # Same file, same resolution, no edge flips.
     sed -e "s/^resolution = .*/resolution = $res/" "$file" > "$work/$name.toml"
     if grep -q '^\[quality\]' "$work/$name.toml"; then
@@ -47,20 +67,33 @@ for c in "${cases[@]}"; do
     else
         printf '\n[quality]\nflip_rounds = 0\n' >> "$work/$name.toml"
     fi
-    t0=$(date +%s.%N)
-    "$bin" cmc "$work/$name.toml" -o "$work/out_$name" --json -q > "$work/$name.json" || true
-    t1=$(date +%s.%N)
-    "$EVOLVER" -x -f "$work/run.cmd" "$work/$name.fe" < /dev/null > "$work/$name.evolver.log" 2>&1 || true
-    t2=$(date +%s.%N)
-    python3 - "$work/$name.json" "$work/$name.evolver.log" "$c" "$res" "$vertices" "$t0" "$t1" "$t2" <<'PY'
+    if [ -n "${QP:-}" ]; then
+        if grep -q '^\[solver\]' "$work/$name.toml"; then
+            sed -i -e '/^qp = /d' "$work/$name.toml"
+            sed -i -e "/^\[solver\]/a qp = \"$QP\"" "$work/$name.toml"
+        else
+            printf '\n[solver]\nqp = "%s"\n' "$QP" >> "$work/$name.toml"
+        fi
+    fi
+    ours=""; theirs=""
+    for _ in $(seq "$ROUNDS"); do
+        ours="$ours $(cpu "$work/$name.json" "$bin" cmc "$work/$name.toml" -o "$work/out_$name" --json -q --threads 1)"
+        theirs="$theirs $(cpu "$work/$name.evolver.log" "$EVOLVER" -x -f "$work/run.cmd" "$work/$name.fe")"
+    done
+    python3 - "$work/$name.json" "$work/$name.evolver.log" "$c" "$facets" "$ours" "$theirs" <<'PY'
 import json, re, sys
-summary, log, case, res, vertices, t0, t1, t2 = sys.argv[1:]
-ours = json.load(open(summary))
-area = ours["objective"] * 1e4
+summary, log, case, facets, ours_cpu, theirs_cpu = sys.argv[1:]
+try:
+    ours = json.load(open(summary))
+    area, status = ours["objective"] * 1e4, f"{ours['status']}, {ours['iterations']} iterations"
+except (ValueError, OSError):
+    area, status = float("nan"), "no result"
 match = re.findall(r"EVOLVER_AREA ([-0-9.eE+]+)", open(log).read())
 theirs = float(match[-1]) if match else float("nan")
-print(f"{case:34s} {res:>5s} {vertices:>8s} {area:14.6f} {theirs:14.6f} "
-      f"{100 * (area - theirs) / theirs:9.4f} {float(t1) - float(t0):9.2f} {float(t2) - float(t1):9.2f}"
-      f"   ({ours['status']}, {ours['iterations']} iterations)")
+t_ours, t_theirs = min(map(float, ours_cpu.split())), min(map(float, theirs_cpu.split()))
+diff = 100 * (area - theirs) / theirs if theirs else float("nan")
+print(f"{case:34s} {facets:>7s} {area:14.6f} {theirs:14.6f} "
+      f"{diff:9.4f} {t_ours:9.2f} {t_theirs:9.2f} "
+      f"{t_ours / max(t_theirs, 1e-9):7.1f}   ({status})")
 PY
 done

@@ -62,13 +62,34 @@ pub fn catenoid(radius: f64, separation: f64, levels: usize) -> Result<Shape, Me
     let rows = rows_per_level * levels.max(1);
     let mut b = MeshBuilder::new();
     let film = b.surface("film");
+    staggered_band(&mut b, film, rows, around, |j, phi| {
+        let y = separation * (j as f64 / rows as f64 - 0.5);
+        Point::new(radius * phi.cos(), y, radius * phi.sin())
+    });
+    Ok(Shape {
+        mesh: b.build()?,
+        volumes: Vec::new(),
+    })
+}
+
+/// Meshes a band of `rows + 1` rows of `around` vertices, row `j`'s vertex `i` at
+/// `place(j, φ)` with `φ = 2π (i + ½ (j mod 2)) / around` (every other row turned by half a
+/// segment: near-equilateral triangles without a net twist); the first and last rows are fixed
+/// wires. Triangles are counter-clockwise seen from the side a ring's outward normal points to
+/// when the rows advance along the axis (the catenoid's outward normals).
+pub fn staggered_band(
+    b: &mut MeshBuilder,
+    surface: usize,
+    rows: usize,
+    around: usize,
+    place: impl Fn(usize, f64) -> Point,
+) {
     let rings: Vec<Vec<usize>> = (0..=rows)
         .map(|j| {
-            let y = separation * (j as f64 / rows as f64 - 0.5);
             (0..around)
                 .map(|i| {
                     let phi = 2.0 * PI * (i as f64 + 0.5 * (j % 2) as f64) / around as f64;
-                    let p = Point::new(radius * phi.cos(), y, radius * phi.sin());
+                    let p = place(j, phi);
                     if j == 0 || j == rows {
                         b.fixed(p)
                     } else {
@@ -86,15 +107,10 @@ pub fn catenoid(radius: f64, separation: f64, levels: usize) -> Result<Shape, Me
             // (the upper ring is turned by +½ segment), upper[i + 1] above an odd one.
             let u = if j % 2 == 0 { i } else { k };
             let u_next = (u + 1) % around;
-            // Counter-clockwise seen from outside.
-            b.triangle(film, [lower[i], upper[u], lower[k]]);
-            b.triangle(film, [lower[k], upper[u], upper[u_next]]);
+            b.triangle(surface, [lower[i], upper[u], lower[k]]);
+            b.triangle(surface, [lower[k], upper[u], upper[u_next]]);
         }
     }
-    Ok(Shape {
-        mesh: b.build()?,
-        volumes: Vec::new(),
-    })
 }
 
 #[cfg(test)]

@@ -12,6 +12,9 @@
 //! flip_rounds = 1               # edge-flip + re-solve rounds after the first solve (cmc::remesh)
 //! coarse_resolution = 1         # optional: solve coarse first, then refine (cmc::multilevel)
 //! refine = 1.5                  # optional: in those rounds split edges > 1.5 × median start edge
+//! [refine]                      # optional refinement study (cmc::refinement)
+//! levels = 4                    # the resolution, then 3 levels each subdivided ×2
+//! expected_order = 2.0          # order the area is expected to converge at
 //! [[chord]]                     # optional chord-length constraints between vertex indices
 //! a = 0
 //! b = 12
@@ -32,6 +35,7 @@ use super::generators::{self, CellSpec, Pole, Shape, TentSpec};
 use super::mesh::Point;
 use super::nlp::Chord;
 use super::octahedron::{self, OctahedronTopology};
+use super::ring_tent;
 use super::volume::Region;
 use crate::error::InputError;
 use crate::solver::Options;
@@ -59,6 +63,9 @@ pub struct CmcFile {
     /// Mesh-quality settings.
     #[serde(default)]
     pub quality: QualitySpec,
+    /// Refinement study.
+    #[serde(default)]
+    pub refine: RefineSpec,
     /// Chord-length constraints.
     #[serde(default)]
     pub chord: Vec<ChordSpec>,
@@ -102,6 +109,39 @@ impl Default for QualitySpec {
             flip_rounds: default_flip_rounds(),
             coarse_resolution: None,
             refine: None,
+        }
+    }
+}
+
+/// `[refine]`: a refinement study ([`super::refinement`]).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RefineSpec {
+    /// Levels solved: the file's resolution, then `levels − 1` ×2 subdivisions (1–6);
+    /// default 1 (no study).
+    #[serde(default = "default_levels")]
+    pub levels: usize,
+    /// Expected order of convergence of the area in the edge length (0.5–8); default 2.
+    #[serde(default = "default_order")]
+    pub expected_order: f64,
+}
+
+/// Most levels of a refinement study.
+pub const MAX_REFINE_LEVELS: usize = 6;
+
+fn default_levels() -> usize {
+    1
+}
+
+fn default_order() -> f64 {
+    2.0
+}
+
+impl Default for RefineSpec {
+    fn default() -> Self {
+        RefineSpec {
+            levels: default_levels(),
+            expected_order: default_order(),
         }
     }
 }
@@ -166,6 +206,15 @@ pub enum ShapeSpec {
         width: f64,
         /// Depth of each U, m.
         depth: f64,
+    },
+    /// The film from a square wire at y = 0 to a raised horizontal ring about the y axis.
+    RingTent {
+        /// Half the side of the square wire, m.
+        half_width: f64,
+        /// Radius of the ring, m (below `half_width`).
+        ring_radius: f64,
+        /// Height of the ring above the square, m.
+        ring_height: f64,
     },
     /// Membranes over polygons, lifted by poles.
     Tents {
@@ -347,6 +396,7 @@ impl ShapeSpec {
             ShapeSpec::DoubleBubble { .. } | ShapeSpec::TripleBubble { .. } => 8,
             ShapeSpec::CubeFrame { .. } | ShapeSpec::OctahedronFrame { .. } => 8,
             ShapeSpec::UWires { .. } => 16,
+            ShapeSpec::RingTent { .. } => 4,
             ShapeSpec::Tents { .. } | ShapeSpec::Cells { .. } => 10,
             ShapeSpec::Obj { .. } | ShapeSpec::Gltf { .. } => 1,
         }
@@ -405,6 +455,19 @@ impl CmcSpec {
                 "`refine` must be a finite number ≥ 1 (a multiple of the median edge length)",
             ));
         }
+        src.count_in(
+            &["refine".into(), "levels".into()],
+            f.refine.levels,
+            1,
+            MAX_REFINE_LEVELS,
+        )?;
+        let order = f.refine.expected_order;
+        if !(order.is_finite() && (0.5..=8.0).contains(&order)) {
+            return Err(self.err(
+                &["refine".into(), "expected_order".into()],
+                "`expected_order` must be a number from 0.5 to 8",
+            ));
+        }
         src.non_negative(
             &["quality".into(), "tangential_weight".into()],
             f.quality.tangential_weight,
@@ -426,11 +489,16 @@ impl CmcSpec {
         } else {
             &[Key::Name("shape")]
         };
+        let study_faces = 4f64.powi(f.refine.levels as i32 - 1);
         src.within_limit(
             sized_by,
-            f.shape.face_estimate(resolution),
+            f.shape.face_estimate(resolution) * study_faces,
             MAX_FACES as f64,
-            "start-mesh faces",
+            if f.refine.levels > 1 {
+                "faces at the finest refinement level"
+            } else {
+                "start-mesh faces"
+            },
         )?;
         match &f.shape {
             ShapeSpec::Sphere { volume } => src.positive(&shape("volume"), *volume)?,
@@ -447,6 +515,26 @@ impl CmcSpec {
                     return Err(self.err(
                         &shape("bubble_volume"),
                         "`bubble_volume` must be positive and its cube root below 0.8·edge",
+                    ));
+                }
+            }
+            ShapeSpec::RingTent {
+                half_width,
+                ring_radius,
+                ring_height,
+            } => {
+                src.positive(&shape("half_width"), *half_width)?;
+                src.positive(&shape("ring_radius"), *ring_radius)?;
+                if ring_radius >= half_width {
+                    return Err(self.err(
+                        &shape("ring_radius"),
+                        "`ring_radius` must be below `half_width` (the ring inside the square)",
+                    ));
+                }
+                if !(ring_height.is_finite() && ring_height.abs() <= 100.0 * half_width) {
+                    return Err(self.err(
+                        &shape("ring_height"),
+                        "`ring_height` must be a finite height within 100·half_width",
                     ));
                 }
             }
@@ -642,6 +730,12 @@ impl CmcSpec {
             ShapeSpec::Catenoid { radius, separation } => {
                 catenoid::catenoid(*radius, *separation, resolution).map_err(|e| at_shape(&e))?
             }
+            ShapeSpec::RingTent {
+                half_width,
+                ring_radius,
+                ring_height,
+            } => ring_tent::ring_tent(*half_width, *ring_radius, *ring_height, resolution)
+                .map_err(|e| at_shape(&e))?,
             ShapeSpec::OctahedronFrame { edge, topology } => {
                 octahedron::octahedron_frame(*edge, *topology, resolution)
                     .map_err(|e| at_shape(&e))?
