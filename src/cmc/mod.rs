@@ -53,6 +53,7 @@ use crate::outcome::{Artifact, Headline, Kind, Outcome, ResultSummary, RunOption
 use crate::solver::derivatives::{
     CheckOptions, FiniteDifferenceOptions, jittered_start, spread_columns,
 };
+use crate::solver::qp::QpMethod;
 use crate::solver::{self, Evaluations, Nlp, Status};
 use crate::spec::Source;
 
@@ -201,12 +202,26 @@ impl Application for Cmc {
     }
 }
 
+/// The solver options of a mesh solve: under `qp = "auto"` the sparse QP at every size. The
+/// dense active-set QP's cost per iteration grows as n³ and its convexification's with the
+/// many curvature rows: the double bubble took 0.21 / 1.18 / 4.96 / 18.5 s CPU at 228 / 408 /
+/// 642 / 930 variables on the dense path and 0.05 / 0.08 / 0.09 / 0.17 s on the sparse one
+/// (0.51 s at 1,668, where `auto` switches), with the same areas and status; every file in
+/// problems/cmc/ gave the same status and area on both paths (BENCHMARKS.md, solver). A file's
+/// explicit `qp = "dense"` is kept.
+fn mesh_solver_options(mut options: solver::Options) -> solver::Options {
+    if options.qp_method == QpMethod::Auto {
+        options.qp_method = QpMethod::Sparse;
+    }
+    options
+}
+
 /// Builds the problem and solves it.
 pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let started = Instant::now();
     let nlp = problem.build()?;
     let build_seconds = started.elapsed().as_secs_f64();
-    let options = opts.solver_options(&problem.spec.file.solver);
+    let options = mesh_solver_options(opts.solver_options(&problem.spec.file.solver));
     let solve_started = Instant::now();
     let mut nlp = nlp;
     // Coarse-to-fine start (cmc::multilevel): the coarse levels' work counts in the totals.
