@@ -327,3 +327,23 @@ fn a_run_reports_its_answer_in_the_users_unit() {
         "{plot}"
     );
 }
+
+#[test]
+fn version_names_the_package_version_and_the_commit() {
+    let out = optimize(&["--version"]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    let prefix = concat!("optimize ", env!("CARGO_PKG_VERSION"), " (commit ");
+    assert!(text.starts_with(prefix), "{text}");
+    let commit = text
+        .trim_end()
+        .strip_prefix(prefix)
+        .and_then(|t| t.strip_suffix(')'));
+    // A hexadecimal hash (possibly marked -dirty), or `unknown` outside a git checkout.
+    let commit = commit.unwrap_or_else(|| panic!("{text}"));
+    let hash = commit.strip_suffix("-dirty").unwrap_or(commit);
+    assert!(
+        hash == "unknown" || (hash.len() >= 7 && hash.chars().all(|c| c.is_ascii_hexdigit())),
+        "{text}"
+    );
+}
