@@ -234,12 +234,15 @@ impl InertiaShift {
             return None;
         }
         let scale = scale_of(h);
+        // The rows' basis, computed once: for the floor now, or below if h needs correcting.
+        let mut basis = (floor > 0.0).then(|| independent_rows(rows));
         let damped;
-        let h = if floor > 0.0 {
-            damped = h + independent_rows(rows).1 * floor;
-            &damped
-        } else {
-            h
+        let h = match &basis {
+            Some((_, projector)) => {
+                damped = h + projector * floor;
+                &damped
+            }
+            None => h,
         };
         if safely_definite(h, scale) {
             self.last = 0.0;
@@ -254,7 +257,7 @@ impl InertiaShift {
         if rows.nrows() > 0 {
             // The independent rows, scaled to unit length so that a short row counts as much
             // as a long one.
-            let (kept, projector) = independent_rows(rows);
+            let (kept, projector) = basis.take().unwrap_or_else(|| independent_rows(rows));
             let mut unit = rows.select_rows(&kept);
             for mut r in unit.row_iter_mut() {
                 r /= r.norm();
