@@ -497,7 +497,7 @@ impl<'a> Sqp<'a> {
                 .zip(d)
                 .map(|(a, b)| a * b)
                 .sum::<f64>()
-                + shift * d.iter().map(|v| v * v).sum::<f64>();
+                + shift.curvature(d);
             // Byrd–Nocedal safeguard: the weighted linearized violation decrease must pay for
             // a tenth more than the model's objective change, or the weights of the rows that
             // decrease are raised uniformly (Powell's rule decays the excess later).
@@ -517,9 +517,11 @@ impl<'a> Sqp<'a> {
             let slope = gd - reduction;
             if self.options.verbosity >= 2 {
                 self.say(&format!(
-                    "      |d| = {:.3e}  g'd = {gd:.3e}  d'Hd = {dhd:.3e}  lin.red = {reduction:.3e}  max rho = {:.3e}  slope = {slope:.3e}  shift = {shift:.2e}  qp = {:?}",
+                    "      |d| = {:.3e}  g'd = {gd:.3e}  d'Hd = {dhd:.3e}  lin.red = {reduction:.3e}  max rho = {:.3e}  slope = {slope:.3e}  shift = {:.2e}  flipped = {}  qp = {:?}",
                     d.iter().fold(0.0_f64, |a, v| a.max(v.abs())),
                     self.rho.iter().fold(0.0_f64, |a, v| a.max(*v)),
+                    shift.shift,
+                    shift.flip.iter().filter(|&&f| f > 0.0).count(),
                     step.qp.status
                 ));
             }
@@ -622,10 +624,10 @@ impl<'a> Sqp<'a> {
                 dense: Some(_),
                 inertia,
                 ..
-            } => *inertia,
-            _ => (self.warm.convexification() - self.warm.shift_floor()).max(0.0),
+            } => inertia * dd,
+            _ => (self.warm.convexification().curvature(d) - self.warm.shift_floor() * dd).max(0.0),
         };
-        let curvature = dhd - correction * dd;
+        let curvature = dhd - correction;
         let floor = if alpha <= self.tuning.damping_cut && dd > 0.0 && curvature > 0.0 {
             self.warm
                 .shift_floor()

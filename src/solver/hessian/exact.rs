@@ -164,6 +164,44 @@ fn independent_rows(rows: &DMatrix<f64>) -> (Vec<usize>, DMatrix<f64>) {
     (kept, projector)
 }
 
+/// `h` as it is (no shift, no row term).
+fn unmodified(h: &DMatrix<f64>) -> Convexified {
+    Convexified {
+        matrix: h.clone(),
+        shift: 0.0,
+        row_weight: 0.0,
+        weighted: Vec::new(),
+    }
+}
+
+/// `h + γ·gram` (gram the unit rows' `UᵀU`) for the first γ of [`GAMMAS`] (relative to
+/// `scale`) that makes it safely positive definite.
+fn augmented(
+    h: &DMatrix<f64>,
+    gram: &DMatrix<f64>,
+    kept: &[usize],
+    scale: f64,
+) -> Option<Convexified> {
+    if kept.is_empty() {
+        return None;
+    }
+    GAMMAS.iter().find_map(|g| {
+        let augmented = h + gram * (g * scale);
+        safely_definite(&augmented, scale_of(&augmented)).then(|| Convexified {
+            matrix: augmented,
+            shift: 0.0,
+            row_weight: g * scale,
+            weighted: kept.to_vec(),
+        })
+    })
+}
+
+/// `2·max(0, −Hᵢᵢ)` per variable: the diagonal that turns every negative diagonal entry into
+/// its absolute value.
+fn negative_diagonal_flip(h: &DMatrix<f64>) -> Vec<f64> {
+    h.diagonal().iter().map(|&v| (-2.0 * v).max(0.0)).collect()
+}
+
 /// Relative residual below which a unit row counts as dependent on the rows before it.
 const RANK_TOLERANCE: f64 = 1e-8;
 
@@ -246,34 +284,38 @@ impl InertiaShift {
         };
         if safely_definite(h, scale) {
             self.last = 0.0;
-            return Some(Convexified {
-                matrix: h.clone(),
-                shift: 0.0,
-                row_weight: 0.0,
-                weighted: Vec::new(),
-            });
+            return Some(unmodified(h));
         }
+        // The independent rows, scaled to unit length so that a short row counts as much as a
+        // long one, and the projector onto their null space.
+        let (kept, projector) = basis.take().unwrap_or_else(|| independent_rows(rows));
+        let mut unit = rows.select_rows(&kept);
+        for mut r in unit.row_iter_mut() {
+            r /= r.norm();
+        }
+        let gram = unit.tr_mul(&unit);
+        if let Some(found) = augmented(h, &gram, &kept, scale) {
+            return Some(found);
+        }
+        // Negative diagonal entries flipped (see `qp::sparse`'s convexification): a separable
+        // concavity is corrected on its own variables before any shift damps every step.
+        let flip = negative_diagonal_flip(h);
+        let flipped;
+        let h = if flip.iter().any(|&f| f > 0.0) {
+            flipped = h + DMatrix::from_diagonal(&DVector::from_vec(flip));
+            if safely_definite(&flipped, scale) {
+                self.last = 0.0;
+                return Some(unmodified(&flipped));
+            }
+            if let Some(found) = augmented(&flipped, &gram, &kept, scale) {
+                return Some(found);
+            }
+            &flipped
+        } else {
+            h
+        };
         let mut base = (h.clone(), 0.0, Vec::new());
-        if rows.nrows() > 0 {
-            // The independent rows, scaled to unit length so that a short row counts as much
-            // as a long one.
-            let (kept, projector) = basis.take().unwrap_or_else(|| independent_rows(rows));
-            let mut unit = rows.select_rows(&kept);
-            for mut r in unit.row_iter_mut() {
-                r /= r.norm();
-            }
-            let gram = unit.tr_mul(&unit);
-            for g in GAMMAS {
-                let augmented = h + &gram * (g * scale);
-                if safely_definite(&augmented, scale_of(&augmented)) {
-                    return Some(Convexified {
-                        matrix: augmented,
-                        shift: 0.0,
-                        row_weight: g * scale,
-                        weighted: kept,
-                    });
-                }
-            }
+        if !kept.is_empty() {
             if let Some((matrix, shift, row_weight)) =
                 self.projected_shift(h, &unit, &projector, scale)
             {
