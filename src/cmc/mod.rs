@@ -128,11 +128,12 @@ impl Problem {
                 target,
             })
             .collect();
-        CmcNlp::new(
+        CmcNlp::with_formulation(
             shape.mesh,
             volumes,
             chords,
             self.spec.file.quality.tangential_weight,
+            self.spec.file.formulation,
         )
         .map_err(|e| Error::Runtime(format!("{}: {e}", self.name)))
     }
@@ -612,7 +613,9 @@ mod tests {
             assert_eq!(problem.name(), name);
             let nlp = problem.build().unwrap();
             let d = nlp.dims();
-            assert!(d.n > 0 && d.m > 0 && nlp.curvature_rows() > 0, "{name}");
+            assert!(d.n > 0 && d.m >= nlp.volumes().len(), "{name}");
+            assert_eq!(nlp.formulation(), nlp::Formulation::Area, "{name}");
+            assert_eq!(nlp.curvature_rows(), 0, "{name}");
         }
     }
 
