@@ -6,10 +6,12 @@
 //!
 //! The search is CMA-ES ([`crate::gait::cmaes`]) over the knot values of every actuator
 //! (slopes stay at the start's), in units of half each actuator's force range, from the
-//! trial's start with step size `[global] sigma`. A candidate's fitness comes from one rollout
-//! and the rows `r` of the task and the shaping rows (`[[task]] shaping = true`) together, the
-//! rows the trial's staged shaping then meets, with `v_r(t)` the violation of row `r`'s bounds
-//! by its quantity at time `t` (m, rad, m/s, rad/s as the rows are):
+//! trial's start with step size `[global] sigma`. It is staged like the trial's shaping
+//! ([`crate::gait::shaping`]): stage `s` scores the rows (task and shaping rows,
+//! `[[task]] shaping = true`) at times up to the `s`-th shaping horizon
+//! ([`Problem::shaping_horizons`]), and the last stage every row; a stage's rollouts stop at its
+//! last row. A candidate's fitness comes from one rollout, with `v_r(t)` the violation of row
+//! `r`'s bounds by its quantity at time `t` (m, rad, m/s, rad/s as the rows are):
 //! ```text
 //!   fitness = Σ_r v_r(t_r) + Σ_r min_{t ≤ t_r} v_r(t) + Σ_j (u_j − clamp(u_j))²
 //! ```
@@ -19,9 +21,12 @@
 //! never leaves the ground sees no change in the first sum, seed §6.1), and the first sum then
 //! moves it to the key time. The third keeps knot values `u` within the spline box of
 //! [`crate::gait::formulation`] (the rollout uses the clamped values). A rollout that fails
-//! scores +∞. The search stops when the fitness is within the trial's tolerance (every row
-//! met), after `generations` generations or `evaluations` rollouts, when the distribution
-//! collapses, or on an interrupt; the best candidate seen starts the trial's solves.
+//! scores +∞. A stage stops when its fitness is within the trial's tolerance (its rows met),
+//! when the distribution collapses, when the run's `generations` or `evaluations` are spent,
+//! or on an interrupt; the next stage starts from its best candidate only if the stage was met
+//! (lexicographic: the take-off before the landing), else the search ends there. The best
+//! candidate of the last stage run starts the trial's solves. Without shaping stages there is
+//! one stage, all rows.
 //!
 //! Deterministic: trial `k`'s search is seeded with the run's seed and `k`, each generation
 //! on its own stream, and its candidates are rolled out in parallel into their own slots.
@@ -93,7 +98,10 @@ pub struct GlobalReport {
     pub evaluations: usize,
     /// Generations.
     pub generations: usize,
-    /// Why the search stopped.
+    /// Stages searched (module header): the shaping horizons' stages up to the first not
+    /// met, the last holding every row.
+    pub stages: usize,
+    /// Why the search's last stage stopped.
     pub stop: Stop,
     /// Wall time (s).
     pub seconds: f64,
@@ -106,7 +114,7 @@ pub fn trial_seed(seed: u64, trial: usize) -> u64 {
 
 /// Runs the global phase of trial `trial` from motion parameters `x0` (physical units;
 /// [`crate::gait::trials::starts`]). With `log` it writes a progress line every
-/// [`PROGRESS_EVERY`] generations and one at the end, prefixed with `stage`.
+/// [`PROGRESS_EVERY`] generations and one at the end of each stage, prefixed with `stage`.
 pub fn search(
     problem: &Problem,
     settings: &GlobalSettings,
@@ -116,8 +124,6 @@ pub fn search(
     log: Option<&LogTarget>,
 ) -> GlobalReport {
     let clock = Instant::now();
-    let shaped = problem.shaped();
-    let steps = sample_steps(&shaped);
     let f = Formulation::new(problem);
     let (lower, upper) = f.physical_bounds();
     let grid = problem.knot_grid();
@@ -131,7 +137,7 @@ pub fn search(
             scale.push(0.5 * (act.bounds[1] - act.bounds[0]));
         }
     }
-    let fitness = |u: &[f64]| -> f64 {
+    let physical = |u: &[f64]| -> (Vec<f64>, f64) {
         let mut x = x0.to_vec();
         let mut outside = 0.0;
         for ((&j, &s), &uj) in index.iter().zip(&scale).zip(u) {
@@ -139,57 +145,85 @@ pub fn search(
             outside += (uj - v / s).powi(2);
             x[j] = v;
         }
-        row_fitness(&shaped, &steps, &x) + outside
-    };
-    let u0: Vec<f64> = index.iter().zip(&scale).map(|(&j, &s)| x0[j] / s).collect();
-    let budget = Budget {
-        generations: settings.generations,
-        evaluations: settings.evaluations,
-        target: problem.trials.tolerance,
+        (x, outside)
     };
     let say = |text: String| {
         if let Some(log) = log {
             log.line(&format!("{} global: {text}", log.stage));
         }
     };
-    let best = minimize(
-        fitness,
-        &u0,
-        settings.sigma,
-        settings.population,
-        budget,
-        trial_seed(seed, trial),
-        |g| {
-            if g.generation.is_multiple_of(PROGRESS_EVERY) {
-                say(format!(
-                    "generation {}, {} rollouts, best fitness {:.3e}, σ {:.3}, {:.1} s",
-                    g.generation,
-                    g.evaluations,
-                    g.best,
-                    g.sigma,
-                    clock.elapsed().as_secs_f64()
-                ));
-            }
-            !problem.interrupt.is_raised()
-        },
-    );
-    let mut x = x0.to_vec();
-    for ((&j, &s), &uj) in index.iter().zip(&scale).zip(&best.x) {
-        x[j] = (uj * s).clamp(lower[j], upper[j]);
+    let tolerance = problem.trials.tolerance;
+    let mut u: Vec<f64> = index.iter().zip(&scale).map(|(&j, &s)| x0[j] / s).collect();
+    let mut report = GlobalReport {
+        x: x0.to_vec(),
+        fitness: f64::INFINITY,
+        evaluations: 0,
+        generations: 0,
+        stages: 0,
+        stop: Stop::Target,
+        seconds: 0.0,
+    };
+    let horizons = problem.shaping_horizons();
+    for (s, horizon) in horizons.iter().copied().chain([f64::INFINITY]).enumerate() {
+        let shaped = problem.shaped_until(horizon);
+        let steps = sample_steps(&shaped);
+        let fitness = |u: &[f64]| -> f64 {
+            let (x, outside) = physical(u);
+            row_fitness(&shaped, &steps, &x) + outside
+        };
+        let budget = Budget {
+            generations: settings.generations.saturating_sub(report.generations),
+            evaluations: settings.evaluations.saturating_sub(report.evaluations),
+            target: tolerance,
+        };
+        let stage_seed = trial_seed(seed, trial) ^ (s as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
+        let best = minimize(
+            fitness,
+            &u,
+            settings.sigma,
+            settings.population,
+            budget,
+            stage_seed,
+            |g| {
+                if g.generation.is_multiple_of(PROGRESS_EVERY) {
+                    say(format!(
+                        "stage {}/{}, generation {}, {} rollouts, best fitness {:.3e}, σ {:.3}, {:.1} s",
+                        s + 1,
+                        horizons.len() + 1,
+                        g.generation,
+                        report.evaluations + g.evaluations,
+                        g.best,
+                        g.sigma,
+                        clock.elapsed().as_secs_f64()
+                    ));
+                }
+                !problem.interrupt.is_raised()
+            },
+        );
+        u = best.x;
+        report.fitness = best.value;
+        report.evaluations += best.evaluations;
+        report.generations += best.generations;
+        report.stages = s + 1;
+        report.stop = best.stop;
+        say(format!(
+            "stage {}/{} (rows up to {horizon} s): {:?} after {} generations, {} rollouts, {:.1} s: fitness {:.3e}",
+            s + 1,
+            horizons.len() + 1,
+            best.stop,
+            best.generations,
+            best.evaluations,
+            clock.elapsed().as_secs_f64(),
+            best.value
+        ));
+        // Lexicographic: a later stage starts only from a candidate that meets this one.
+        if best.value > tolerance {
+            break;
+        }
     }
-    let seconds = clock.elapsed().as_secs_f64();
-    say(format!(
-        "{:?} after {} generations, {} rollouts, {seconds:.1} s: fitness {:.3e}",
-        best.stop, best.generations, best.evaluations, best.value
-    ));
-    GlobalReport {
-        x,
-        fitness: best.value,
-        evaluations: best.evaluations,
-        generations: best.generations,
-        stop: best.stop,
-        seconds,
-    }
+    report.x = physical(&u).0;
+    report.seconds = clock.elapsed().as_secs_f64();
+    report
 }
 
 #[cfg(test)]
