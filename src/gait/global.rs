@@ -274,6 +274,40 @@ mod tests {
         assert_ne!(one.x, search(&p, &settings, &x0, 8, 2, None).x);
     }
 
+    /// Staging: the short pogo jump with a shaping row at t = 0.25 s (and `shaping_stages`)
+    /// searches that row's stage first. A stage whose row is met at the start (the foot above
+    /// −1 m) leads on to the last stage; one that cannot be met (the foot 10 m up) ends the
+    /// search there, with its rollouts only a quarter-second long.
+    #[test]
+    fn the_search_is_staged_and_stops_at_a_stage_not_met() {
+        let staged = |lower: f64| {
+            let mut p = golden("pogo_jump_short");
+            let mut row = p.constraints[0].clone();
+            row.time = 0.25;
+            row.step = (0.25 / p.dt).round() as usize;
+            row.lower = lower;
+            p.shaping.push(row);
+            p.trials.shaping_stages = 1;
+            p
+        };
+        let settings = GlobalSettings {
+            generations: 6,
+            evaluations: 1000,
+            population: Some(8),
+            sigma: 0.5,
+        };
+        let reachable = staged(-1.0);
+        assert_eq!(reachable.shaping_horizons(), vec![0.25]);
+        let x0 = vec![0.0; reachable.motion_parameters()];
+        let on = search(&reachable, &settings, &x0, 8, 1, None);
+        assert_eq!(on.stages, 2);
+        assert!(on.generations <= settings.generations);
+        let unreachable = staged(10.0);
+        let stopped = search(&unreachable, &settings, &x0, 8, 1, None);
+        assert_eq!(stopped.stages, 1);
+        assert!(stopped.fitness > 10.0, "{}", stopped.fitness);
+    }
+
     /// A raised interrupt ends the search after its current generation, whose rollouts stop
     /// at once and score +∞: the start is returned.
     #[test]
