@@ -6,12 +6,10 @@
 //!
 //! The search is CMA-ES ([`crate::gait::cmaes`]) over the knot values of every actuator
 //! (slopes stay at the start's), in units of half each actuator's force range, from the
-//! trial's start with step size `[global] sigma`. It is staged like the trial's shaping
-//! ([`crate::gait::shaping`]): stage `s` scores the rows (task and shaping rows,
-//! `[[task]] shaping = true`) at times up to the `s`-th shaping horizon
-//! ([`Problem::shaping_horizons`]), and the last stage every row; a stage's rollouts stop at its
-//! last row. A candidate's fitness comes from one rollout, with `v_r(t)` the violation of row
-//! `r`'s bounds by its quantity at time `t` (m, rad, m/s, rad/s as the rows are):
+//! trial's start with step size `[global] sigma`. A candidate's fitness comes from one rollout
+//! and the rows `r` of the task and the shaping rows (`[[task]] shaping = true`) together, the
+//! rows the trial's staged shaping then meets, with `v_r(t)` the violation of row `r`'s bounds
+//! by its quantity at time `t` (m, rad, m/s, rad/s as the rows are):
 //! ```text
 //!   fitness = Σ_r v_r(t_r) + Σ_r min_{t ≤ t_r} v_r(t) + Σ_j (u_j − clamp(u_j))²
 //! ```
@@ -21,12 +19,9 @@
 //! never leaves the ground sees no change in the first sum, seed §6.1), and the first sum then
 //! moves it to the key time. The third keeps knot values `u` within the spline box of
 //! [`crate::gait::formulation`] (the rollout uses the clamped values). A rollout that fails
-//! scores +∞. A stage stops when its fitness is within the trial's tolerance (its rows met),
-//! when the distribution collapses, when the run's `generations` or `evaluations` are spent,
-//! or on an interrupt; the next stage starts from its best candidate only if the stage was met
-//! (lexicographic: the take-off before the landing), else the search ends there. The best
-//! candidate of the last stage run starts the trial's solves. Without shaping stages there is
-//! one stage, all rows.
+//! scores +∞. The search stops when the fitness is within the trial's tolerance (every row
+//! met), after `generations` generations or `evaluations` rollouts, when the distribution
+//! collapses, or on an interrupt; the best candidate seen starts the trial's solves.
 //!
 //! Deterministic: trial `k`'s search is seeded with the run's seed and `k`, each generation
 //! on its own stream, and its candidates are rolled out in parallel into their own slots.
@@ -98,10 +93,7 @@ pub struct GlobalReport {
     pub evaluations: usize,
     /// Generations.
     pub generations: usize,
-    /// Stages searched (module header): the shaping horizons' stages up to the first not
-    /// met, the last holding every row.
-    pub stages: usize,
-    /// Why the search's last stage stopped.
+    /// Why the search stopped.
     pub stop: Stop,
     /// Wall time (s).
     pub seconds: f64,
@@ -114,7 +106,7 @@ pub fn trial_seed(seed: u64, trial: usize) -> u64 {
 
 /// Runs the global phase of trial `trial` from motion parameters `x0` (physical units;
 /// [`crate::gait::trials::starts`]). With `log` it writes a progress line every
-/// [`PROGRESS_EVERY`] generations and one at the end of each stage, prefixed with `stage`.
+/// [`PROGRESS_EVERY`] generations and one at the end, prefixed with `stage`.
 pub fn search(
     problem: &Problem,
     settings: &GlobalSettings,
@@ -124,6 +116,8 @@ pub fn search(
     log: Option<&LogTarget>,
 ) -> GlobalReport {
     let clock = Instant::now();
+    let shaped = problem.shaped();
+    let steps = sample_steps(&shaped);
     let f = Formulation::new(problem);
     let (lower, upper) = f.physical_bounds();
     let grid = problem.knot_grid();
@@ -137,7 +131,7 @@ pub fn search(
             scale.push(0.5 * (act.bounds[1] - act.bounds[0]));
         }
     }
-    let physical = |u: &[f64]| -> (Vec<f64>, f64) {
+    let fitness = |u: &[f64]| -> f64 {
         let mut x = x0.to_vec();
         let mut outside = 0.0;
         for ((&j, &s), &uj) in index.iter().zip(&scale).zip(u) {
@@ -145,85 +139,57 @@ pub fn search(
             outside += (uj - v / s).powi(2);
             x[j] = v;
         }
-        (x, outside)
+        row_fitness(&shaped, &steps, &x) + outside
+    };
+    let u0: Vec<f64> = index.iter().zip(&scale).map(|(&j, &s)| x0[j] / s).collect();
+    let budget = Budget {
+        generations: settings.generations,
+        evaluations: settings.evaluations,
+        target: problem.trials.tolerance,
     };
     let say = |text: String| {
         if let Some(log) = log {
             log.line(&format!("{} global: {text}", log.stage));
         }
     };
-    let tolerance = problem.trials.tolerance;
-    let mut u: Vec<f64> = index.iter().zip(&scale).map(|(&j, &s)| x0[j] / s).collect();
-    let mut report = GlobalReport {
-        x: x0.to_vec(),
-        fitness: f64::INFINITY,
-        evaluations: 0,
-        generations: 0,
-        stages: 0,
-        stop: Stop::Target,
-        seconds: 0.0,
-    };
-    let horizons = problem.shaping_horizons();
-    for (s, horizon) in horizons.iter().copied().chain([f64::INFINITY]).enumerate() {
-        let shaped = problem.shaped_until(horizon);
-        let steps = sample_steps(&shaped);
-        let fitness = |u: &[f64]| -> f64 {
-            let (x, outside) = physical(u);
-            row_fitness(&shaped, &steps, &x) + outside
-        };
-        let budget = Budget {
-            generations: settings.generations.saturating_sub(report.generations),
-            evaluations: settings.evaluations.saturating_sub(report.evaluations),
-            target: tolerance,
-        };
-        let stage_seed = trial_seed(seed, trial) ^ (s as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
-        let best = minimize(
-            fitness,
-            &u,
-            settings.sigma,
-            settings.population,
-            budget,
-            stage_seed,
-            |g| {
-                if g.generation.is_multiple_of(PROGRESS_EVERY) {
-                    say(format!(
-                        "stage {}/{}, generation {}, {} rollouts, best fitness {:.3e}, σ {:.3}, {:.1} s",
-                        s + 1,
-                        horizons.len() + 1,
-                        g.generation,
-                        report.evaluations + g.evaluations,
-                        g.best,
-                        g.sigma,
-                        clock.elapsed().as_secs_f64()
-                    ));
-                }
-                !problem.interrupt.is_raised()
-            },
-        );
-        u = best.x;
-        report.fitness = best.value;
-        report.evaluations += best.evaluations;
-        report.generations += best.generations;
-        report.stages = s + 1;
-        report.stop = best.stop;
-        say(format!(
-            "stage {}/{} (rows up to {horizon} s): {:?} after {} generations, {} rollouts, {:.1} s: fitness {:.3e}",
-            s + 1,
-            horizons.len() + 1,
-            best.stop,
-            best.generations,
-            best.evaluations,
-            clock.elapsed().as_secs_f64(),
-            best.value
-        ));
-        // Lexicographic: a later stage starts only from a candidate that meets this one.
-        if best.value > tolerance {
-            break;
-        }
+    let best = minimize(
+        fitness,
+        &u0,
+        settings.sigma,
+        settings.population,
+        budget,
+        trial_seed(seed, trial),
+        |g| {
+            if g.generation.is_multiple_of(PROGRESS_EVERY) {
+                say(format!(
+                    "generation {}, {} rollouts, best fitness {:.3e}, σ {:.3}, {:.1} s",
+                    g.generation,
+                    g.evaluations,
+                    g.best,
+                    g.sigma,
+                    clock.elapsed().as_secs_f64()
+                ));
+            }
+            !problem.interrupt.is_raised()
+        },
+    );
+    let mut x = x0.to_vec();
+    for ((&j, &s), &uj) in index.iter().zip(&scale).zip(&best.x) {
+        x[j] = (uj * s).clamp(lower[j], upper[j]);
     }
-    report.x = physical(&u).0;
-    report.seconds = clock.elapsed().as_secs_f64();
-    report
+    let seconds = clock.elapsed().as_secs_f64();
+    say(format!(
+        "{:?} after {} generations, {} rollouts, {seconds:.1} s: fitness {:.3e}",
+        best.stop, best.generations, best.evaluations, best.value
+    ));
+    GlobalReport {
+        x,
+        fitness: best.value,
+        evaluations: best.evaluations,
+        generations: best.generations,
+        stop: best.stop,
+        seconds,
+    }
 }
 
 #[cfg(test)]
@@ -272,40 +238,6 @@ mod tests {
             start.fitness
         );
         assert_ne!(one.x, search(&p, &settings, &x0, 8, 2, None).x);
-    }
-
-    /// Staging: the short pogo jump with a shaping row at t = 0.25 s (and `shaping_stages`)
-    /// searches that row's stage first. A stage whose row is met at the start (the foot above
-    /// −1 m) leads on to the last stage; one that cannot be met (the foot 10 m up) ends the
-    /// search there, with its rollouts only a quarter-second long.
-    #[test]
-    fn the_search_is_staged_and_stops_at_a_stage_not_met() {
-        let staged = |lower: f64| {
-            let mut p = golden("pogo_jump_short");
-            let mut row = p.constraints[0].clone();
-            row.time = 0.25;
-            row.step = (0.25 / p.dt).round() as usize;
-            row.lower = lower;
-            p.shaping.push(row);
-            p.trials.shaping_stages = 1;
-            p
-        };
-        let settings = GlobalSettings {
-            generations: 6,
-            evaluations: 1000,
-            population: Some(8),
-            sigma: 0.5,
-        };
-        let reachable = staged(-1.0);
-        assert_eq!(reachable.shaping_horizons(), vec![0.25]);
-        let x0 = vec![0.0; reachable.motion_parameters()];
-        let on = search(&reachable, &settings, &x0, 8, 1, None);
-        assert_eq!(on.stages, 2);
-        assert!(on.generations <= settings.generations);
-        let unreachable = staged(10.0);
-        let stopped = search(&unreachable, &settings, &x0, 8, 1, None);
-        assert_eq!(stopped.stages, 1);
-        assert!(stopped.fitness > 10.0, "{}", stopped.fitness);
     }
 
     /// A raised interrupt ends the search after its current generation, whose rollouts stop

@@ -757,7 +757,6 @@ pub fn table_json(results: &[TrialResult], tol: f64) -> serde_json::Value {
                         "seconds": g.seconds,
                         "rollouts": g.evaluations,
                         "generations": g.generations,
-                        "stages": g.stages,
                         "fitness": g.fitness,
                         "stop": format!("{:?}", g.stop),
                     })),
