@@ -69,6 +69,23 @@ pub struct Chord {
     pub length: f64,
 }
 
+/// Which equations place the vertices in the normal direction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Formulation {
+    /// Seed eq. 5.4: a row `H(x_j) − H_s = 0` at every curvature vertex and one variable `H_s`
+    /// per surface; the area is minimized under those rows.
+    Curvature,
+    /// Surface Evolver's (the default): the area alone is minimized under the volume (chord,
+    /// guide, gauge) rows; constant mean curvature is the optimality condition (`2H = p`, `p`
+    /// the volume's multiplier), not a constraint, and the Meyer curvature spread of the
+    /// solution is its check. No curvature rows, no `H_s` variables: a few rows instead of
+    /// one per vertex and no curvature Hessians, 2–18× less CPU on problems/cmc
+    /// (docs/notes/cmc.md).
+    #[default]
+    Area,
+}
+
 /// One term `(w/2)|P (x_v − mean of ring)|²` of the regularization.
 #[derive(Debug, Clone)]
 struct Smoothing {
@@ -112,6 +129,7 @@ pub struct CmcNlp {
     pattern: Vec<(usize, usize)>,
     hessian: HessianPattern,
     centre: Point,
+    formulation: Formulation,
 }
 
 /// Lower-triangle pattern of the Lagrangian Hessian in 3×3 vertex blocks: block `(u, w)` with
@@ -193,12 +211,30 @@ pub enum BuildError {
 }
 
 impl CmcNlp {
-    /// Builds the problem from a start mesh; `tangential_weight` is `w` of the module header.
+    /// Builds the curvature-row problem ([`Formulation::Curvature`]) from a start mesh;
+    /// `tangential_weight` is `w` of the module header.
     pub fn new(
         mesh: Mesh,
         volumes: Vec<VolumeConstraint>,
         chords: Vec<Chord>,
         tangential_weight: f64,
+    ) -> Result<CmcNlp, BuildError> {
+        CmcNlp::with_formulation(
+            mesh,
+            volumes,
+            chords,
+            tangential_weight,
+            Formulation::Curvature,
+        )
+    }
+
+    /// Builds the problem in the given [`Formulation`] from a start mesh.
+    pub fn with_formulation(
+        mesh: Mesh,
+        volumes: Vec<VolumeConstraint>,
+        chords: Vec<Chord>,
+        tangential_weight: f64,
+        formulation: Formulation,
     ) -> Result<CmcNlp, BuildError> {
         if !(tangential_weight >= 0.0 && tangential_weight.is_finite()) {
             return Err(BuildError::Invalid(format!(
@@ -227,7 +263,11 @@ impl CmcNlp {
             .filter_map(|v| mesh.curvature_surface(v).map(|s| (v, s)))
             .collect();
         let mut curvature_column = vec![None; mesh.surfaces().len()];
-        for &(_, s) in &curvature_vertices {
+        let curvature_rows: &[(usize, usize)] = match formulation {
+            Formulation::Curvature => &curvature_vertices,
+            Formulation::Area => &[],
+        };
+        for &(_, s) in curvature_rows {
             if curvature_column[s].is_none() {
                 curvature_column[s] = Some(usize::MAX);
             }
@@ -236,7 +276,7 @@ impl CmcNlp {
             *slot = next;
             next += 1;
         }
-        let mut rows: Vec<Row> = curvature_vertices
+        let mut rows: Vec<Row> = curvature_rows
             .iter()
             .map(|&(vertex, surface)| Row::Curvature { vertex, surface })
             .collect();
@@ -290,6 +330,7 @@ impl CmcNlp {
             pattern: Vec::new(),
             hessian: HessianPattern::default(),
             centre,
+            formulation,
         };
         nlp.pattern = nlp.build_pattern();
         nlp.hessian = nlp.build_hessian_pattern();
@@ -299,7 +340,18 @@ impl CmcNlp {
     /// The same problem (volumes, chords, weight) on another mesh with the same vertices and
     /// surfaces, e.g. after [`super::remesh::equiangulate`].
     pub fn remeshed(&self, mesh: Mesh) -> Result<CmcNlp, BuildError> {
-        CmcNlp::new(mesh, self.volumes.clone(), self.chords.clone(), self.weight)
+        CmcNlp::with_formulation(
+            mesh,
+            self.volumes.clone(),
+            self.chords.clone(),
+            self.weight,
+            self.formulation,
+        )
+    }
+
+    /// The formulation in use.
+    pub fn formulation(&self) -> Formulation {
+        self.formulation
     }
 
     /// The start mesh (connectivity, flags, fixed positions).
@@ -880,7 +932,17 @@ mod tests {
         CheckOptions, FiniteDifferenceOptions, check_derivatives, jittered_start,
     };
 
+    /// The curvature-row problem of a generated shape.
     fn nlp_of(shape: Shape, weight: f64) -> CmcNlp {
+        formulated(shape, weight, Formulation::Curvature)
+    }
+
+    /// The area problem of a generated shape.
+    fn area_nlp_of(shape: Shape, weight: f64) -> CmcNlp {
+        formulated(shape, weight, Formulation::Area)
+    }
+
+    fn formulated(shape: Shape, weight: f64, formulation: Formulation) -> CmcNlp {
         let volumes = shape
             .volumes
             .into_iter()
@@ -890,7 +952,7 @@ mod tests {
                 target,
             })
             .collect();
-        CmcNlp::new(shape.mesh, volumes, Vec::new(), weight).unwrap()
+        CmcNlp::with_formulation(shape.mesh, volumes, Vec::new(), weight, formulation).unwrap()
     }
 
     fn assert_derivatives(nlp: &CmcNlp, what: &str) -> f64 {
@@ -957,6 +1019,9 @@ mod tests {
             ("u wires", generators::u_wires(1.0, 0.6, 4).unwrap()),
         ];
         for (what, shape) in shapes {
+            let area = area_nlp_of(shape.clone(), 0.05);
+            assert_eq!(area.curvature_rows(), 0, "{what}");
+            assert_derivatives(&area, what);
             let nlp = nlp_of(shape, 0.05);
             assert!(nlp.curvature_rows() > 0, "{what}");
             assert_derivatives(&nlp, what);
@@ -1004,6 +1069,7 @@ mod tests {
             ("u wires", generators::u_wires(1.0, 0.6, 4).unwrap()),
         ];
         for (what, shape) in shapes {
+            assert_hessian(&area_nlp_of(shape.clone(), 0.05), what);
             assert_hessian(&nlp_of(shape, 0.05), what);
         }
     }
@@ -1095,28 +1161,38 @@ mod tests {
         let mut f = mesh.flags()[0];
         f.fixed = true;
         mesh.set_flags(0, f).unwrap();
-        let nlp = CmcNlp::new(
-            mesh,
-            Vec::new(),
-            vec![
-                Chord {
-                    a: 0,
-                    b: 9,
-                    length: 3.0,
-                },
-                Chord {
-                    a: 4,
-                    b: 7,
-                    length: 1.0,
-                },
-            ],
-            0.1,
-        )
-        .unwrap();
-        // 42 vertices, 1 fixed, 3 guided: 38 curvature rows, 2 chords, 1 + 2 + 2 guide rows.
-        assert_eq!(nlp.dims().m, 38 + 2 + 5);
-        assert_derivatives(&nlp, "guides and chords");
-        assert_hessian(&nlp, "guides and chords");
+        let chords = vec![
+            Chord {
+                a: 0,
+                b: 9,
+                length: 3.0,
+            },
+            Chord {
+                a: 4,
+                b: 7,
+                length: 1.0,
+            },
+        ];
+        for formulation in [Formulation::Curvature, Formulation::Area] {
+            let nlp = CmcNlp::with_formulation(
+                mesh.clone(),
+                Vec::new(),
+                chords.clone(),
+                0.1,
+                formulation,
+            )
+            .unwrap();
+            // 42 vertices, 1 fixed, 3 guided: 38 curvature rows (curvature formulation only),
+            // 2 chords, 1 + 2 + 2 guide rows.
+            let curvature_rows = if formulation == Formulation::Area {
+                0
+            } else {
+                38
+            };
+            assert_eq!(nlp.dims().m, curvature_rows + 2 + 5);
+            assert_derivatives(&nlp, "guides and chords");
+            assert_hessian(&nlp, "guides and chords");
+        }
     }
 
     #[test]

@@ -3,6 +3,7 @@
 //! ```toml
 //! name = "double_bubble"        # optional; defaults to the file stem
 //! resolution = 6                # optional refinement level (meaning per shape, see below)
+//! formulation = "area"          # area | curvature (per-vertex rows, seed eq. 5.4), cmc::nlp
 //! [shape]
 //! type = "double_bubble"        # sphere | double_bubble | triple_bubble | cube_frame |
 //! volumes = [1.0e-6, 2.0e-6]    # octahedron_frame | catenoid | u_wires | tents | cells |
@@ -33,7 +34,7 @@ use serde::Deserialize;
 use super::catenoid;
 use super::generators::{self, CellSpec, Pole, Shape, TentSpec};
 use super::mesh::Point;
-use super::nlp::Chord;
+use super::nlp::{Chord, Formulation};
 use super::octahedron::{self, OctahedronTopology};
 use super::ring_tent;
 use super::volume::Region;
@@ -58,6 +59,9 @@ pub struct CmcFile {
     pub name: Option<String>,
     /// Refinement level; defaults per shape ([`ShapeSpec::default_resolution`]).
     pub resolution: Option<usize>,
+    /// How the vertices are placed normally ([`Formulation`]); default `area`.
+    #[serde(default)]
+    pub formulation: Formulation,
     /// The start shape.
     pub shape: ShapeSpec,
     /// Mesh-quality settings.

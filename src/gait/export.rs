@@ -8,8 +8,10 @@
 //! orientation (link → world) is `Eᵀ`, written as a glTF quaternion `[x, y, z, w]`.
 //! Each link is a top-level glTF node (no hierarchy) holding its display shape in link
 //! coordinates; a ground plane sits at the contact law's ground height. The filmstrip draws the
-//! 2-D (x, y) silhouette of every link at frames every 1/4 s, shifted sideways so that they stand
-//! side by side, over a 10 cm grid (seed Figures 3.9–3.14).
+//! 2-D (x, y) silhouette of every link at frames every 1/4 s, plus the take-off and the apex of
+//! the first flight when there is one ([`flight_events`], from the 30 fps samples), shifted
+//! sideways so that they stand side by side, over a 10 cm grid (seed Figures 3.9–3.14), under a
+//! caption naming the task, the trial's status and its effort.
 
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion};
 
@@ -30,6 +32,10 @@ pub const FPS: f64 = 30.0;
 pub const FILMSTRIP_INTERVAL: f64 = 0.25;
 /// Filmstrip grid spacing (m).
 pub const GRID: f64 = 0.1;
+
+/// Height (m) above the ground from which a contact point counts as clear of it: the seed's
+/// contact law exerts negligible force more than 5 mm up (§3.5).
+pub const CLEAR: f64 = 0.005;
 
 /// A sampled motion.
 #[derive(Debug, Clone)]
@@ -208,10 +214,10 @@ fn outline(shape: &Shape, x: &Xform<f64>) -> Vec<[f64; 2]> {
     }
 }
 
-/// Frames every 1/4 s side by side over a 10 cm grid.
-pub fn filmstrip(problem: &Problem, motion: &Sampled) -> String {
+/// The lowest contact point's height above the ground (m) at each sample.
+fn lowest_contact(problem: &Problem, motion: &Sampled) -> Vec<f64> {
     let model = &problem.model;
-    let outlines: Vec<Vec<Vec<[f64; 2]>>> = motion
+    motion
         .poses
         .iter()
         .map(|frame| {
@@ -219,6 +225,51 @@ pub fn filmstrip(problem: &Problem, motion: &Sampled) -> String {
                 .links
                 .iter()
                 .zip(frame)
+                .flat_map(|(l, x)| l.contacts.iter().map(|&p| world_point(x, p)[1]))
+                .fold(f64::INFINITY, f64::min)
+                - model.contact.ground
+        })
+        .collect()
+}
+
+/// The first flight of a sampled motion, as sample indices `(take-off, apex)`: take-off is the
+/// first sample with every contact point more than [`CLEAR`] up after one that was not; the
+/// apex is the sample of that flight (until a point comes back within [`CLEAR`]) whose lowest
+/// contact point is highest. `None` when the motion never leaves the ground.
+pub fn flight_events(problem: &Problem, motion: &Sampled) -> Option<(usize, usize)> {
+    let low = lowest_contact(problem, motion);
+    let off = (1..low.len()).find(|&k| low[k] > CLEAR && low[k - 1] <= CLEAR)?;
+    let end = (off..low.len())
+        .find(|&k| low[k] <= CLEAR)
+        .unwrap_or(low.len());
+    let apex = (off..end).max_by(|&a, &b| low[a].total_cmp(&low[b]))?;
+    Some((off, apex))
+}
+
+/// The filmstrip (module header): frames of `strip` (every 1/4 s) and the take-off and apex
+/// of `motion` (the 30 fps samples), in time order, under `caption`.
+pub fn filmstrip(problem: &Problem, strip: &Sampled, motion: &Sampled, caption: &str) -> String {
+    let model = &problem.model;
+    let mut frames: Vec<(f64, &Vec<Xform<f64>>, &str)> = strip
+        .times
+        .iter()
+        .zip(&strip.poses)
+        .map(|(&t, p)| (t, p, ""))
+        .collect();
+    if let Some((off, apex)) = flight_events(problem, motion) {
+        frames.push((motion.times[off], &motion.poses[off], "take-off"));
+        if apex != off {
+            frames.push((motion.times[apex], &motion.poses[apex], "apex"));
+        }
+    }
+    frames.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let outlines: Vec<Vec<Vec<[f64; 2]>>> = frames
+        .iter()
+        .map(|(_, frame, _)| {
+            model
+                .links
+                .iter()
+                .zip(frame.iter())
                 .map(|(l, x)| outline(&l.shape, x))
                 .collect()
         })
@@ -238,7 +289,7 @@ pub fn filmstrip(problem: &Problem, motion: &Sampled) -> String {
     let left = (xmin / GRID).floor() * GRID;
     let (bottom, top) = (
         (ymin / GRID).floor() * GRID,
-        (ymax / GRID).ceil() * GRID + GRID,
+        (ymax / GRID).ceil() * GRID + 2.0 * GRID,
     );
     let right = left + panel * n as f64;
     let width = (200.0 * n as f64).min(2400.0);
@@ -260,12 +311,14 @@ pub fn filmstrip(problem: &Problem, motion: &Sampled) -> String {
                 },
             );
         }
+        let (t, _, event) = frames[k];
         svg.text(
-            [left + shift + 0.01, top - 0.03],
+            [left + shift + 0.01, top - GRID - 0.03],
             10.0,
-            &format!("t = {:.2} s", motion.times[k]),
+            format!("t = {t:.2} s {event}").trim_end(),
         );
     }
+    svg.text([left + 0.01, top - 0.03], 12.0, caption);
     svg.finish()
 }
 
@@ -306,8 +359,9 @@ pub fn forces_csv(problem: &Problem, motion: &Sampled) -> Artifact {
     csv.into_artifact("forces.csv")
 }
 
-/// Every exported file of the motion with spline parameters `x`.
-pub fn artifacts(problem: &Problem, x: &[f64]) -> Result<Vec<Artifact>, String> {
+/// Every exported file of the motion with spline parameters `x`; `caption` heads the
+/// filmstrip (task, status, effort).
+pub fn artifacts(problem: &Problem, x: &[f64], caption: &str) -> Result<Vec<Artifact>, String> {
     let motion = sample(problem, x, 1.0 / FPS)?;
     let strip = sample(problem, x, FILMSTRIP_INTERVAL)?;
     let glb = scene(problem, &motion)
@@ -320,7 +374,7 @@ pub fn artifacts(problem: &Problem, x: &[f64]) -> Result<Vec<Artifact>, String> 
         },
         Artifact {
             name: "filmstrip.svg".into(),
-            bytes: filmstrip(problem, &strip).into_bytes(),
+            bytes: filmstrip(problem, &strip, &motion, caption).into_bytes(),
         },
         trajectory_csv(problem, &motion),
         forces_csv(problem, &motion),
@@ -417,12 +471,44 @@ mod tests {
             .hand_made_start()
             .to_vec();
         let strip = sample(&p, &x, FILMSTRIP_INTERVAL).unwrap();
-        let svg = filmstrip(&p, &strip);
-        assert_eq!(svg.matches("t = ").count(), 5, "frames at 0, 0.25, …, 1 s");
         let motion = sample(&p, &x, 1.0 / FPS).unwrap();
+        assert_eq!(
+            flight_events(&p, &motion),
+            None,
+            "the crouch stays on the ground"
+        );
+        let svg = filmstrip(&p, &strip, &motion, "pogo_crouch: caption");
+        assert_eq!(svg.matches("t = ").count(), 5, "frames at 0, 0.25, …, 1 s");
+        assert!(svg.contains("pogo_crouch: caption"));
         let forces = forces_csv(&p, &motion);
         let text = String::from_utf8(forces.bytes).unwrap();
         assert_eq!(text.lines().count(), 1 + 31);
         assert!(text.starts_with("t_s,leg"));
+    }
+
+    /// A pogo stick pushed off at full force leaves the ground: the filmstrip gains a take-off
+    /// frame (every contact more than 5 mm up, the sample before not) and an apex frame after it.
+    #[test]
+    fn a_jump_gets_take_off_and_apex_frames() {
+        let p = problem("pogo_jump");
+        let f = crate::gait::formulation::Formulation::new(&p);
+        let (_, hi) = f.physical_bounds();
+        let x: Vec<f64> = hi[..p.spline_parameters()]
+            .iter()
+            .enumerate()
+            .map(|(j, &v)| if j < p.knots { v } else { 0.0 })
+            .collect();
+        let motion = sample(&p, &x, 1.0 / FPS).unwrap();
+        let (off, apex) = flight_events(&p, &motion).expect("a flight");
+        let low = lowest_contact(&p, &motion);
+        assert!(low[off] > CLEAR && low[off - 1] <= CLEAR);
+        assert!(apex >= off && low[apex] >= low[off]);
+        let strip = sample(&p, &x, FILMSTRIP_INTERVAL).unwrap();
+        let svg = filmstrip(&p, &strip, &motion, "");
+        assert_eq!(svg.matches("take-off").count(), 1);
+        assert_eq!(
+            svg.matches("t = ").count(),
+            5 + 1 + usize::from(apex != off)
+        );
     }
 }

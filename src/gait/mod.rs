@@ -190,7 +190,14 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
         evaluations.hessians += r.evaluations.hessians;
     }
     let export_clock = Instant::now();
-    let mut artifacts = export::artifacts(problem, &chosen.x)
+    let caption = format!(
+        "{}: trial {} {:?}, effort {:.4} N²·s",
+        problem.name,
+        chosen.trial,
+        chosen.status,
+        chosen.cost()
+    );
+    let mut artifacts = export::artifacts(problem, &chosen.x, &caption)
         .map_err(|e| Error::Runtime(format!("{}: {e}", problem.name)))?;
     // Every trial's records, in trial order (the stage column names the trial).
     let log: Vec<_> = results

@@ -632,252 +632,13 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
             format!("`dt` must be in (0, 0.01] s, got {}", file.dt),
         ));
     }
-    if !finite_all(&file.gravity) {
-        return Err(err(
-            path(&["gravity".into()]),
-            "`gravity` must be finite".into(),
-        ));
-    }
+    source.finite_vector(&[Key::Name("gravity")], &file.gravity)?;
     if file.link.is_empty() {
         return Err(err(path(&[]), "at least one [[link]] is required".into()));
     }
-    let mut index: HashMap<&str, usize> = HashMap::new();
-    let mut links = Vec::new();
-    for (i, l) in file.link.iter().enumerate() {
-        let at = |key: &'static str| vec![Key::Name("link"), Key::Index(i), Key::Name(key)];
-        let jat = |key: &'static str| {
-            vec![
-                Key::Name("link"),
-                Key::Index(i),
-                Key::Name("joint"),
-                Key::Name(key),
-            ]
-        };
-        if index.insert(l.name.as_str(), i).is_some() {
-            return Err(err(
-                at("name"),
-                format!("link name `{}` is used twice", l.name),
-            ));
-        }
-        if !(l.mass > 0.0 && l.mass.is_finite()) {
-            return Err(err(
-                at("mass"),
-                format!("`mass` must be positive kg, got {}", l.mass),
-            ));
-        }
-        let shape = build_shape(&l.shape).map_err(|m| err(at("shape"), m))?;
-        let com = l.com.unwrap_or_else(|| shape_center(&shape));
-        if !finite_all(&com) {
-            return Err(err(at("com"), "`com` must be finite".into()));
-        }
-        let mut inertia = shape_inertia(&shape, l.mass);
-        if let Some(d) = l.inertia {
-            inertia = [[d[0], 0.0, 0.0], [0.0, d[1], 0.0], [0.0, 0.0, d[2]]];
-        }
-        if let Some([xy, xz, yz]) = l.inertia_products {
-            inertia[0][1] = xy;
-            inertia[1][0] = xy;
-            inertia[0][2] = xz;
-            inertia[2][0] = xz;
-            inertia[1][2] = yz;
-            inertia[2][1] = yz;
-        }
-        if !positive_definite(&inertia) {
-            let key = if l.inertia.is_some() || l.inertia_products.is_some() {
-                "inertia"
-            } else {
-                "shape"
-            };
-            return Err(err(at(key), "the rotational inertia must be positive definite (check moments, products and the triangle inequality)".into()));
-        }
-        for c in &l.contacts {
-            if !finite_all(c) {
-                return Err(err(at("contacts"), "contact points must be finite".into()));
-            }
-        }
-        let j = &l.joint;
-        let parent = match &j.parent {
-            None if i == 0 => None,
-            None => {
-                return Err(err(
-                    jat("type"),
-                    format!(
-                        "link `{}` needs a `parent` (only the first link is the root)",
-                        l.name
-                    ),
-                ));
-            }
-            Some(_) if i == 0 => {
-                return Err(err(
-                    jat("parent"),
-                    "the first link is the root and is attached to the world: remove `parent`"
-                        .into(),
-                ));
-            }
-            Some(p) => match index.get(p.as_str()) {
-                Some(&k) if k < i => Some(k),
-                _ => {
-                    return Err(err(
-                        jat("parent"),
-                        format!("parent `{p}` is not a link listed before `{}`", l.name),
-                    ));
-                }
-            },
-        };
-        let kind = match j.kind {
-            JointType::Revolute | JointType::Prismatic => {
-                let axis = unit(j.axis.unwrap_or([0.0, 0.0, 1.0])).ok_or_else(|| {
-                    err(
-                        jat("axis"),
-                        "`axis` must be a non-zero finite vector".into(),
-                    )
-                })?;
-                if j.kind == JointType::Revolute {
-                    JointKind::Revolute { axis }
-                } else {
-                    JointKind::Prismatic { axis }
-                }
-            }
-            JointType::Planar | JointType::Floating if i > 0 => {
-                return Err(err(
-                    jat("type"),
-                    "planar and floating joints attach the root (first link) to the world".into(),
-                ));
-            }
-            JointType::Planar => JointKind::Planar,
-            JointType::Floating => JointKind::Floating,
-        };
-        if !finite_all(&j.origin) {
-            return Err(err(jat("origin"), "`origin` must be finite".into()));
-        }
-        let scalar = kind.is_scalar();
-        for (key, present) in [
-            ("axis", j.axis.is_some()),
-            ("limits", j.limits.is_some()),
-            ("limit_stiffness", j.limit_stiffness.is_some()),
-            ("limit_width", j.limit_width.is_some()),
-        ] {
-            if present && !scalar {
-                return Err(err(
-                    jat(key),
-                    format!("`{key}` applies to revolute and prismatic joints only"),
-                ));
-            }
-        }
-        if !scalar && (j.stiffness != 0.0 || j.damping != 0.0 || j.rest != 0.0) {
-            return Err(err(
-                jat("stiffness"),
-                "passive springs apply to revolute and prismatic joints only".into(),
-            ));
-        }
-        let spring = if j.stiffness != 0.0 || j.damping != 0.0 {
-            if !(j.stiffness >= 0.0
-                && j.damping >= 0.0
-                && j.stiffness.is_finite()
-                && j.damping.is_finite()
-                && j.rest.is_finite())
-            {
-                return Err(err(
-                    jat("stiffness"),
-                    "`stiffness` and `damping` must be finite and non-negative".into(),
-                ));
-            }
-            Some(Spring {
-                stiffness: j.stiffness,
-                rest: j.rest,
-                damping: j.damping,
-            })
-        } else {
-            None
-        };
-        let limits = match j.limits {
-            Some([lo, hi]) => {
-                if !(lo < hi && lo.is_finite() && hi.is_finite()) {
-                    return Err(err(
-                        jat("limits"),
-                        format!("`limits` must be finite with lower < upper, got [{lo}, {hi}]"),
-                    ));
-                }
-                let stiffness = j.limit_stiffness.unwrap_or(100.0);
-                let width = j.limit_width.unwrap_or(0.005);
-                if !(stiffness > 0.0 && stiffness.is_finite()) {
-                    return Err(err(
-                        jat("limit_stiffness"),
-                        "`limit_stiffness` must be positive".into(),
-                    ));
-                }
-                if !(width > 0.0 && width < hi - lo) {
-                    return Err(err(
-                        jat("limit_width"),
-                        "`limit_width` must be positive and smaller than the range".into(),
-                    ));
-                }
-                Some(Limits {
-                    lower: lo,
-                    upper: hi,
-                    stiffness,
-                    width,
-                })
-            }
-            None => None,
-        };
-        links.push(Link {
-            name: l.name.clone(),
-            parent,
-            joint: kind,
-            origin: j.origin,
-            inertia: RigidInertia {
-                mass: l.mass,
-                com: Vec3(com),
-                inertia_com: Mat3(inertia),
-            },
-            spring,
-            limits,
-            shape,
-            contacts: l.contacts.clone(),
-            q_index: 0,
-            v_index: 0,
-        });
-    }
+    let (links, index) = build_links(source, &file.link)?;
     let contact = build_contact(source, &file.contact)?;
-    let mut actuators = Vec::new();
-    let mut names = HashMap::new();
-    for (a, spec) in file.actuator.iter().enumerate() {
-        let at = |key: &'static str| vec![Key::Name("actuator"), Key::Index(a), Key::Name(key)];
-        if names.insert(spec.name.as_str(), a).is_some() {
-            return Err(err(
-                at("name"),
-                format!("actuator name `{}` is used twice", spec.name),
-            ));
-        }
-        let link = *index
-            .get(spec.joint.as_str())
-            .ok_or_else(|| err(at("joint"), format!("no link named `{}`", spec.joint)))?;
-        if !links[link].joint.is_scalar() {
-            return Err(err(
-                at("joint"),
-                "actuators drive revolute or prismatic joints only".into(),
-            ));
-        }
-        if actuators.iter().any(|x: &Actuator| x.link == link) {
-            return Err(err(
-                at("joint"),
-                format!("joint `{}` already has an actuator", spec.joint),
-            ));
-        }
-        let [lo, hi] = spec.bounds;
-        if !(lo < hi && lo.is_finite() && hi.is_finite()) {
-            return Err(err(
-                at("bounds"),
-                format!("`bounds` must be finite with lower < upper, got [{lo}, {hi}]"),
-            ));
-        }
-        actuators.push(Actuator {
-            name: spec.name.clone(),
-            link,
-            bounds: [lo, hi],
-        });
-    }
+    let actuators = build_actuators(source, &file.actuator, &index, &links)?;
     let model = Model::new(links, actuators, file.gravity, contact);
     let initial = build_initial(source, &file, &model)?;
     check_contacts_above_ground(source, &model, &initial)?;
@@ -889,24 +650,7 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
             format!("`knots` must be in 2..=100, got {knots}"),
         ));
     }
-    let mut start = Vec::new();
-    for (a, spec) in file.actuator.iter().enumerate() {
-        let at = vec![Key::Name("actuator"), Key::Index(a), Key::Name("start")];
-        let s = spec.start.clone().unwrap_or_else(|| vec![0.0; knots]);
-        if s.len() != knots {
-            return Err(err(
-                at,
-                format!(
-                    "`start` needs one force per knot ({knots}), got {}",
-                    s.len()
-                ),
-            ));
-        }
-        if !finite_all(&s) {
-            return Err(err(at, "`start` must be finite".into()));
-        }
-        start.push(s);
-    }
+    let start = build_knot_starts(source, &file.actuator, knots)?;
     let (constraints, shaping) = build_tasks(source, &file, &model, &index)?;
     let last = constraints
         .iter()
@@ -983,6 +727,282 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
         solver: file.solver,
         interrupt: Interrupt::new(),
     })
+}
+
+/// The key path `link[i].joint.<key>`.
+fn joint_key(i: usize, key: &str) -> Vec<Key<'_>> {
+    vec![
+        Key::Name("link"),
+        Key::Index(i),
+        Key::Name("joint"),
+        Key::Name(key),
+    ]
+}
+
+/// The links in file order with their joints, and each link's index by name (a parent must be
+/// listed before its children).
+fn build_links<'a>(
+    source: &Source,
+    specs: &'a [LinkSpec],
+) -> Result<(Vec<Link>, HashMap<&'a str, usize>), InputError> {
+    let mut index: HashMap<&str, usize> = HashMap::new();
+    let mut links = Vec::new();
+    for (i, l) in specs.iter().enumerate() {
+        if index.insert(l.name.as_str(), i).is_some() {
+            return Err(source.error_at(
+                &[Key::Name("link"), Key::Index(i), Key::Name("name")],
+                format!("link name `{}` is used twice", l.name),
+            ));
+        }
+        links.push(build_link(source, i, l, &index)?);
+    }
+    Ok((links, index))
+}
+
+/// Link `i`: its mass properties (from `shape` unless given), contacts and joint.
+fn build_link(
+    source: &Source,
+    i: usize,
+    l: &LinkSpec,
+    index: &HashMap<&str, usize>,
+) -> Result<Link, InputError> {
+    let at = |key: &'static str| vec![Key::Name("link"), Key::Index(i), Key::Name(key)];
+    source.positive_quantity(&at("mass"), l.mass, "kg")?;
+    let shape = build_shape(&l.shape).map_err(|m| source.error_at(&at("shape"), m))?;
+    let com = l.com.unwrap_or_else(|| shape_center(&shape));
+    source.finite_vector(&at("com"), &com)?;
+    let mut inertia = shape_inertia(&shape, l.mass);
+    if let Some(d) = l.inertia {
+        inertia = [[d[0], 0.0, 0.0], [0.0, d[1], 0.0], [0.0, 0.0, d[2]]];
+    }
+    if let Some([xy, xz, yz]) = l.inertia_products {
+        inertia[0][1] = xy;
+        inertia[1][0] = xy;
+        inertia[0][2] = xz;
+        inertia[2][0] = xz;
+        inertia[1][2] = yz;
+        inertia[2][1] = yz;
+    }
+    let key = if l.inertia.is_some() || l.inertia_products.is_some() {
+        "inertia"
+    } else {
+        "shape"
+    };
+    source.ensure(&at(key), positive_definite(&inertia), || {
+        "the rotational inertia must be positive definite (check moments, products and the triangle inequality)".into()
+    })?;
+    for c in &l.contacts {
+        source.ensure(&at("contacts"), finite_all(c), || {
+            "contact points must be finite".into()
+        })?;
+    }
+    let (parent, joint) = build_joint_kind(source, i, l, index)?;
+    let j = &l.joint;
+    let jat = |key: &'static str| joint_key(i, key);
+    source.finite_vector(&jat("origin"), &j.origin)?;
+    let scalar = joint.is_scalar();
+    for (key, present) in [
+        ("axis", j.axis.is_some()),
+        ("limits", j.limits.is_some()),
+        ("limit_stiffness", j.limit_stiffness.is_some()),
+        ("limit_width", j.limit_width.is_some()),
+    ] {
+        source.ensure(&jat(key), !present || scalar, || {
+            format!("`{key}` applies to revolute and prismatic joints only")
+        })?;
+    }
+    source.ensure(
+        &jat("stiffness"),
+        scalar || (j.stiffness == 0.0 && j.damping == 0.0 && j.rest == 0.0),
+        || "passive springs apply to revolute and prismatic joints only".into(),
+    )?;
+    Ok(Link {
+        name: l.name.clone(),
+        parent,
+        joint,
+        origin: j.origin,
+        inertia: RigidInertia {
+            mass: l.mass,
+            com: Vec3(com),
+            inertia_com: Mat3(inertia),
+        },
+        spring: build_spring(source, &jat("stiffness"), j)?,
+        limits: build_limits(source, &jat, j)?,
+        shape,
+        contacts: l.contacts.clone(),
+        q_index: 0,
+        v_index: 0,
+    })
+}
+
+/// Link `i`'s parent (none for the root, the first link) and its joint's kind.
+fn build_joint_kind(
+    source: &Source,
+    i: usize,
+    l: &LinkSpec,
+    index: &HashMap<&str, usize>,
+) -> Result<(Option<usize>, JointKind), InputError> {
+    let err = |key: &'static str, msg: String| source.error_at(&joint_key(i, key), msg);
+    let j = &l.joint;
+    let parent = match &j.parent {
+        None if i == 0 => None,
+        None => {
+            return Err(err(
+                "type",
+                format!(
+                    "link `{}` needs a `parent` (only the first link is the root)",
+                    l.name
+                ),
+            ));
+        }
+        Some(_) if i == 0 => {
+            return Err(err(
+                "parent",
+                "the first link is the root and is attached to the world: remove `parent`".into(),
+            ));
+        }
+        Some(p) => match index.get(p.as_str()) {
+            Some(&k) if k < i => Some(k),
+            _ => {
+                return Err(err(
+                    "parent",
+                    format!("parent `{p}` is not a link listed before `{}`", l.name),
+                ));
+            }
+        },
+    };
+    let kind = match j.kind {
+        JointType::Revolute | JointType::Prismatic => {
+            let axis = unit(j.axis.unwrap_or([0.0, 0.0, 1.0]))
+                .ok_or_else(|| err("axis", "`axis` must be a non-zero finite vector".into()))?;
+            if j.kind == JointType::Revolute {
+                JointKind::Revolute { axis }
+            } else {
+                JointKind::Prismatic { axis }
+            }
+        }
+        JointType::Planar | JointType::Floating if i > 0 => {
+            return Err(err(
+                "type",
+                "planar and floating joints attach the root (first link) to the world".into(),
+            ));
+        }
+        JointType::Planar => JointKind::Planar,
+        JointType::Floating => JointKind::Floating,
+    };
+    Ok((parent, kind))
+}
+
+/// The joint's passive spring-damper, if it has a stiffness or a damping.
+fn build_spring(
+    source: &Source,
+    at: &[Key<'_>],
+    j: &JointSpec,
+) -> Result<Option<Spring>, InputError> {
+    if j.stiffness == 0.0 && j.damping == 0.0 {
+        return Ok(None);
+    }
+    source.ensure(
+        at,
+        j.stiffness >= 0.0
+            && j.damping >= 0.0
+            && j.stiffness.is_finite()
+            && j.damping.is_finite()
+            && j.rest.is_finite(),
+        || "`stiffness` and `damping` must be finite and non-negative".into(),
+    )?;
+    Ok(Some(Spring {
+        stiffness: j.stiffness,
+        rest: j.rest,
+        damping: j.damping,
+    }))
+}
+
+/// The joint's range with its soft-limit stiffness and width, if `limits` is given.
+fn build_limits<'k>(
+    source: &Source,
+    jat: &impl Fn(&'static str) -> Vec<Key<'k>>,
+    j: &JointSpec,
+) -> Result<Option<Limits>, InputError> {
+    let Some([lo, hi]) = j.limits else {
+        return Ok(None);
+    };
+    source.ordered_pair(&jat("limits"), [lo, hi])?;
+    let stiffness = j.limit_stiffness.unwrap_or(100.0);
+    let width = j.limit_width.unwrap_or(0.005);
+    source.ensure(
+        &jat("limit_stiffness"),
+        stiffness > 0.0 && stiffness.is_finite(),
+        || "`limit_stiffness` must be positive".into(),
+    )?;
+    source.ensure(&jat("limit_width"), width > 0.0 && width < hi - lo, || {
+        "`limit_width` must be positive and smaller than the range".into()
+    })?;
+    Ok(Some(Limits {
+        lower: lo,
+        upper: hi,
+        stiffness,
+        width,
+    }))
+}
+
+/// The actuators, each driving one revolute or prismatic joint (at most one per joint).
+fn build_actuators(
+    source: &Source,
+    specs: &[ActuatorSpec],
+    index: &HashMap<&str, usize>,
+    links: &[Link],
+) -> Result<Vec<Actuator>, InputError> {
+    let mut actuators: Vec<Actuator> = Vec::new();
+    let mut names = HashMap::new();
+    for (a, spec) in specs.iter().enumerate() {
+        let at = |key: &'static str| vec![Key::Name("actuator"), Key::Index(a), Key::Name(key)];
+        source.ensure(
+            &at("name"),
+            names.insert(spec.name.as_str(), a).is_none(),
+            || format!("actuator name `{}` is used twice", spec.name),
+        )?;
+        let link = *index.get(spec.joint.as_str()).ok_or_else(|| {
+            source.error_at(&at("joint"), format!("no link named `{}`", spec.joint))
+        })?;
+        source.ensure(&at("joint"), links[link].joint.is_scalar(), || {
+            "actuators drive revolute or prismatic joints only".into()
+        })?;
+        source.ensure(
+            &at("joint"),
+            !actuators.iter().any(|x| x.link == link),
+            || format!("joint `{}` already has an actuator", spec.joint),
+        )?;
+        source.ordered_pair(&at("bounds"), spec.bounds)?;
+        actuators.push(Actuator {
+            name: spec.name.clone(),
+            link,
+            bounds: spec.bounds,
+        });
+    }
+    Ok(actuators)
+}
+
+/// Each actuator's start forces, one per knot (zero unless given).
+fn build_knot_starts(
+    source: &Source,
+    specs: &[ActuatorSpec],
+    knots: usize,
+) -> Result<Vec<Vec<f64>>, InputError> {
+    let mut start = Vec::new();
+    for (a, spec) in specs.iter().enumerate() {
+        let at = [Key::Name("actuator"), Key::Index(a), Key::Name("start")];
+        let s = spec.start.clone().unwrap_or_else(|| vec![0.0; knots]);
+        source.ensure(&at, s.len() == knots, || {
+            format!(
+                "`start` needs one force per knot ({knots}), got {}",
+                s.len()
+            )
+        })?;
+        source.finite_vector(&at, &s)?;
+        start.push(s);
+    }
+    Ok(start)
 }
 
 /// Most RK4 steps one rollout may take (task times and the horizon over `dt`): ten times the
@@ -1346,14 +1366,7 @@ fn build_initial(
     let mut v = vec![0.0; model.nv];
     for (i, (l, spec)) in model.links.iter().zip(&file.link).enumerate() {
         let j = &spec.joint;
-        let jat = |key: &'static str| {
-            vec![
-                Key::Name("link"),
-                Key::Index(i),
-                Key::Name("joint"),
-                Key::Name(key),
-            ]
-        };
+        let jat = |key: &'static str| joint_key(i, key);
         let get = |key: &'static str,
                    x: &Option<Numbers>,
                    n: usize|

@@ -7,7 +7,7 @@
 //! Entry point: [`solve`]`(&nlp, &options) -> Solution`. Not converging is a [`Status`] in the
 //! [`Solution`], never an `Err`.
 //!
-//! The method (see `sqp.rs`) is a line-search SQP on an automatically scaled problem: convex
+//! The method (see `sqp/`) is a line-search SQP on an automatically scaled problem: convex
 //! QP subproblems solved by a dual active-set method (small n) or a sparse interior-point
 //! method (large n, see [`qp::QpMethod`]), an ℓ1 merit function with second-order
 //! correction, elastic mode for inconsistent linearizations (ending `Infeasible` at a

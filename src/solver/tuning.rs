@@ -1,4 +1,4 @@
-//! Tuning constants of the SQP method (see `sqp.rs`): step limits, line-search and
+//! Tuning constants of the SQP method (see `sqp/`): step limits, line-search and
 //! trust-region constants, elastic-mode and penalty-weight limits, the exact Hessian's
 //! safeguards, the acceptable-termination test and the noise measurement.
 //!

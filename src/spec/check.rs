@@ -46,6 +46,49 @@ impl Source {
         vs.iter().try_for_each(|v| self.finite(path, *v))
     }
 
+    /// `ok` must hold, or the error is `message` at `path`: the check the named ones reduce
+    /// to, for conditions they do not cover.
+    pub fn ensure(
+        &self,
+        path: &[Key<'_>],
+        ok: bool,
+        message: impl FnOnce() -> String,
+    ) -> Result<(), InputError> {
+        if ok {
+            return Ok(());
+        }
+        Err(self.error_at(path, message()))
+    }
+
+    /// Every element of `vs` must be finite; the message names the key only (a vector).
+    pub fn finite_vector(&self, path: &[Key<'_>], vs: &[f64]) -> Result<(), InputError> {
+        let key = key_name(path);
+        self.ensure(path, vs.iter().all(|v| v.is_finite()), || {
+            format!("`{key}` must be finite")
+        })
+    }
+
+    /// `v` must be positive and finite, a quantity in `unit` (`` `mass` must be positive kg ``).
+    pub fn positive_quantity(
+        &self,
+        path: &[Key<'_>],
+        v: f64,
+        unit: &str,
+    ) -> Result<(), InputError> {
+        let key = key_name(path);
+        self.ensure(path, is_positive(v), || {
+            format!("`{key}` must be positive {unit}, got {v}")
+        })
+    }
+
+    /// `[lo, hi]` must be finite with `lo < hi`.
+    pub fn ordered_pair(&self, path: &[Key<'_>], [lo, hi]: [f64; 2]) -> Result<(), InputError> {
+        let key = key_name(path);
+        self.ensure(path, lo < hi && lo.is_finite() && hi.is_finite(), || {
+            format!("`{key}` must be finite with lower < upper, got [{lo}, {hi}]")
+        })
+    }
+
     /// `v` must be positive and finite.
     pub fn positive(&self, path: &[Key<'_>], v: f64) -> Result<(), InputError> {
         if is_positive(v) {
@@ -223,5 +266,16 @@ mod tests {
             "`margin` would generate 8e18 candidate joints; limit 1e6"
         );
         assert!(s.within_limit(&path, f64::NAN, 1e6, "joints").is_err());
+        let e = s.positive_quantity(&path, 0.0, "kg").unwrap_err();
+        assert_eq!(e.message, "`margin` must be positive kg, got 0");
+        let e = s.ordered_pair(&path, [1.0, 0.5]).unwrap_err();
+        assert_eq!(
+            e.message,
+            "`margin` must be finite with lower < upper, got [1, 0.5]"
+        );
+        assert!(s.ordered_pair(&path, [0.0, f64::INFINITY]).is_err());
+        assert!(s.ordered_pair(&path, [-1.0, 1.0]).is_ok());
+        let e = s.finite_vector(&path, &[0.0, f64::NAN]).unwrap_err();
+        assert_eq!(e.message, "`margin` must be finite");
     }
 }
