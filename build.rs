@@ -1,6 +1,6 @@
 //! Stamps the build with the commit it was built from (`optimize --version`): the short hash of
 //! `git rev-parse HEAD`, with `-dirty` when the work tree has changes, or `unknown` outside a
-//! git checkout (e.g. a source package).
+//! git checkout (e.g. a source package). The dirty flag is refreshed when `src/` changes.
 
 use std::process::Command;
 
@@ -21,6 +21,21 @@ fn main() {
         _ => "unknown".to_string(),
     };
     println!("cargo:rustc-env=OPTIMIZE_COMMIT={commit}");
-    println!("cargo:rerun-if-changed=.git/HEAD");
-    println!("cargo:rerun-if-changed=.git/index");
+    // Rerun when HEAD moves (a commit, a checkout) or the sources change; not on every index
+    // refresh, which would rebuild the whole crate after `git status`. Paths come from git, so
+    // a linked worktree (where `.git` is a file) works too; a path that does not exist would
+    // make cargo rerun this script on every build, so only existing ones are printed.
+    let head_ref = git(&["symbolic-ref", "-q", "HEAD"]);
+    let watched = ["HEAD", "packed-refs"]
+        .into_iter()
+        .map(str::to_string)
+        .chain(head_ref)
+        .filter_map(|name| git(&["rev-parse", "--git-path", &name]));
+    for path in watched {
+        if std::path::Path::new(&path).exists() {
+            println!("cargo:rerun-if-changed={path}");
+        }
+    }
+    println!("cargo:rerun-if-changed=src");
+    println!("cargo:rerun-if-changed=build.rs");
 }

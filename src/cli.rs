@@ -21,17 +21,9 @@ pub const MAX_THREADS: u64 = 256;
 /// Most topology rounds `--rounds` accepts (the file's `[rounds] count` has the same cap).
 const MAX_ROUNDS: u64 = crate::truss::spec::MAX_ROUNDS as u64;
 
-/// `optimize --version`: the package version and the commit it was built from (build.rs).
-const VERSION: &str = concat!(
-    env!("CARGO_PKG_VERSION"),
-    " (commit ",
-    env!("OPTIMIZE_COMMIT"),
-    ")"
-);
-
 /// Design physically valid motion and structures by constrained nonlinear optimization.
 #[derive(Debug, Parser)]
-#[command(name = "optimize", version = VERSION, after_help = EXAMPLES)]
+#[command(name = "optimize", version, after_help = EXAMPLES)]
 pub struct Cli {
     /// What to optimize.
     #[command(subcommand)]

@@ -7,15 +7,28 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::{Arc, Mutex};
 
-use clap::Parser;
+use clap::{CommandFactory, FromArgMatches};
 use optimize::cli::Cli;
 use optimize::io::atomic::CHECK_FOLDER;
 use optimize::outcome::Outcome;
 use optimize::run::execute;
 use optimize::solver::log::LogTarget;
 
+/// `optimize --version`: the package version and the commit it was built from (build.rs). Kept in
+/// the binary so a new commit recompiles only this file, not the library.
+const VERSION: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " (commit ",
+    env!("OPTIMIZE_COMMIT"),
+    ")"
+);
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let matches = Cli::command().version(VERSION).get_matches();
+    let cli = match Cli::from_arg_matches(&matches) {
+        Ok(cli) => cli,
+        Err(error) => error.exit(),
+    };
     let (kind, common, mut opts) = cli.command.resolve();
     if let Some(n) = opts.threads
         && let Err(e) = rayon::ThreadPoolBuilder::new()
