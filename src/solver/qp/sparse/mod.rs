@@ -27,7 +27,13 @@
 //! `S = dlᵀz_l − duᵀz_u + blᵀw_l − buᵀw_u − b_Eᵀy_E` (finite bounds; fixed variables add
 //! `dl_j (Aᵀy)_j`) and `R = ‖Aᵀy − z_l + z_u‖∞` (fixed variables excluded), every feasible d
 //! satisfies `S ≤ ‖d‖₁ R`; so `S > 10⁶ (1 + ‖d_k‖₁) R` proves that no feasible point lies within
-//! that ℓ₁ radius, and the QP is reported [`QpStatus::Infeasible`]. Unboundedness: when
+//! that ℓ₁ radius, and the QP is reported [`QpStatus::Infeasible`]. A primal residual that stops
+//! halving (over 5 iterations) while the dual residual and the complementarity have converged
+//! marks a least-infeasible point: `Infeasible`, unless the residual is below 1e-5 (relative),
+//! where it ends `Optimal`: near feasibility the complementarity can converge first, the
+//! iterates then sit on the boundary and the residual shrinks by a few per cent per iteration
+//! (truss QPs stalled at 2e-6 and were sent to the elastic mode, whose weights steering then
+//! drove to 1e12); the rows hold to 1e-5 and the SQP measures the true violation anyway. Unboundedness: when
 //! ‖d‖∞ exceeds 10⁸ times the data scale, the normalized d̂ is tested as a direction of
 //! recession with `gᵀd̂ < 0` and `d̂ᵀH d̂ ≈ 0`.
 //!
@@ -66,6 +72,9 @@ use super::{QpHessian, QpProblem, QpSolution, QpStatus};
 
 /// Iterations over which a primal residual that fails to halve counts as stalled.
 const STALL_WINDOW: usize = 5;
+/// Relative primal residual below which a stalled iterate that has converged except for
+/// feasibility ends `Optimal` rather than `Infeasible` (module header).
+const NEAR_FEASIBLE: f64 = 1e-5;
 
 /// Default first convexification shift (relative), see [`SparseQp::first_shift`].
 pub const DEFAULT_FIRST_SHIFT: f64 = 1e-4;
@@ -360,7 +369,7 @@ impl SparseQp {
                 // Return the last finite iterate (slacks rounding to zero end here).
                 std::mem::swap(&mut ws.x, &mut ws.backup);
                 residuals(qp, layout, ws);
-                status = breakdown_status(previous, stalled, tolerance);
+                status = breakdown_status(previous, stalled, tolerance, NEAR_FEASIBLE);
                 break;
             }
             info.primal_residual = measures.primal;
@@ -376,9 +385,13 @@ impl SparseQp {
             primal_history[iterations % (STALL_WINDOW + 1)] = measures.primal;
             let window_start = primal_history[(iterations + 1) % (STALL_WINDOW + 1)];
             stalled = iterations >= STALL_WINDOW && measures.primal > 0.5 * window_start;
+            let least_infeasible = stalled && converged_except_feasibility(measures, tolerance);
+            if least_infeasible && measures.primal <= NEAR_FEASIBLE {
+                status = QpStatus::Optimal;
+                break;
+            }
             if measures.primal > tolerance
-                && (infeasibility_certified(qp, layout, ws)
-                    || stalled && converged_except_feasibility(measures, tolerance))
+                && (infeasibility_certified(qp, layout, ws) || least_infeasible)
             {
                 status = QpStatus::Infeasible;
                 break;
@@ -403,7 +416,7 @@ impl SparseQp {
             )
             .is_err()
             {
-                status = breakdown_status(previous, stalled, tolerance);
+                status = breakdown_status(previous, stalled, tolerance, NEAR_FEASIBLE);
                 break;
             }
         }
