@@ -63,6 +63,7 @@ pub struct CmcFile {
     #[serde(default)]
     pub formulation: Formulation,
     /// The start shape.
+    #[serde(deserialize_with = "crate::spec::tagged::deserialize")]
     pub shape: ShapeSpec,
     /// Mesh-quality settings.
     #[serde(default)]
@@ -163,8 +164,10 @@ pub struct ChordSpec {
 }
 
 /// `[shape]`: which start shape, with its parameters.
+///
+/// Read from a table whose `type` key names the variant ([`crate::spec::tagged`]).
 #[derive(Debug, Clone, Deserialize, PartialEq)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum ShapeSpec {
     /// One bubble of `volume` m³ (an icosphere).
     Sphere {

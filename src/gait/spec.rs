@@ -226,6 +226,7 @@ pub struct LinkSpec {
     #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub inertia_products: Option<[f64; 3]>,
     /// Display shape (link coordinates, m).
+    #[serde(deserialize_with = "crate::spec::tagged::deserialize")]
     pub shape: ShapeSpec,
     /// Contact points in link coordinates (m).
     #[serde(default, deserialize_with = "crate::spec::arrays::exact_vec")]
@@ -235,8 +236,10 @@ pub struct LinkSpec {
 }
 
 /// Display shape.
+///
+/// Read from a table whose `type` key names the variant ([`crate::spec::tagged`]).
 #[derive(Debug, Clone, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum ShapeSpec {
     /// A box of full side lengths `size` (m) centred at `center` (m).
     Box {

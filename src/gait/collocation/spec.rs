@@ -356,13 +356,9 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
             max,
         });
     }
-    if let Some(w) = file.wall
-        && !(w.x.is_finite() && positive(w.height))
-    {
-        return Err(err(
-            &top("wall"),
-            "the wall needs a finite `x` and a positive `height`".into(),
-        ));
+    if let Some(w) = &file.wall {
+        // `x` is finite like every float in the file (`Source::parse`).
+        source.positive_quantity(&[Key::Name("wall"), Key::Name("height")], w.height, "m")?;
     }
     let name = file.name.clone().unwrap_or_else(|| {
         source
