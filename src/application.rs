@@ -17,6 +17,8 @@ use crate::error::Error;
 use crate::outcome::{Artifact, Headline, Kind, Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::{CheckOptions, DerivativeReport, check_derivatives};
 use crate::solver::{Bounds, Evaluations, Interrupt, Interruptible, Nlp, Status};
+use crate::spec::Source;
+use crate::spec::overrides;
 
 /// A problem kind: how its files are loaded, checked and solved.
 pub trait Application {
@@ -25,8 +27,8 @@ pub trait Application {
     /// A loaded, validated problem.
     type Problem;
 
-    /// Reads, parses and validates a problem file (errors positioned in the file).
-    fn load(path: &Path) -> Result<Self::Problem, Error>;
+    /// Parses and validates a problem file's text (errors positioned in the file).
+    fn load(source: Source) -> Result<Self::Problem, Error>;
 
     /// The problem's name (the file's `name`, or its stem): names `out/<name>/`.
     fn name(problem: &Self::Problem) -> &str;
@@ -91,9 +93,19 @@ impl<'p> CheckCase<'p> {
 
 /// Loads a problem file of application `A` and checks or solves it (`opts.check`): the one
 /// entry point of every kind. Returns the problem's name and the outcome; writes nothing.
+///
+/// The `--set` overrides (`opts.overrides`) are spliced into the file's text before it is
+/// parsed; errors are positioned in the file as written, or name the `--set` argument they come
+/// from; `result.json` lists the overrides.
 pub fn execute<A: Application>(path: &Path, opts: &RunOptions) -> Result<(String, Outcome), Error> {
-    let problem = A::load(path)?;
-    let outcome = run_problem::<A>(&problem, opts)?;
+    let edited = overrides::apply(Source::read(path)?, &opts.overrides)?;
+    let relocate = |e: Error| match e {
+        Error::Input(e) => Error::Input(edited.relocate(e)),
+        other => other,
+    };
+    let problem = A::load(edited.source.clone()).map_err(relocate)?;
+    let mut outcome = run_problem::<A>(&problem, opts).map_err(relocate)?;
+    outcome.summary.overrides = opts.overrides.iter().map(|o| o.argument.clone()).collect();
     Ok((A::name(&problem).to_string(), outcome))
 }
 

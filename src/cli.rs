@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 
 use crate::outcome::{Kind, RunOptions};
+use crate::spec::overrides::Override;
 
 const EXAMPLES: &str = "\
 Examples:
@@ -104,6 +105,10 @@ pub struct Common {
     /// Worker threads, 1 to 256 [default: all cores]; results do not depend on it.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_THREADS))]
     pub threads: Option<u64>,
+    /// Override a problem-file value, checked like the file (repeatable; the value in TOML
+    /// syntax, a bare word taken as a string), e.g. `--set solver.max_iterations=300`.
+    #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
+    pub set: Vec<Override>,
 }
 
 impl Command {
@@ -123,6 +128,7 @@ impl Command {
             seed: common.seed.unwrap_or(0),
             seed_given: common.seed.is_some(),
             threads: common.threads.map(|t| t as usize),
+            overrides: common.set.clone(),
             ..RunOptions::default()
         };
         match self {

@@ -9,6 +9,7 @@ use serde::Serialize;
 
 use crate::solver::log::{LogTarget, ObjectiveUnit};
 use crate::solver::{Evaluations, Interrupt, Options, Solution, Status};
+use crate::spec::overrides::Override;
 
 /// The problem kinds, one per module.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -70,6 +71,8 @@ pub struct RunOptions {
     pub trial: Option<usize>,
     /// Truss: number of topology rounds.
     pub rounds: Option<usize>,
+    /// `--set key.path=value` overrides of problem-file values, in command-line order.
+    pub overrides: Vec<Override>,
     /// Raised by Ctrl-C: every solve, evaluation, rollout and check polls it
     /// ([`crate::solver::interrupt`]) and the run ends with the best point so far.
     pub interrupt: Interrupt,
@@ -168,6 +171,9 @@ pub struct ResultSummary {
     pub timings: BTreeMap<String, f64>,
     /// The seed used.
     pub seed: u64,
+    /// The `--set` overrides the run was given (`key.path=value`, in order); absent when none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub overrides: Vec<String>,
     /// Module-specific figures (areas, masses, trial tables, ...).
     pub figures: serde_json::Value,
 }
@@ -187,6 +193,7 @@ impl ResultSummary {
             evaluations: Evaluations::default(),
             timings: BTreeMap::new(),
             seed,
+            overrides: Vec::new(),
             figures: serde_json::Value::Object(Default::default()),
         }
     }

@@ -347,3 +347,131 @@ fn version_names_the_package_version_and_the_commit() {
         "{text}"
     );
 }
+
+/// Runs `optimize --check` on the cmc cushion with `sets` as `--set` arguments and returns the
+/// check's summary.
+fn checked_cushion_with(scratch: &Scratch, sets: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        "cmc",
+        "problems/cmc/tennis_cushion.toml",
+        "--check",
+        "-q",
+        "-o",
+        scratch.0.to_str().unwrap(),
+    ];
+    for s in sets {
+        args.extend(["--set", s]);
+    }
+    let out = optimize(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{sets:?}: {stderr}");
+    let text = std::fs::read_to_string(scratch.0.join("check").join("result.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+#[test]
+fn set_overrides_a_file_value_and_is_recorded() {
+    let scratch = Scratch::new("set");
+    let plain = checked_cushion_with(&scratch, &[]);
+    assert!(plain.get("overrides").is_none(), "{plain}");
+    // The file says resolution = 8; halving it quarters the mesh.
+    let coarse = checked_cushion_with(&scratch, &["resolution=4", "solver.max_iterations=7"]);
+    let variables = |v: &serde_json::Value| v["figures"]["variables"].as_u64().unwrap();
+    assert!(
+        variables(&coarse) * 3 < variables(&plain),
+        "{} vs {}",
+        variables(&coarse),
+        variables(&plain)
+    );
+    assert_eq!(
+        coarse["overrides"],
+        serde_json::json!(["resolution=4", "solver.max_iterations=7"])
+    );
+    // A [solver] key the file does not have: the table is created, the value validated.
+    let truss = optimize(&[
+        "truss",
+        SHIPPED,
+        "--set",
+        "solver.max_iterations=1",
+        "--rounds",
+        "1",
+        "-q",
+        "--threads",
+        "1",
+        "-o",
+        scratch.0.join("truss").to_str().unwrap(),
+    ]);
+    assert_eq!(
+        truss.status.code(),
+        Some(3),
+        "one iteration does not converge"
+    );
+    let summary: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(scratch.0.join("truss").join("result.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(summary["iterations"], 1, "{summary}");
+}
+
+#[test]
+fn set_errors_name_the_argument() {
+    for (set, expected) in [
+        (
+            "resoluton=8",
+            "error: --set resoluton=8: unknown key `resoluton`; did you mean `resolution`?",
+        ),
+        (
+            "resolution=0",
+            "error: --set resolution=0: `resolution` must be between 1 and 64, got 0",
+        ),
+        (
+            "solver.max_iterations=abc",
+            "error: --set solver.max_iterations=abc: wrong type: found string \"abc\"",
+        ),
+        (
+            "solver.tolerance=2.0",
+            "error: --set solver.tolerance=2.0: `tolerance` must be in (0, 1), got 2",
+        ),
+        ("shape=1", "error: --set shape=1: `shape` is a table"),
+        (
+            "solver.tolerance=inf",
+            "error: --set solver.tolerance=inf: `tolerance` must be finite",
+        ),
+    ] {
+        let out = optimize(&[
+            "cmc",
+            "problems/cmc/tennis_cushion.toml",
+            "--check",
+            "-q",
+            "--set",
+            set,
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{set}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(stderr.starts_with(expected), "{set}: {stderr}");
+    }
+    // Malformed arguments are usage errors.
+    let out = optimize(&[
+        "cmc",
+        "problems/cmc/tennis_cushion.toml",
+        "--set",
+        "resolution",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn a_file_error_keeps_its_position_under_set() {
+    // `--set seed=3` goes in as a new first line; the file's own error stays at its line.
+    let scratch = Scratch::new("set-position");
+    let text = shipped().replacen("min_length", "min_lenght", 1);
+    let path = scratch.file("bad.toml", &text);
+    let out = optimize(&["truss", path.to_str().unwrap(), "--set", "seed=3"]);
+    assert_input_error(
+        &out,
+        &path,
+        Some(line_of(&text, "min_lenght")),
+        &["did you mean `min_length`"],
+    );
+}

@@ -76,7 +76,12 @@ pub struct Problem {
 /// Reads, parses and validates a CMC problem file, and builds its start mesh once to report
 /// geometry problems now rather than at run time.
 pub fn load(path: &Path) -> Result<Problem, InputError> {
-    let source = Source::read(path)?;
+    load_source(Source::read(path)?)
+}
+
+/// [`load`] from a file's text (with any `--set` overrides already applied).
+pub fn load_source(source: Source) -> Result<Problem, InputError> {
+    let path = source.path.clone();
     let spec = spec::parse(source)?;
     let name = spec.file.name.clone().unwrap_or_else(|| {
         path.file_stem().map_or_else(
@@ -161,8 +166,8 @@ impl Application for Cmc {
     const KIND: Kind = Kind::Cmc;
     type Problem = Problem;
 
-    fn load(path: &Path) -> Result<Problem, Error> {
-        Ok(load(path)?)
+    fn load(source: Source) -> Result<Problem, Error> {
+        Ok(load_source(source)?)
     }
 
     fn name(problem: &Problem) -> &str {

@@ -86,8 +86,7 @@ impl Application for Gait {
     const KIND: Kind = Kind::Gait;
     type Problem = GaitProblem;
 
-    fn load(path: &Path) -> Result<GaitProblem, Error> {
-        let source = Source::read(path)?;
+    fn load(source: Source) -> Result<GaitProblem, Error> {
         Ok(if collocation::spec::selects_collocation(&source) {
             GaitProblem::Collocation(Box::new(collocation::load_source(&source)?))
         } else {
@@ -235,6 +234,7 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
         evaluations,
         timings,
         seed: opts.seed,
+        overrides: Vec::new(),
         figures: serde_json::json!({
             "best_trial": chosen.trial,
             "best_status": format!("{:?}", chosen.status),

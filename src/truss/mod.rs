@@ -68,7 +68,12 @@ pub struct Problem {
 /// Reads, parses and validates a truss problem file, and builds its ground structure and NLP once
 /// so that every problem-file error is reported here, positioned in the file.
 pub fn load(path: &Path) -> Result<Problem, InputError> {
-    let source = Source::read(path)?;
+    load_source(Source::read(path)?)
+}
+
+/// [`load`] from a file's text (with any `--set` overrides already applied).
+pub fn load_source(source: Source) -> Result<Problem, InputError> {
+    let path = source.path.clone();
     let spec: TrussSpec = source.parse()?;
     spec::validate(&spec, &source)?;
     let name = spec.name.clone().unwrap_or_else(|| {
@@ -210,8 +215,8 @@ impl Application for Truss {
     const KIND: Kind = Kind::Truss;
     type Problem = Problem;
 
-    fn load(path: &Path) -> Result<Problem, Error> {
-        Ok(load(path)?)
+    fn load(source: Source) -> Result<Problem, Error> {
+        Ok(load_source(source)?)
     }
 
     fn name(problem: &Problem) -> &str {
