@@ -109,6 +109,9 @@ pub struct Common {
     /// syntax, a bare word taken as a string), e.g. `--set solver.max_iterations=300`.
     #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
     pub set: Vec<Override>,
+    /// Start from a previous run's answer: its `result.json` (same problem, same kind).
+    #[arg(long, value_name = "RESULT", conflicts_with = "check")]
+    pub start: Option<PathBuf>,
 }
 
 impl Command {
@@ -129,6 +132,7 @@ impl Command {
             seed_given: common.seed.is_some(),
             threads: common.threads.map(|t| t as usize),
             overrides: common.set.clone(),
+            start_file: common.start.clone(),
             ..RunOptions::default()
         };
         match self {

@@ -475,3 +475,117 @@ fn a_file_error_keeps_its_position_under_set() {
         &["did you mean `min_length`"],
     );
 }
+
+/// Solves `file` of `kind` into `dir` (extra flags after), expecting exit 0; returns result.json.
+fn solved(kind: &str, file: &str, dir: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        kind,
+        file,
+        "-q",
+        "--threads",
+        "1",
+        "-o",
+        dir.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    let out = optimize(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{args:?}: {stderr}");
+    serde_json::from_slice(&std::fs::read(dir.join("result.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn every_kind_restarts_from_its_result_at_once() {
+    let scratch = Scratch::new("start");
+    for (kind, file, extra) in [
+        ("truss", SHIPPED, &[][..]),
+        (
+            "gait",
+            "tests/golden/problems/gait/pogo_crouch_short.toml",
+            &["--trial", "1"][..],
+        ),
+        ("cmc", "problems/cmc/tennis_cushion.toml", &[][..]),
+    ] {
+        let first_dir = scratch.0.join(kind).join("first");
+        let first = solved(kind, file, &first_dir, extra);
+        let result = first_dir.join("result.json");
+        let again = solved(
+            kind,
+            file,
+            &scratch.0.join(kind).join("again"),
+            &["--start", result.to_str().unwrap()],
+        );
+        let (a, b) = (
+            first["headline"]["value"].as_f64().unwrap(),
+            again["headline"]["value"].as_f64().unwrap(),
+        );
+        let iterations = again["iterations"].as_u64().unwrap();
+        assert!(
+            iterations <= 3 && iterations < first["iterations"].as_u64().unwrap(),
+            "{kind}: {iterations} iterations from the result, {} from the file",
+            first["iterations"]
+        );
+        assert_eq!(again["status"], "Optimal", "{kind}: {again}");
+        // cmc minimizes area plus the tangential regularization, whose projectors are frozen
+        // at the solve's start: from another start the area may move by up to that term.
+        let tolerance = match kind {
+            "cmc" => {
+                let f = &first["figures"];
+                let l = f["length_scale"].as_f64().unwrap();
+                f["regularization"].as_f64().unwrap() * l * l / a
+            }
+            _ => 1e-9,
+        };
+        assert!(
+            (b / a - 1.0).abs() <= tolerance,
+            "{kind}: {b} from the result, {a} from the file (tolerance {tolerance:e})"
+        );
+    }
+}
+
+#[test]
+fn a_result_of_another_problem_kind_or_size_is_refused() {
+    let scratch = Scratch::new("start-mismatch");
+    let truss_dir = scratch.0.join("truss");
+    solved("truss", SHIPPED, &truss_dir, &["--rounds", "1"]);
+    let cmc_dir = scratch.0.join("cmc");
+    solved("cmc", "problems/cmc/tennis_cushion.toml", &cmc_dir, &[]);
+    let truss_result = truss_dir.join("result.json");
+    let cmc_result = cmc_dir.join("result.json");
+    let out_dir = scratch.0.join("x");
+    for (args, result, expected) in [
+        (
+            vec!["truss", "problems/truss/roof_warren.toml"],
+            &truss_result,
+            "a result of truss problem `roof_fink`, not of truss problem `roof_warren`",
+        ),
+        (
+            vec!["cmc", "problems/cmc/tennis_cushion.toml"],
+            &truss_result,
+            "a result of truss problem `roof_fink`, not of cmc problem `tennis_cushion`",
+        ),
+        (
+            vec![
+                "cmc",
+                "problems/cmc/tennis_cushion.toml",
+                "--set",
+                "resolution=4",
+            ],
+            &cmc_result,
+            "does not fit this problem's start mesh (45 vertices, 64 triangles)",
+        ),
+    ] {
+        let mut args = args.clone();
+        args.extend(["-q", "-o", out_dir.to_str().unwrap()]);
+        args.extend(["--start", result.to_str().unwrap()]);
+        let out = optimize(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(
+            stderr.starts_with(&format!("error: {}: ", result.display()))
+                && stderr.contains(expected),
+            "{args:?}: {stderr}"
+        );
+    }
+}

@@ -33,6 +33,7 @@ pub mod orientation;
 pub mod preview;
 pub mod refinement;
 pub mod remesh;
+pub mod restart;
 pub mod ring_tent;
 pub mod spec;
 pub mod stability;
@@ -225,13 +226,19 @@ fn mesh_solver_options(mut options: solver::Options) -> solver::Options {
 /// Builds the problem and solves it.
 pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let started = Instant::now();
-    let nlp = problem.build()?;
+    let mut nlp = problem.build()?;
+    if let Some(previous) = &opts.start {
+        nlp = restart::nlp_from(&nlp, previous)?;
+    }
     let build_seconds = started.elapsed().as_secs_f64();
     let options = mesh_solver_options(opts.solver_options(&problem.spec.file.solver));
     let solve_started = Instant::now();
-    let mut nlp = nlp;
-    // Coarse-to-fine start (cmc::multilevel): the coarse levels' work counts in the totals.
-    let staged = multilevel::coarse_to_fine(problem, &options)?;
+    // Coarse-to-fine start (cmc::multilevel), unless the run starts from a previous result: the
+    // coarse levels' work counts in the totals.
+    let staged = match opts.start {
+        Some(_) => None,
+        None => multilevel::coarse_to_fine(problem, &options)?,
+    };
     let coarse_seconds = solve_started.elapsed().as_secs_f64();
     let mut coarse_stages = Vec::new();
     let mut tally = Tally {
@@ -301,6 +308,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     summary.figures = figures_json(&nlp, &mesh, &solution.x)?;
     if let Some(obj) = summary.figures.as_object_mut() {
         obj.insert("flip_rounds".into(), rounds.into());
+        obj.insert("mesh".into(), restart::mesh_json(&mesh));
         let regions: Vec<&volume::Region> = nlp.volumes().iter().map(|v| &v.region).collect();
         let stability = stability::analyse(&mesh, &regions);
         opts.say(&format!(

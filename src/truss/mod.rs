@@ -21,6 +21,7 @@ pub mod model;
 pub mod nlp;
 pub mod plastic;
 pub mod quality;
+pub mod restart;
 pub mod spec;
 pub mod start;
 pub mod topology;
@@ -255,7 +256,14 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let started = Instant::now();
     let model = problem.model_for(seed)?;
     let mut timings = BTreeMap::new();
-    let (mut nlp, start_report, lp) = problem.staged_nlp(&model, seed)?;
+    let (mut nlp, start_report, lp) = match &opts.start {
+        Some(previous) => (
+            restart::nlp_from(previous, &model)?,
+            json!({ "method": "result", "file": previous.path }),
+            None,
+        ),
+        None => problem.staged_nlp(&model, seed)?,
+    };
     let start = quality::Point::start(&nlp)
         .ok()
         .map(|point| (nlp.clone(), point));
@@ -387,6 +395,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         "rounds": reports,
         "rounds_run": rounds_run,
         "result_round": result_round,
+        "design": restart::design_json(&design),
     });
     let caption = format!(
         "{}: {}, {} beams; {}",
