@@ -589,3 +589,69 @@ fn a_result_of_another_problem_kind_or_size_is_refused() {
         );
     }
 }
+
+#[test]
+fn an_output_folder_that_cannot_be_written_exits_1() {
+    // `-o` under a regular file: the run's folder cannot be created.
+    let scratch = Scratch::new("unwritable");
+    let file = scratch.file("plain.txt", "not a folder");
+    let out_dir = file.join("run");
+    let out = optimize(&[
+        "truss",
+        SHIPPED,
+        "--rounds",
+        "1",
+        "-q",
+        "--threads",
+        "1",
+        "-o",
+        out_dir.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.starts_with("error: "), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_writes_the_best_point_so_far_and_exits_130() {
+    // Eight pogo trials take a minute and more; SIGINT (what Ctrl-C sends) stops them at their
+    // next poll.
+    let scratch = Scratch::new("interrupt");
+    let out_dir = scratch.0.join("run");
+    let child = Command::new(env!("CARGO_BIN_EXE_optimize"))
+        .args([
+            "gait",
+            "problems/gait/pogo_crouch.toml",
+            "-q",
+            "--threads",
+            "1",
+            "-o",
+            out_dir.to_str().unwrap(),
+        ])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(kill.success());
+    let started = std::time::Instant::now();
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(
+        started.elapsed().as_secs_f64() < 10.0,
+        "stopped after {:?}",
+        started.elapsed()
+    );
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("result.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "Interrupted", "{summary}");
+    assert!(out_dir.join("model.glb").is_file());
+}
