@@ -26,9 +26,33 @@ impl Scratch {
 }
 
 impl Drop for Scratch {
+    /// Every `.glb` a test wrote must read back with the `gltf` crate (which validates indices,
+    /// accessors and buffers); then the folder goes.
     fn drop(&mut self) {
+        if !std::thread::panicking() {
+            for glb in files_under(&self.0, "glb") {
+                let bytes = std::fs::read(&glb).unwrap();
+                if let Err(e) = gltf::import_slice(&bytes) {
+                    panic!("{}: not valid glTF: {e}", glb.display());
+                }
+            }
+        }
         let _ = std::fs::remove_dir_all(&self.0);
     }
+}
+
+/// Files under `dir` (recursively) whose extension is `ext`.
+fn files_under(dir: &Path, ext: &str) -> Vec<PathBuf> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            found.extend(files_under(&path, ext));
+        } else if path.extension().is_some_and(|e| e == ext) {
+            found.push(path);
+        }
+    }
+    found
 }
 
 fn optimize(args: &[&str]) -> Output {
@@ -654,4 +678,60 @@ fn ctrl_c_writes_the_best_point_so_far_and_exits_130() {
         serde_json::from_slice(&std::fs::read(out_dir.join("result.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "Interrupted", "{summary}");
     assert!(out_dir.join("model.glb").is_file());
+}
+
+#[test]
+fn truss_glb_shows_every_working_beam_with_its_figures() {
+    let scratch = Scratch::new("truss-glb");
+    let summary = solved("truss", SHIPPED, &scratch.0, &[]);
+    let bytes = std::fs::read(scratch.0.join("model.glb")).unwrap();
+    let (doc, _, _) = gltf::import_slice(&bytes).unwrap();
+    // Extras are read from the GLB's JSON chunk (length at bytes 12..16, text from byte 20).
+    let length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let json: serde_json::Value = serde_json::from_slice(&bytes[20..20 + length]).unwrap();
+    let beams: Vec<&serde_json::Value> = json["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|n| n["name"].as_str().unwrap().starts_with("beam "))
+        .collect();
+    let active = summary["figures"]["active_beams"].as_u64().unwrap() as usize;
+    assert_eq!(beams.len(), active, "{}", json["nodes"]);
+    let mass: f64 = beams
+        .iter()
+        .map(|n| n["extras"]["mass_kg"].as_f64().unwrap())
+        .sum();
+    let total = summary["headline"]["value"].as_f64().unwrap();
+    // Idle beams (below 1e-3 of the largest force) are left out: they weigh next to nothing.
+    assert!((mass / total - 1.0).abs() < 1e-3, "{mass} kg of {total} kg");
+    // Every beam drawn at least 0.4 % of the joints' bounding-box diagonal thick (a 12-sided
+    // prism: its narrowest width is cos 15° of the diameter).
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for joint in summary["figures"]["design"]["joints"].as_array().unwrap() {
+        for k in 0..3 {
+            let x = joint["position"][k].as_f64().unwrap();
+            (lo[k], hi[k]) = (lo[k].min(x), hi[k].max(x));
+        }
+    }
+    let diagonal = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
+    let cases = summary["figures"]["load_cases"].as_array().unwrap().len();
+    for (node, beam) in doc.nodes().zip(&beams) {
+        let bbox = node
+            .mesh()
+            .unwrap()
+            .primitives()
+            .next()
+            .unwrap()
+            .bounding_box();
+        let thickness = (0..3)
+            .map(|k| f64::from(bbox.max[k] - bbox.min[k]))
+            .fold(f64::INFINITY, f64::min);
+        let least = 2.0 * 0.004 * diagonal * (std::f64::consts::PI / 12.0).cos();
+        assert!(
+            thickness >= least * (1.0 - 1e-6),
+            "{beam}: {thickness} m thick"
+        );
+        assert_eq!(beam["extras"]["force_n"].as_array().unwrap().len(), cases);
+        assert!(beam["extras"]["radius_m"].as_f64().unwrap() > 0.0);
+    }
 }
