@@ -735,3 +735,39 @@ fn truss_glb_shows_every_working_beam_with_its_figures() {
         assert!(beam["extras"]["radius_m"].as_f64().unwrap() > 0.0);
     }
 }
+
+#[test]
+fn every_kind_writes_a_model_and_a_picture() {
+    // README's output list: model.glb and a picture for every kind, collocation included.
+    let scratch = Scratch::new("pictures");
+    for (kind, file, picture, extra) in [
+        ("truss", SHIPPED, "preview.svg", &["--rounds", "1"][..]),
+        (
+            "cmc",
+            "problems/cmc/tennis_cushion.toml",
+            "preview.svg",
+            &[][..],
+        ),
+        (
+            "gait",
+            "tests/golden/problems/gait/pogo_crouch_short.toml",
+            "filmstrip.svg",
+            &["--trial", "1"][..],
+        ),
+        ("gait", "problems/gait/ball.toml", "filmstrip.svg", &[][..]),
+    ] {
+        let dir = scratch.0.join(Path::new(file).file_stem().unwrap());
+        let summary = solved(kind, file, &dir, extra);
+        let svg = std::fs::read_to_string(dir.join(picture)).unwrap();
+        let problem = summary["problem"].as_str().unwrap();
+        assert!(
+            svg.starts_with("<svg") && svg.contains(&format!("{problem}: ")),
+            "{file}"
+        );
+        let (doc, _, _) = gltf::import(dir.join("model.glb")).unwrap();
+        assert!(doc.meshes().count() >= 1, "{file}");
+        if kind == "gait" {
+            assert_eq!(doc.animations().count(), 1, "{file}: animated");
+        }
+    }
+}
