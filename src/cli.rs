@@ -63,6 +63,20 @@ pub enum Command {
         #[command(flatten)]
         common: Common,
     },
+    /// Print a shell completion script on stdout, e.g. `optimize completions bash >
+    /// ~/.local/share/bash-completion/completions/optimize`.
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff) on stdout, or with DIR write it and one page per command
+    /// (optimize-truss.1, …) there, e.g. `optimize man ~/.local/share/man/man1`.
+    Man {
+        /// Folder for every page.
+        #[arg(value_name = "DIR")]
+        dir: Option<PathBuf>,
+    },
 }
 
 /// Flags every kind accepts.
@@ -115,12 +129,14 @@ pub struct Common {
 }
 
 impl Command {
-    /// The kind, the problem file, the flags shared by all kinds, and the run options.
-    pub fn resolve(&self) -> (Kind, &Common, RunOptions) {
+    /// The kind, the problem file, the flags shared by all kinds, and the run options; `None`
+    /// for the commands that describe the tool (`completions`, `man`).
+    pub fn resolve(&self) -> Option<(Kind, &Common, RunOptions)> {
         let (kind, common) = match self {
             Command::Gait { common, .. } => (Kind::Gait, common),
             Command::Truss { common, .. } => (Kind::Truss, common),
             Command::Cmc { common } => (Kind::Cmc, common),
+            Command::Completions { .. } | Command::Man { .. } => return None,
         };
         let mut opts = RunOptions {
             out_dir: common.out.clone(),
@@ -138,9 +154,35 @@ impl Command {
         match self {
             Command::Gait { trial, .. } => opts.trial = trial.map(|t| t as usize),
             Command::Truss { rounds, .. } => opts.rounds = rounds.map(|r| r as usize),
-            Command::Cmc { .. } => {}
+            _ => {}
         }
-        (kind, common, opts)
+        Some((kind, common, opts))
+    }
+}
+
+/// Writes what `optimize completions` or `optimize man` prints for the command line `cli`
+/// (the definition with its version) to `out` (or, for `man DIR`, the pages into DIR); `false`
+/// for the problem kinds' commands.
+pub fn describe(
+    command: &Command,
+    mut cli: clap::Command,
+    out: &mut dyn std::io::Write,
+) -> std::io::Result<bool> {
+    match command {
+        Command::Completions { shell } => {
+            clap_complete::generate(*shell, &mut cli, "optimize", out);
+            Ok(true)
+        }
+        Command::Man { dir: None } => {
+            clap_mangen::Man::new(cli).render(out)?;
+            Ok(true)
+        }
+        Command::Man { dir: Some(dir) } => {
+            std::fs::create_dir_all(dir)?;
+            clap_mangen::generate_to(cli, dir)?;
+            Ok(true)
+        }
+        _ => Ok(false),
     }
 }
 
@@ -169,7 +211,7 @@ mod tests {
             "5",
         ])
         .unwrap();
-        let (kind, common, opts) = cli.command.resolve();
+        let (kind, common, opts) = cli.command.resolve().unwrap();
         assert_eq!(kind, Kind::Truss);
         assert_eq!(common.file, PathBuf::from("p.toml"));
         assert_eq!(
@@ -185,7 +227,8 @@ mod tests {
         let (_, _, opts) = Cli::try_parse_from(["optimize", "truss", "p.toml"])
             .unwrap()
             .command
-            .resolve();
+            .resolve()
+            .unwrap();
         assert_eq!((opts.seed, opts.seed_given), (0, false));
         assert!(Cli::try_parse_from(["optimize", "gait", "p.toml", "--trial", "0"]).is_err());
         assert!(Cli::try_parse_from(["optimize", "cmc", "p.toml", "-q", "-v"]).is_err());

@@ -771,3 +771,37 @@ fn every_kind_writes_a_model_and_a_picture() {
         }
     }
 }
+
+#[test]
+fn completions_and_man_pages_describe_every_command() {
+    for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
+        let out = optimize(&["completions", shell]);
+        assert_eq!(out.status.code(), Some(0), "{shell}");
+        let script = String::from_utf8_lossy(&out.stdout);
+        for word in ["truss", "gait", "cmc", "set", "start", "rounds", "max-iter"] {
+            assert!(script.contains(word), "{shell}: no {word}");
+        }
+    }
+    assert_eq!(optimize(&["completions", "tcsh"]).status.code(), Some(2));
+    let page = optimize(&["man"]);
+    assert_eq!(page.status.code(), Some(0));
+    let page = String::from_utf8_lossy(&page.stdout);
+    assert!(
+        page.starts_with(".ie") && page.contains(".TH optimize 1"),
+        "{page}"
+    );
+    assert!(page.contains("Exit codes: 0 converged"), "{page}");
+    let scratch = Scratch::new("man");
+    let dir = scratch.0.join("man1");
+    assert_eq!(
+        optimize(&["man", dir.to_str().unwrap()]).status.code(),
+        Some(0)
+    );
+    for kind in ["gait", "truss", "cmc"] {
+        let page = std::fs::read_to_string(dir.join(format!("optimize-{kind}.1"))).unwrap();
+        assert!(
+            page.contains("\\-\\-set") && page.contains("\\-\\-start"),
+            "{kind}: {page}"
+        );
+    }
+}
