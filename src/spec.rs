@@ -22,6 +22,7 @@ use crate::solver::Options;
 pub mod arrays;
 mod check;
 mod global;
+pub mod overrides;
 pub mod tagged;
 pub use check::{is_positive, short};
 pub use global::{GlobalMethodName, GlobalSpec};
