@@ -223,6 +223,29 @@ fn mesh_solver_options(mut options: solver::Options) -> solver::Options {
     options
 }
 
+/// The stability analysis of the solved `mesh` under the problem's volume constraints
+/// ([`stability`]), logged in one line and returned as its `figures.stability` value.
+fn stability_figure(
+    nlp: &CmcNlp,
+    mesh: &mesh::Mesh,
+    opts: &RunOptions,
+) -> Result<serde_json::Value, Error> {
+    let regions: Vec<&volume::Region> = nlp.volumes().iter().map(|v| &v.region).collect();
+    let stability = stability::analyse(mesh, &regions);
+    opts.say(&format!(
+        "stability: {} (smallest eigenvalues [{}] 1/m², {} normal degrees of freedom)",
+        stability.verdict,
+        stability
+            .smallest_eigenvalues
+            .iter()
+            .map(|e| format!("{e:.4e}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        stability.degrees_of_freedom
+    ));
+    serde_json::to_value(&stability).map_err(|e| Error::Runtime(format!("stability: {e}")))
+}
+
 /// Builds the problem and solves it.
 pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let started = Instant::now();
@@ -309,22 +332,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     if let Some(obj) = summary.figures.as_object_mut() {
         obj.insert("flip_rounds".into(), rounds.into());
         obj.insert("mesh".into(), restart::mesh_json(&mesh));
-        let regions: Vec<&volume::Region> = nlp.volumes().iter().map(|v| &v.region).collect();
-        let stability = stability::analyse(&mesh, &regions);
-        opts.say(&format!(
-            "stability: {} (smallest eigenvalues [{}] 1/m², {} normal degrees of freedom)",
-            stability.verdict,
-            stability
-                .smallest_eigenvalues
-                .iter()
-                .map(|e| format!("{e:.4e}"))
-                .collect::<Vec<_>>()
-                .join(", "),
-            stability.degrees_of_freedom
-        ));
-        let value = serde_json::to_value(&stability)
-            .map_err(|e| Error::Runtime(format!("stability: {e}")))?;
-        obj.insert("stability".into(), value);
+        obj.insert("stability".into(), stability_figure(&nlp, &mesh, opts)?);
         if let Some(study) = &study {
             let value = serde_json::to_value(study)
                 .map_err(|e| Error::Runtime(format!("refinement study: {e}")))?;
