@@ -294,8 +294,7 @@ fn an_iteration_limit_on_a_coarse_level_writes_the_best_result_and_exits_3() {
     ]);
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(3), "{stderr}");
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("result.json")).unwrap()).unwrap();
+    let summary = read_result(&out);
     assert_eq!(summary["status"], "IterationLimit", "{summary}");
     assert!(out.join("model.glb").is_file());
 }
@@ -317,9 +316,7 @@ fn a_run_reports_its_answer_in_the_users_unit() {
         String::from_utf8_lossy(&out.stderr),
     );
     assert_eq!(out.status.code(), Some(0), "{stderr}");
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(scratch.0.join("result.json")).unwrap())
-            .unwrap();
+    let summary = read_result(&scratch.0);
     let headline = &summary["headline"];
     let mass = summary["figures"]["mass_kg"].as_f64().unwrap();
     assert_eq!(
@@ -430,10 +427,7 @@ fn set_overrides_a_file_value_and_is_recorded() {
         Some(3),
         "one iteration does not converge"
     );
-    let summary: serde_json::Value = serde_json::from_slice(
-        &std::fs::read(scratch.0.join("truss").join("result.json")).unwrap(),
-    )
-    .unwrap();
+    let summary = read_result(&scratch.0.join("truss"));
     assert_eq!(summary["iterations"], 1, "{summary}");
 }
 
@@ -501,6 +495,11 @@ fn a_file_error_keeps_its_position_under_set() {
 }
 
 /// Solves `file` of `kind` into `dir` (extra flags after), expecting exit 0; returns result.json.
+/// The `result.json` written into `dir`.
+fn read_result(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("result.json")).unwrap()).unwrap()
+}
+
 fn solved(kind: &str, file: &str, dir: &Path, extra: &[&str]) -> serde_json::Value {
     let mut args = vec![
         kind,
@@ -515,7 +514,7 @@ fn solved(kind: &str, file: &str, dir: &Path, extra: &[&str]) -> serde_json::Val
     let out = optimize(&args);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{args:?}: {stderr}");
-    serde_json::from_slice(&std::fs::read(dir.join("result.json")).unwrap()).unwrap()
+    read_result(dir)
 }
 
 #[test]
@@ -674,8 +673,7 @@ fn ctrl_c_writes_the_best_point_so_far_and_exits_130() {
         "stopped after {:?}",
         started.elapsed()
     );
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out_dir.join("result.json")).unwrap()).unwrap();
+    let summary = read_result(&out_dir);
     assert_eq!(summary["status"], "Interrupted", "{summary}");
     assert!(out_dir.join("model.glb").is_file());
 }

@@ -183,42 +183,43 @@ fn assert_at(out: &Output, path: &Path, needle: &str, fragment: &str) {
 
 #[test]
 fn errors_inside_shape_tables_point_at_the_key_or_value() {
-    let p = mutant(
-        "problems/cmc/catenoid.toml",
-        "radius = 1.0 ",
-        "radius = 1.0\nbogus = 1 ",
-        "shape-key",
-    );
-    assert_at(&check("cmc", &p), &p, "bogus", "unknown key `bogus`");
-    let p = mutant(
-        "problems/cmc/catenoid.toml",
-        "separation = 1.0",
-        "separation = \"far\"",
-        "shape-type",
-    );
-    assert_at(&check("cmc", &p), &p, "\"far\"", "wrong type");
-    let p = mutant(
-        "problems/gait/pogo_crouch.toml",
-        "size = [0.06, 0.20, 0.03]",
-        "size = [0.06, 0.20, 0.03, 1.0]",
-        "link-shape",
-    );
-    assert_at(
-        &check("gait", &p),
-        &p,
-        "[0.06, 0.20, 0.03, 1.0]",
-        "expected 3 elements, found 4",
-    );
-    let p = mutant(
-        "problems/gait/ball.toml",
-        "height = 2.0",
-        "height = -2.0",
-        "wall",
-    );
-    assert_at(
-        &check("gait", &p),
-        &p,
-        "height = -2.0",
-        "`height` must be positive m",
-    );
+    // (kind, problem, text, its mutation, where the error must point, what it must say)
+    let cases = [
+        (
+            "cmc",
+            "problems/cmc/catenoid.toml",
+            "radius = 1.0 ",
+            "radius = 1.0\nbogus = 1 ",
+            "bogus",
+            "unknown key `bogus`",
+        ),
+        (
+            "cmc",
+            "problems/cmc/catenoid.toml",
+            "separation = 1.0",
+            "separation = \"far\"",
+            "\"far\"",
+            "wrong type",
+        ),
+        (
+            "gait",
+            "problems/gait/pogo_crouch.toml",
+            "size = [0.06, 0.20, 0.03]",
+            "size = [0.06, 0.20, 0.03, 1.0]",
+            "[0.06, 0.20, 0.03, 1.0]",
+            "expected 3 elements, found 4",
+        ),
+        (
+            "gait",
+            "problems/gait/ball.toml",
+            "height = 2.0",
+            "height = -2.0",
+            "height = -2.0",
+            "`height` must be positive m",
+        ),
+    ];
+    for (i, (kind, problem, from, to, needle, fragment)) in cases.into_iter().enumerate() {
+        let p = mutant(problem, from, to, &format!("shape-{i}"));
+        assert_at(&check(kind, &p), &p, needle, fragment);
+    }
 }

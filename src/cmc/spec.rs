@@ -425,6 +425,16 @@ fn shape(key: &'static str) -> [Key<'static>; 2] {
     [Key::Name("shape"), Key::Name(key)]
 }
 
+/// The key path `shape.<table>[i].<key>` (an entry of an array of tables inside `[shape]`).
+fn shape_entry(table: &'static str, i: usize, key: &'static str) -> [Key<'static>; 4] {
+    [
+        Key::Name("shape"),
+        Key::Name(table),
+        Key::Index(i),
+        Key::Name(key),
+    ]
+}
+
 pub fn parse(source: Source) -> Result<CmcSpec, InputError> {
     let file: CmcFile = source.parse()?;
     let spec = CmcSpec { file, source };
@@ -595,12 +605,7 @@ impl CmcSpec {
             ShapeSpec::Cells { cell } => self.validate_cells(cell)?,
             ShapeSpec::Obj { volume, .. } | ShapeSpec::Gltf { volume, .. } => {
                 for (i, v) in volume.iter().enumerate() {
-                    let at = [
-                        Key::Name("shape"),
-                        Key::Name("volume"),
-                        Key::Index(i),
-                        Key::Name("volume"),
-                    ];
+                    let at = shape_entry("volume", i, "volume");
                     src.positive(&at, v.volume)?;
                 }
             }
@@ -615,14 +620,7 @@ impl CmcSpec {
             return Err(self.err(&shape("tent"), "at least one `[[shape.tent]]`"));
         }
         for (i, t) in tent.iter().enumerate() {
-            let at = |k: &'static str| {
-                [
-                    Key::Name("shape"),
-                    Key::Name("tent"),
-                    Key::Index(i),
-                    Key::Name(k),
-                ]
-            };
+            let at = |k: &'static str| shape_entry("tent", i, k);
             self.check_outline(t.boundary.is_some(), t.rim.as_ref(), &at("name"))?;
             if let Some(b) = &t.boundary {
                 let flat: Vec<[f64; 2]> = b.iter().map(|p| [p[0], p[2]]).collect();
@@ -667,14 +665,7 @@ impl CmcSpec {
             return Err(self.err(&shape("cell"), "at least one `[[shape.cell]]`"));
         }
         for (i, c) in cell.iter().enumerate() {
-            let at = |k: &'static str| {
-                [
-                    Key::Name("shape"),
-                    Key::Name("cell"),
-                    Key::Index(i),
-                    Key::Name(k),
-                ]
-            };
+            let at = |k: &'static str| shape_entry("cell", i, k);
             self.check_outline(c.footprint.is_some(), c.circle.as_ref(), &at("name"))?;
             if let Some(fp) = &c.footprint {
                 self.check_polygon(fp, &at("footprint"))?;
@@ -858,12 +849,7 @@ impl CmcSpec {
                 };
                 let s = mesh.surface_index(bare).ok_or_else(|| {
                     self.err(
-                        &[
-                            Key::Name("shape"),
-                            Key::Name("volume"),
-                            Key::Index(i),
-                            Key::Name("surfaces"),
-                        ],
+                        &shape_entry("volume", i, "surfaces"),
                         format!(
                             "no surface `{bare}` in the mesh; it has: {}",
                             mesh.surfaces().join(", ")
@@ -879,12 +865,7 @@ impl CmcSpec {
             let enclosed = region.volume(&mesh);
             if enclosed.is_nan() || enclosed <= 0.0 {
                 return Err(self.err(
-                    &[
-                        Key::Name("shape"),
-                        Key::Name("volume"),
-                        Key::Index(i),
-                        Key::Name("surfaces"),
-                    ],
+                    &shape_entry("volume", i, "surfaces"),
                     format!(
                         "the surfaces of volume `{}` enclose {enclosed:.3e} m³ as wound: their \
                          normals must point out of the region (reverse the faces, or prefix a \
