@@ -11,12 +11,15 @@
 
 use std::collections::BTreeMap;
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 
-use crate::error::Error;
-use crate::outcome::{Artifact, Headline, Kind, Outcome, ResultSummary, RunOptions};
+use crate::error::{Error, InputError};
+use crate::outcome::{Artifact, Headline, Kind, Outcome, Previous, ResultSummary, RunOptions};
 use crate::solver::derivatives::{CheckOptions, DerivativeReport, check_derivatives};
 use crate::solver::{Bounds, Evaluations, Interrupt, Interruptible, Nlp, Status};
+use crate::spec::Source;
+use crate::spec::overrides;
 
 /// A problem kind: how its files are loaded, checked and solved.
 pub trait Application {
@@ -25,8 +28,8 @@ pub trait Application {
     /// A loaded, validated problem.
     type Problem;
 
-    /// Reads, parses and validates a problem file (errors positioned in the file).
-    fn load(path: &Path) -> Result<Self::Problem, Error>;
+    /// Parses and validates a problem file's text (errors positioned in the file).
+    fn load(source: Source) -> Result<Self::Problem, Error>;
 
     /// The problem's name (the file's `name`, or its stem): names `out/<name>/`.
     fn name(problem: &Self::Problem) -> &str;
@@ -91,10 +94,49 @@ impl<'p> CheckCase<'p> {
 
 /// Loads a problem file of application `A` and checks or solves it (`opts.check`): the one
 /// entry point of every kind. Returns the problem's name and the outcome; writes nothing.
+///
+/// The `--set` overrides (`opts.overrides`) are spliced into the file's text before it is
+/// parsed; errors are positioned in the file as written, or name the `--set` argument they come
+/// from; `result.json` lists the overrides.
 pub fn execute<A: Application>(path: &Path, opts: &RunOptions) -> Result<(String, Outcome), Error> {
-    let problem = A::load(path)?;
-    let outcome = run_problem::<A>(&problem, opts)?;
+    let edited = overrides::apply(Source::read(path)?, &opts.overrides)?;
+    let relocate = |e: Error| match e {
+        Error::Input(e) => Error::Input(edited.relocate(e)),
+        other => other,
+    };
+    let problem = A::load(edited.source.clone()).map_err(relocate)?;
+    let mut opts = opts.clone();
+    if let Some(file) = &opts.start_file {
+        opts.start = Some(Arc::new(read_start(file, A::KIND, A::name(&problem))?));
+    }
+    let mut outcome = run_problem::<A>(&problem, &opts).map_err(relocate)?;
+    outcome.summary.overrides = opts.overrides.iter().map(|o| o.argument.clone()).collect();
     Ok((A::name(&problem).to_string(), outcome))
+}
+
+/// Reads `--start`'s `result.json` and checks that it is a solved result of the problem `name`
+/// of `kind`: anything else is a one-line error naming the file (exit 2).
+fn read_start(path: &Path, kind: Kind, name: &str) -> Result<Previous, Error> {
+    let fail = |message: String| Error::Input(InputError::whole_file(path, message));
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| fail(format!("cannot read the result to start from: {e}")))?;
+    let result: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| fail(format!("not a result.json ({e})")))?;
+    let (their_kind, their_name) = (result["kind"].as_str(), result["problem"].as_str());
+    if their_kind != Some(kind.name()) || their_name != Some(name) {
+        return Err(fail(format!(
+            "a result of {} problem `{}`, not of {kind} problem `{name}`",
+            their_kind.unwrap_or("no"),
+            their_name.unwrap_or("?")
+        )));
+    }
+    if result["status"] == "Checked" {
+        return Err(fail("a --check report, not a solved result".into()));
+    }
+    Ok(Previous {
+        path: path.to_path_buf(),
+        result,
+    })
 }
 
 /// Checks (`opts.check`) or solves a loaded problem of application `A`.

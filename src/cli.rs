@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 
 use crate::outcome::{Kind, RunOptions};
+use crate::spec::overrides::Override;
 
 const EXAMPLES: &str = "\
 Examples:
@@ -62,6 +63,20 @@ pub enum Command {
         #[command(flatten)]
         common: Common,
     },
+    /// Print a shell completion script on stdout, e.g. `optimize completions bash >
+    /// ~/.local/share/bash-completion/completions/optimize`.
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff) on stdout, or with DIR write it and one page per command
+    /// (optimize-truss.1, …) there, e.g. `optimize man ~/.local/share/man/man1`.
+    Man {
+        /// Folder for every page.
+        #[arg(value_name = "DIR")]
+        dir: Option<PathBuf>,
+    },
 }
 
 /// Flags every kind accepts.
@@ -104,15 +119,24 @@ pub struct Common {
     /// Worker threads, 1 to 256 [default: all cores]; results do not depend on it.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_THREADS))]
     pub threads: Option<u64>,
+    /// Override a problem-file value, checked like the file (repeatable; the value in TOML
+    /// syntax, a bare word taken as a string), e.g. `--set solver.max_iterations=300`.
+    #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
+    pub set: Vec<Override>,
+    /// Start from a previous run's answer: its `result.json` (same problem, same kind).
+    #[arg(long, value_name = "RESULT", conflicts_with = "check")]
+    pub start: Option<PathBuf>,
 }
 
 impl Command {
-    /// The kind, the problem file, the flags shared by all kinds, and the run options.
-    pub fn resolve(&self) -> (Kind, &Common, RunOptions) {
+    /// The kind, the problem file, the flags shared by all kinds, and the run options; `None`
+    /// for the commands that describe the tool (`completions`, `man`).
+    pub fn resolve(&self) -> Option<(Kind, &Common, RunOptions)> {
         let (kind, common) = match self {
             Command::Gait { common, .. } => (Kind::Gait, common),
             Command::Truss { common, .. } => (Kind::Truss, common),
             Command::Cmc { common } => (Kind::Cmc, common),
+            Command::Completions { .. } | Command::Man { .. } => return None,
         };
         let mut opts = RunOptions {
             out_dir: common.out.clone(),
@@ -123,14 +147,42 @@ impl Command {
             seed: common.seed.unwrap_or(0),
             seed_given: common.seed.is_some(),
             threads: common.threads.map(|t| t as usize),
+            overrides: common.set.clone(),
+            start_file: common.start.clone(),
             ..RunOptions::default()
         };
         match self {
             Command::Gait { trial, .. } => opts.trial = trial.map(|t| t as usize),
             Command::Truss { rounds, .. } => opts.rounds = rounds.map(|r| r as usize),
-            Command::Cmc { .. } => {}
+            _ => {}
         }
-        (kind, common, opts)
+        Some((kind, common, opts))
+    }
+}
+
+/// Writes what `optimize completions` or `optimize man` prints for the command line `cli`
+/// (the definition with its version) to `out` (or, for `man DIR`, the pages into DIR); `false`
+/// for the problem kinds' commands.
+pub fn describe(
+    command: &Command,
+    mut cli: clap::Command,
+    out: &mut dyn std::io::Write,
+) -> std::io::Result<bool> {
+    match command {
+        Command::Completions { shell } => {
+            clap_complete::generate(*shell, &mut cli, "optimize", out);
+            Ok(true)
+        }
+        Command::Man { dir: None } => {
+            clap_mangen::Man::new(cli).render(out)?;
+            Ok(true)
+        }
+        Command::Man { dir: Some(dir) } => {
+            std::fs::create_dir_all(dir)?;
+            clap_mangen::generate_to(cli, dir)?;
+            Ok(true)
+        }
+        _ => Ok(false),
     }
 }
 
@@ -159,7 +211,7 @@ mod tests {
             "5",
         ])
         .unwrap();
-        let (kind, common, opts) = cli.command.resolve();
+        let (kind, common, opts) = cli.command.resolve().unwrap();
         assert_eq!(kind, Kind::Truss);
         assert_eq!(common.file, PathBuf::from("p.toml"));
         assert_eq!(
@@ -175,7 +227,8 @@ mod tests {
         let (_, _, opts) = Cli::try_parse_from(["optimize", "truss", "p.toml"])
             .unwrap()
             .command
-            .resolve();
+            .resolve()
+            .unwrap();
         assert_eq!((opts.seed, opts.seed_given), (0, false));
         assert!(Cli::try_parse_from(["optimize", "gait", "p.toml", "--trial", "0"]).is_err());
         assert!(Cli::try_parse_from(["optimize", "cmc", "p.toml", "-q", "-v"]).is_err());

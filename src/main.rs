@@ -29,7 +29,20 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(error) => error.exit(),
     };
-    let (kind, common, mut opts) = cli.command.resolve();
+    let Some((kind, common, mut opts)) = cli.command.resolve() else {
+        let described = optimize::cli::describe(
+            &cli.command,
+            Cli::command().version(VERSION),
+            &mut std::io::stdout(),
+        );
+        return match described {
+            Ok(_) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: cannot write the description: {e}");
+                ExitCode::from(1)
+            }
+        };
+    };
     if let Some(n) = opts.threads
         && let Err(e) = rayon::ThreadPoolBuilder::new()
             .num_threads(n)

@@ -9,6 +9,7 @@ use serde::Serialize;
 
 use crate::solver::log::{LogTarget, ObjectiveUnit};
 use crate::solver::{Evaluations, Interrupt, Options, Solution, Status};
+use crate::spec::overrides::Override;
 
 /// The problem kinds, one per module.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -70,6 +71,13 @@ pub struct RunOptions {
     pub trial: Option<usize>,
     /// Truss: number of topology rounds.
     pub rounds: Option<usize>,
+    /// `--set key.path=value` overrides of problem-file values, in command-line order.
+    pub overrides: Vec<Override>,
+    /// `--start FILE`: a previous run's `result.json` to start from.
+    pub start_file: Option<PathBuf>,
+    /// The previous result read from `start_file` (filled in before the kind runs, after its
+    /// problem and kind were checked against the problem's).
+    pub start: Option<std::sync::Arc<Previous>>,
     /// Raised by Ctrl-C: every solve, evaluation, rollout and check polls it
     /// ([`crate::solver::interrupt`]) and the run ends with the best point so far.
     pub interrupt: Interrupt,
@@ -101,6 +109,34 @@ impl RunOptions {
         if !self.quiet {
             self.log.line(text);
         }
+    }
+}
+
+/// A previous run's `result.json`, read to start a run from its answer (`--start`).
+#[derive(Debug, Clone)]
+pub struct Previous {
+    /// The file as the user named it.
+    pub path: PathBuf,
+    /// Its contents.
+    pub result: serde_json::Value,
+}
+
+impl Previous {
+    /// The entry `figures.<key>` of the previous result, or an error naming the file when it is
+    /// missing (a result written before that figure existed).
+    pub fn figure(&self, key: &str) -> Result<&serde_json::Value, crate::error::InputError> {
+        self.result["figures"].get(key).ok_or_else(|| {
+            crate::error::InputError::whole_file(
+                &self.path,
+                format!("no `figures.{key}` to start from (written by an older version?)"),
+            )
+        })
+    }
+
+    /// A mismatch between this result and the problem it should start: one line naming the
+    /// file.
+    pub fn mismatch(&self, message: impl Into<String>) -> crate::error::InputError {
+        crate::error::InputError::whole_file(&self.path, message)
     }
 }
 
@@ -168,6 +204,9 @@ pub struct ResultSummary {
     pub timings: BTreeMap<String, f64>,
     /// The seed used.
     pub seed: u64,
+    /// The `--set` overrides the run was given (`key.path=value`, in order); absent when none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub overrides: Vec<String>,
     /// Module-specific figures (areas, masses, trial tables, ...).
     pub figures: serde_json::Value,
 }
@@ -187,6 +226,7 @@ impl ResultSummary {
             evaluations: Evaluations::default(),
             timings: BTreeMap::new(),
             seed,
+            overrides: Vec::new(),
             figures: serde_json::Value::Object(Default::default()),
         }
     }

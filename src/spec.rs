@@ -22,6 +22,8 @@ use crate::solver::Options;
 pub mod arrays;
 mod check;
 mod global;
+pub mod overrides;
+pub mod tagged;
 pub use check::{is_positive, short};
 pub use global::{GlobalMethodName, GlobalSpec};
 
@@ -75,7 +77,9 @@ impl Source {
     /// Deserializes the whole file into `T`, mapping toml/serde errors to positioned messages;
     /// then rejects every float that is not finite, wherever it sits (`check`).
     pub fn parse<T: DeserializeOwned>(&self) -> Result<T, InputError> {
-        let parsed = toml::from_str::<T>(&self.text).map_err(|e| self.translate(&e))?;
+        let (parsed, inside) =
+            tagged::with_document(&self.text, || toml::from_str::<T>(&self.text));
+        let parsed = parsed.map_err(|e| self.translate(&e, inside))?;
         check::reject_non_finite(self)?;
         Ok(parsed)
     }
@@ -113,8 +117,13 @@ impl Source {
         offset
     }
 
-    fn translate(&self, e: &toml::de::Error) -> InputError {
-        let offset = e.span().map_or(0, |s| s.start);
+    /// A toml/serde error as a positioned message; `inside` is the error of a tagged table
+    /// ([`tagged`]), positioned inside the table where `e` can only point at the table.
+    fn translate(&self, e: &toml::de::Error, inside: Option<tagged::Located>) -> InputError {
+        let offset = match inside {
+            Some(l) if l.message == e.message() => l.span.start,
+            _ => e.span().map_or(0, |s| s.start),
+        };
         let message = tidy_message(e.message());
         InputError::at_offset(&self.path, &self.text, offset, message)
     }
@@ -123,10 +132,7 @@ impl Source {
 /// Turns serde's messages into short sentences; unknown keys get a "did you mean" hint.
 fn tidy_message(raw: &str) -> String {
     let raw = raw.trim().trim_end_matches('.');
-    if let Some(rest) = raw.strip_prefix("unknown field `")
-        && let Some((key, expected)) = rest.split_once('`')
-    {
-        let valid: Vec<&str> = expected.split('`').skip(1).step_by(2).collect();
+    if let Some((key, valid)) = unknown_key(raw) {
         return match closest(key, &valid) {
             Some(best) => format!("unknown key `{key}`; did you mean `{best}`?"),
             None if valid.is_empty() => format!("unknown key `{key}`"),
@@ -138,6 +144,20 @@ fn tidy_message(raw: &str) -> String {
     }
     raw.replace("invalid type: ", "wrong type: found ")
         .replace('\n', " ")
+}
+
+/// The unknown key and the valid ones, from serde's message ("unknown field `k`, expected one
+/// of `a`, `b`") or toml's for a table read as an enum variant ("unexpected keys in table: k,
+/// available keys: a, b").
+fn unknown_key(raw: &str) -> Option<(&str, Vec<&str>)> {
+    if let Some(rest) = raw.strip_prefix("unknown field `") {
+        let (key, expected) = rest.split_once('`')?;
+        return Some((key, expected.split('`').skip(1).step_by(2).collect()));
+    }
+    let rest = raw.strip_prefix("unexpected keys in table: ")?;
+    let (keys, valid) = rest.split_once(", available keys: ")?;
+    let key = keys.split(", ").next()?;
+    Some((key, valid.split(", ").filter(|k| !k.is_empty()).collect()))
 }
 
 /// The valid key nearest to `key` by edit distance, if it is plausibly a typo.

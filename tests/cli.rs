@@ -26,9 +26,33 @@ impl Scratch {
 }
 
 impl Drop for Scratch {
+    /// Every `.glb` a test wrote must read back with the `gltf` crate (which validates indices,
+    /// accessors and buffers); then the folder goes.
     fn drop(&mut self) {
+        if !std::thread::panicking() {
+            for glb in files_under(&self.0, "glb") {
+                let bytes = std::fs::read(&glb).unwrap();
+                if let Err(e) = gltf::import_slice(&bytes) {
+                    panic!("{}: not valid glTF: {e}", glb.display());
+                }
+            }
+        }
         let _ = std::fs::remove_dir_all(&self.0);
     }
+}
+
+/// Files under `dir` (recursively) whose extension is `ext`.
+fn files_under(dir: &Path, ext: &str) -> Vec<PathBuf> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            found.extend(files_under(&path, ext));
+        } else if path.extension().is_some_and(|e| e == ext) {
+            found.push(path);
+        }
+    }
+    found
 }
 
 fn optimize(args: &[&str]) -> Output {
@@ -270,8 +294,7 @@ fn an_iteration_limit_on_a_coarse_level_writes_the_best_result_and_exits_3() {
     ]);
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(3), "{stderr}");
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("result.json")).unwrap()).unwrap();
+    let summary = read_result(&out);
     assert_eq!(summary["status"], "IterationLimit", "{summary}");
     assert!(out.join("model.glb").is_file());
 }
@@ -293,9 +316,7 @@ fn a_run_reports_its_answer_in_the_users_unit() {
         String::from_utf8_lossy(&out.stderr),
     );
     assert_eq!(out.status.code(), Some(0), "{stderr}");
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(scratch.0.join("result.json")).unwrap())
-            .unwrap();
+    let summary = read_result(&scratch.0);
     let headline = &summary["headline"];
     let mass = summary["figures"]["mass_kg"].as_f64().unwrap();
     assert_eq!(
@@ -346,4 +367,439 @@ fn version_names_the_package_version_and_the_commit() {
         hash == "unknown" || (hash.len() >= 7 && hash.chars().all(|c| c.is_ascii_hexdigit())),
         "{text}"
     );
+}
+
+/// Runs `optimize --check` on the cmc cushion with `sets` as `--set` arguments and returns the
+/// check's summary.
+fn checked_cushion_with(scratch: &Scratch, sets: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        "cmc",
+        "problems/cmc/tennis_cushion.toml",
+        "--check",
+        "-q",
+        "-o",
+        scratch.0.to_str().unwrap(),
+    ];
+    for s in sets {
+        args.extend(["--set", s]);
+    }
+    let out = optimize(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{sets:?}: {stderr}");
+    let text = std::fs::read_to_string(scratch.0.join("check").join("result.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+#[test]
+fn set_overrides_a_file_value_and_is_recorded() {
+    let scratch = Scratch::new("set");
+    let plain = checked_cushion_with(&scratch, &[]);
+    assert!(plain.get("overrides").is_none(), "{plain}");
+    // The file says resolution = 8; halving it quarters the mesh.
+    let coarse = checked_cushion_with(&scratch, &["resolution=4", "solver.max_iterations=7"]);
+    let variables = |v: &serde_json::Value| v["figures"]["variables"].as_u64().unwrap();
+    assert!(
+        variables(&coarse) * 3 < variables(&plain),
+        "{} vs {}",
+        variables(&coarse),
+        variables(&plain)
+    );
+    assert_eq!(
+        coarse["overrides"],
+        serde_json::json!(["resolution=4", "solver.max_iterations=7"])
+    );
+    // A [solver] key the file does not have: the table is created, the value validated.
+    let truss = optimize(&[
+        "truss",
+        SHIPPED,
+        "--set",
+        "solver.max_iterations=1",
+        "--rounds",
+        "1",
+        "-q",
+        "--threads",
+        "1",
+        "-o",
+        scratch.0.join("truss").to_str().unwrap(),
+    ]);
+    assert_eq!(
+        truss.status.code(),
+        Some(3),
+        "one iteration does not converge"
+    );
+    let summary = read_result(&scratch.0.join("truss"));
+    assert_eq!(summary["iterations"], 1, "{summary}");
+}
+
+#[test]
+fn set_errors_name_the_argument() {
+    for (set, expected) in [
+        (
+            "resoluton=8",
+            "error: --set resoluton=8: unknown key `resoluton`; did you mean `resolution`?",
+        ),
+        (
+            "resolution=0",
+            "error: --set resolution=0: `resolution` must be between 1 and 64, got 0",
+        ),
+        (
+            "solver.max_iterations=abc",
+            "error: --set solver.max_iterations=abc: wrong type: found string \"abc\"",
+        ),
+        (
+            "solver.tolerance=2.0",
+            "error: --set solver.tolerance=2.0: `tolerance` must be in (0, 1), got 2",
+        ),
+        ("shape=1", "error: --set shape=1: `shape` is a table"),
+        (
+            "solver.tolerance=inf",
+            "error: --set solver.tolerance=inf: `tolerance` must be finite",
+        ),
+    ] {
+        let out = optimize(&[
+            "cmc",
+            "problems/cmc/tennis_cushion.toml",
+            "--check",
+            "-q",
+            "--set",
+            set,
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{set}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(stderr.starts_with(expected), "{set}: {stderr}");
+    }
+    // Malformed arguments are usage errors.
+    let out = optimize(&[
+        "cmc",
+        "problems/cmc/tennis_cushion.toml",
+        "--set",
+        "resolution",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn a_file_error_keeps_its_position_under_set() {
+    // `--set seed=3` goes in as a new first line; the file's own error stays at its line.
+    let scratch = Scratch::new("set-position");
+    let text = shipped().replacen("min_length", "min_lenght", 1);
+    let path = scratch.file("bad.toml", &text);
+    let out = optimize(&["truss", path.to_str().unwrap(), "--set", "seed=3"]);
+    assert_input_error(
+        &out,
+        &path,
+        Some(line_of(&text, "min_lenght")),
+        &["did you mean `min_length`"],
+    );
+}
+
+/// Solves `file` of `kind` into `dir` (extra flags after), expecting exit 0; returns result.json.
+/// The `result.json` written into `dir`.
+fn read_result(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("result.json")).unwrap()).unwrap()
+}
+
+fn solved(kind: &str, file: &str, dir: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        kind,
+        file,
+        "-q",
+        "--threads",
+        "1",
+        "-o",
+        dir.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    let out = optimize(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{args:?}: {stderr}");
+    read_result(dir)
+}
+
+#[test]
+fn every_kind_restarts_from_its_result_at_once() {
+    let scratch = Scratch::new("start");
+    for (kind, file, extra) in [
+        ("truss", SHIPPED, &[][..]),
+        (
+            "gait",
+            "tests/golden/problems/gait/pogo_crouch_short.toml",
+            &["--trial", "1"][..],
+        ),
+        ("cmc", "problems/cmc/tennis_cushion.toml", &[][..]),
+    ] {
+        let first_dir = scratch.0.join(kind).join("first");
+        let first = solved(kind, file, &first_dir, extra);
+        let result = first_dir.join("result.json");
+        let again = solved(
+            kind,
+            file,
+            &scratch.0.join(kind).join("again"),
+            &["--start", result.to_str().unwrap()],
+        );
+        let (a, b) = (
+            first["headline"]["value"].as_f64().unwrap(),
+            again["headline"]["value"].as_f64().unwrap(),
+        );
+        let iterations = again["iterations"].as_u64().unwrap();
+        assert!(
+            iterations <= 3 && iterations < first["iterations"].as_u64().unwrap(),
+            "{kind}: {iterations} iterations from the result, {} from the file",
+            first["iterations"]
+        );
+        assert_eq!(again["status"], "Optimal", "{kind}: {again}");
+        // cmc minimizes area plus the tangential regularization, whose projectors are frozen
+        // at the solve's start: from another start the area may move by up to that term.
+        let tolerance = match kind {
+            "cmc" => {
+                let f = &first["figures"];
+                let l = f["length_scale"].as_f64().unwrap();
+                f["regularization"].as_f64().unwrap() * l * l / a
+            }
+            _ => 1e-9,
+        };
+        assert!(
+            (b / a - 1.0).abs() <= tolerance,
+            "{kind}: {b} from the result, {a} from the file (tolerance {tolerance:e})"
+        );
+    }
+}
+
+#[test]
+fn a_result_of_another_problem_kind_or_size_is_refused() {
+    let scratch = Scratch::new("start-mismatch");
+    let truss_dir = scratch.0.join("truss");
+    solved("truss", SHIPPED, &truss_dir, &["--rounds", "1"]);
+    let cmc_dir = scratch.0.join("cmc");
+    solved("cmc", "problems/cmc/tennis_cushion.toml", &cmc_dir, &[]);
+    let truss_result = truss_dir.join("result.json");
+    let cmc_result = cmc_dir.join("result.json");
+    let out_dir = scratch.0.join("x");
+    for (args, result, expected) in [
+        (
+            vec!["truss", "problems/truss/roof_warren.toml"],
+            &truss_result,
+            "a result of truss problem `roof_fink`, not of truss problem `roof_warren`",
+        ),
+        (
+            vec!["cmc", "problems/cmc/tennis_cushion.toml"],
+            &truss_result,
+            "a result of truss problem `roof_fink`, not of cmc problem `tennis_cushion`",
+        ),
+        (
+            vec![
+                "cmc",
+                "problems/cmc/tennis_cushion.toml",
+                "--set",
+                "resolution=4",
+            ],
+            &cmc_result,
+            "does not fit this problem's start mesh (45 vertices, 64 triangles)",
+        ),
+    ] {
+        let mut args = args.clone();
+        args.extend(["-q", "-o", out_dir.to_str().unwrap()]);
+        args.extend(["--start", result.to_str().unwrap()]);
+        let out = optimize(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(
+            stderr.starts_with(&format!("error: {}: ", result.display()))
+                && stderr.contains(expected),
+            "{args:?}: {stderr}"
+        );
+    }
+}
+
+#[test]
+fn an_output_folder_that_cannot_be_written_exits_1() {
+    // `-o` under a regular file: the run's folder cannot be created.
+    let scratch = Scratch::new("unwritable");
+    let file = scratch.file("plain.txt", "not a folder");
+    let out_dir = file.join("run");
+    let out = optimize(&[
+        "truss",
+        SHIPPED,
+        "--rounds",
+        "1",
+        "-q",
+        "--threads",
+        "1",
+        "-o",
+        out_dir.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.starts_with("error: "), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_writes_the_best_point_so_far_and_exits_130() {
+    // Eight pogo trials take a minute and more; SIGINT (what Ctrl-C sends) stops them at their
+    // next poll.
+    let scratch = Scratch::new("interrupt");
+    let out_dir = scratch.0.join("run");
+    let child = Command::new(env!("CARGO_BIN_EXE_optimize"))
+        .args([
+            "gait",
+            "problems/gait/pogo_crouch.toml",
+            "-q",
+            "--threads",
+            "1",
+            "-o",
+            out_dir.to_str().unwrap(),
+        ])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(kill.success());
+    let started = std::time::Instant::now();
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(
+        started.elapsed().as_secs_f64() < 10.0,
+        "stopped after {:?}",
+        started.elapsed()
+    );
+    let summary = read_result(&out_dir);
+    assert_eq!(summary["status"], "Interrupted", "{summary}");
+    assert!(out_dir.join("model.glb").is_file());
+}
+
+#[test]
+fn truss_glb_shows_every_working_beam_with_its_figures() {
+    let scratch = Scratch::new("truss-glb");
+    let summary = solved("truss", SHIPPED, &scratch.0, &[]);
+    let bytes = std::fs::read(scratch.0.join("model.glb")).unwrap();
+    let (doc, _, _) = gltf::import_slice(&bytes).unwrap();
+    // Extras are read from the GLB's JSON chunk (length at bytes 12..16, text from byte 20).
+    let length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let json: serde_json::Value = serde_json::from_slice(&bytes[20..20 + length]).unwrap();
+    let beams: Vec<&serde_json::Value> = json["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|n| n["name"].as_str().unwrap().starts_with("beam "))
+        .collect();
+    let active = summary["figures"]["active_beams"].as_u64().unwrap() as usize;
+    assert_eq!(beams.len(), active, "{}", json["nodes"]);
+    let mass: f64 = beams
+        .iter()
+        .map(|n| n["extras"]["mass_kg"].as_f64().unwrap())
+        .sum();
+    let total = summary["headline"]["value"].as_f64().unwrap();
+    // Idle beams (below 1e-3 of the largest force) are left out: they weigh next to nothing.
+    assert!((mass / total - 1.0).abs() < 1e-3, "{mass} kg of {total} kg");
+    // Every beam drawn at least 0.4 % of the joints' bounding-box diagonal thick (a 12-sided
+    // prism: its narrowest width is cos 15° of the diameter).
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for joint in summary["figures"]["design"]["joints"].as_array().unwrap() {
+        for k in 0..3 {
+            let x = joint["position"][k].as_f64().unwrap();
+            (lo[k], hi[k]) = (lo[k].min(x), hi[k].max(x));
+        }
+    }
+    let diagonal = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
+    let cases = summary["figures"]["load_cases"].as_array().unwrap().len();
+    for (node, beam) in doc.nodes().zip(&beams) {
+        let bbox = node
+            .mesh()
+            .unwrap()
+            .primitives()
+            .next()
+            .unwrap()
+            .bounding_box();
+        let thickness = (0..3)
+            .map(|k| f64::from(bbox.max[k] - bbox.min[k]))
+            .fold(f64::INFINITY, f64::min);
+        let least = 2.0 * 0.004 * diagonal * (std::f64::consts::PI / 12.0).cos();
+        assert!(
+            thickness >= least * (1.0 - 1e-6),
+            "{beam}: {thickness} m thick"
+        );
+        assert_eq!(beam["extras"]["force_n"].as_array().unwrap().len(), cases);
+        assert!(beam["extras"]["radius_m"].as_f64().unwrap() > 0.0);
+    }
+}
+
+#[test]
+fn every_kind_writes_a_model_and_a_picture() {
+    // README's output list: model.glb and a picture for every kind, collocation included.
+    let scratch = Scratch::new("pictures");
+    for (kind, file, picture, extra) in [
+        ("truss", SHIPPED, "preview.svg", &["--rounds", "1"][..]),
+        (
+            "cmc",
+            "problems/cmc/tennis_cushion.toml",
+            "preview.svg",
+            &[][..],
+        ),
+        (
+            "gait",
+            "tests/golden/problems/gait/pogo_crouch_short.toml",
+            "filmstrip.svg",
+            &["--trial", "1"][..],
+        ),
+        ("gait", "problems/gait/ball.toml", "filmstrip.svg", &[][..]),
+    ] {
+        let dir = scratch.0.join(Path::new(file).file_stem().unwrap());
+        let summary = solved(kind, file, &dir, extra);
+        let svg = std::fs::read_to_string(dir.join(picture)).unwrap();
+        let problem = summary["problem"].as_str().unwrap();
+        assert!(
+            svg.starts_with("<svg") && svg.contains(&format!("{problem}: ")),
+            "{file}"
+        );
+        let (doc, _, _) = gltf::import(dir.join("model.glb")).unwrap();
+        assert!(doc.meshes().count() >= 1, "{file}");
+        if kind == "gait" {
+            assert_eq!(doc.animations().count(), 1, "{file}: animated");
+        }
+    }
+}
+
+#[test]
+fn completions_and_man_pages_describe_every_command() {
+    for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
+        let out = optimize(&["completions", shell]);
+        assert_eq!(out.status.code(), Some(0), "{shell}");
+        let script = String::from_utf8_lossy(&out.stdout);
+        for word in ["truss", "gait", "cmc", "set", "start", "rounds", "max-iter"] {
+            assert!(script.contains(word), "{shell}: no {word}");
+        }
+    }
+    assert_eq!(optimize(&["completions", "tcsh"]).status.code(), Some(2));
+    let page = optimize(&["man"]);
+    assert_eq!(page.status.code(), Some(0));
+    let page = String::from_utf8_lossy(&page.stdout);
+    assert!(
+        page.starts_with(".ie") && page.contains(".TH optimize 1"),
+        "{page}"
+    );
+    assert!(page.contains("Exit codes: 0 converged"), "{page}");
+    let scratch = Scratch::new("man");
+    let dir = scratch.0.join("man1");
+    assert_eq!(
+        optimize(&["man", dir.to_str().unwrap()]).status.code(),
+        Some(0)
+    );
+    for kind in ["gait", "truss", "cmc"] {
+        let page = std::fs::read_to_string(dir.join(format!("optimize-{kind}.1"))).unwrap();
+        assert!(
+            page.contains("\\-\\-set") && page.contains("\\-\\-start"),
+            "{kind}: {page}"
+        );
+    }
 }

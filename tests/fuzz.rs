@@ -29,6 +29,10 @@ const TIME_LIMIT: Duration = Duration::from_secs(20);
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 enum Outcome {
     RejectedWithPosition,
+    /// Positioned at 1:1 on a comment or blank line: no key was found for the error.
+    RejectedAtFileStart,
+    /// Positioned at a table header although the error is about something inside the table.
+    RejectedAtTableHeader,
     RejectedWithoutPosition,
     RuntimeError,
     AcceptedEvaluated,
@@ -69,16 +73,44 @@ fn evaluate(nlp: &dyn Nlp) -> bool {
     nlp.eval(&x, &mut f, &mut c).is_ok() && nlp.eval_derivatives(&x, &mut g, &mut j).is_ok()
 }
 
-fn classify_error(e: &Error) -> Outcome {
-    match e {
-        Error::Input(i) if i.position.is_some() => Outcome::RejectedWithPosition,
-        Error::Input(_) => Outcome::RejectedWithoutPosition,
-        _ => Outcome::RuntimeError,
+/// The outcome of an error on `text`. Misplaced: at 1:1 on a comment or blank line (no key
+/// found for the error, unless a top-level key is missing), or at a table header for an error
+/// about a key or value inside the table (a serde error other than a missing key, or a message
+/// quoting a key the table holds).
+fn classify_error(e: &Error, text: &str) -> Outcome {
+    let Error::Input(i) = e else {
+        return Outcome::RuntimeError;
+    };
+    let Some((line, _)) = i.position else {
+        return Outcome::RejectedWithoutPosition;
+    };
+    let lines: Vec<&str> = text.lines().collect();
+    let at = lines.get(line - 1).map_or("", |l| l.trim_start());
+    let missing = i.message.starts_with("missing key");
+    if i.position == Some((1, 1)) && (at.is_empty() || at.starts_with('#')) && !missing {
+        return Outcome::RejectedAtFileStart;
     }
+    if at.starts_with('[') && !missing {
+        let body = lines[line..]
+            .iter()
+            .take_while(|l| !l.trim_start().starts_with('['));
+        let keys: Vec<&str> = body
+            .filter_map(|l| l.split_once('=').map(|(k, _)| k.trim()))
+            .collect();
+        let quoted = i.message.split('`').skip(1).step_by(2);
+        let about_inside = ["unknown key", "expected ", "invalid", "unknown variant"]
+            .iter()
+            .any(|p| i.message.starts_with(p))
+            || quoted.into_iter().any(|q| keys.contains(&q));
+        if about_inside {
+            return Outcome::RejectedAtTableHeader;
+        }
+    }
+    Outcome::RejectedWithPosition
 }
 
-/// Load, build and evaluate one file of `kind`.
-fn probe(kind: &str, path: &Path) -> Outcome {
+/// Load, build and evaluate one file of `kind`: the outcome and the error's text, if any.
+fn probe(kind: &str, path: &Path) -> (Outcome, String) {
     let result: Result<bool, Error> = (|| match kind {
         "truss" => {
             let p = optimize::truss::load(path)?;
@@ -103,9 +135,12 @@ fn probe(kind: &str, path: &Path) -> Outcome {
         }
     })();
     match result {
-        Ok(true) => Outcome::AcceptedEvaluated,
-        Ok(false) => Outcome::AcceptedEvaluationFailed,
-        Err(e) => classify_error(&e),
+        Ok(true) => (Outcome::AcceptedEvaluated, String::new()),
+        Ok(false) => (Outcome::AcceptedEvaluationFailed, String::new()),
+        Err(e) => {
+            let text = std::fs::read_to_string(path).unwrap_or_default();
+            (classify_error(&e, &text), e.to_string())
+        }
     }
 }
 
@@ -171,11 +206,26 @@ fn numbers_in(line: &str) -> Vec<(usize, usize)> {
     out
 }
 
-/// One random mutation of `text`.
-fn mutate_once(text: &str, rng: &mut ChaCha8Rng) -> String {
+/// `table.key` of the value on line `i`: the nearest header above and the line's key.
+fn key_of(lines: &[String], i: usize) -> String {
+    let table = lines[..i]
+        .iter()
+        .rev()
+        .map(|l| l.trim())
+        .find(|l| l.starts_with('['))
+        .map_or(String::new(), |h| {
+            let header = h.split('#').next().unwrap_or("").trim();
+            header.trim_matches(['[', ']']).to_string() + "."
+        });
+    let key = lines[i].split('=').next().unwrap_or("").trim();
+    format!("{table}{key}")
+}
+
+/// One random mutation of `text`, and its class (what was done to which key).
+fn mutate_once(text: &str, rng: &mut ChaCha8Rng) -> (String, String) {
     let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
     if lines.is_empty() {
-        return text.to_string();
+        return (text.to_string(), "none".into());
     }
     let with_numbers: Vec<usize> = (0..lines.len())
         .filter(|&i| !numbers_in(&lines[i]).is_empty())
@@ -187,28 +237,38 @@ fn mutate_once(text: &str, rng: &mut ChaCha8Rng) -> String {
         })
         .collect();
     let op = rng.random_range(0..10);
-    match op {
+    let class = match op {
         0..=4 if !with_numbers.is_empty() => {
             let i = with_numbers[rng.random_range(0..with_numbers.len())];
             let spans = numbers_in(&lines[i]);
             let (s, e) = spans[rng.random_range(0..spans.len())];
             let old = lines[i][s..e].to_string();
-            let new = match rng.random_range(0..3) {
-                0 => NUMBERS[rng.random_range(0..NUMBERS.len())].to_string(),
-                1 if old.starts_with('-') => old[1..].to_string(),
-                1 => format!("-{old}"),
-                _ => format!("{old}e{}", rng.random_range(3..40)),
+            let (new, what) = match rng.random_range(0..3) {
+                0 => {
+                    let n = NUMBERS[rng.random_range(0..NUMBERS.len())];
+                    (n.to_string(), format!("set {n}"))
+                }
+                1 if old.starts_with('-') => (old[1..].to_string(), "negate".into()),
+                1 => (format!("-{old}"), "negate".into()),
+                _ => (
+                    format!("{old}e{}", rng.random_range(3..40)),
+                    "scale up".into(),
+                ),
             };
             lines[i].replace_range(s..e, &new);
+            format!("{what} {}", key_of(&lines, i))
         }
         5 if !with_values.is_empty() => {
             let i = with_values[rng.random_range(0..with_values.len())];
+            let class = format!("delete {}", key_of(&lines, i));
             lines.remove(i);
+            class
         }
         6 if !with_values.is_empty() => {
             let i = with_values[rng.random_range(0..with_values.len())];
             let copy = lines[i].clone();
             lines.insert(i + 1, copy);
+            format!("duplicate {}", key_of(&lines, i))
         }
         7 => {
             let arrays: Vec<usize> = (0..lines.len())
@@ -217,6 +277,9 @@ fn mutate_once(text: &str, rng: &mut ChaCha8Rng) -> String {
             if let Some(&i) = arrays.get(rng.random_range(0..arrays.len().max(1))) {
                 let close = lines[i].rfind(']').unwrap_or(0);
                 lines[i].insert_str(close, ", 5.0");
+                format!("extend {}", key_of(&lines, i))
+            } else {
+                "none".into()
             }
         }
         8 if !with_values.is_empty() => {
@@ -224,6 +287,9 @@ fn mutate_once(text: &str, rng: &mut ChaCha8Rng) -> String {
             if let Some(eq) = lines[i].find('=') {
                 let value = OTHERS[rng.random_range(0..OTHERS.len())];
                 lines[i] = format!("{}= {value}", &lines[i][..eq]);
+                format!("retype {} to {value}", key_of(&lines, i))
+            } else {
+                "none".into()
             }
         }
         _ => {
@@ -234,20 +300,24 @@ fn mutate_once(text: &str, rng: &mut ChaCha8Rng) -> String {
                 .get(rng.random_range(0..headers.len().max(1)))
                 .map_or(0, |&i| i + 1);
             lines.insert(at, "unknown_key = 1.0".to_string());
+            format!("unknown key after line {at}")
         }
-    }
+    };
     let mut out = lines.join("\n");
     out.push('\n');
-    out
+    (out, class)
 }
 
-/// A mutant of `text`: one or two mutations.
-fn mutant(text: &str, rng: &mut ChaCha8Rng) -> String {
+/// A mutant of `text`: one or two mutations, and their classes joined by " + ".
+fn mutant(text: &str, rng: &mut ChaCha8Rng) -> (String, String) {
     let mut t = text.to_string();
+    let mut classes = Vec::new();
     for _ in 0..rng.random_range(1..=2) {
-        t = mutate_once(&t, rng);
+        let (next, class) = mutate_once(&t, rng);
+        t = next;
+        classes.push(class);
     }
-    t
+    (t, classes.join(" + "))
 }
 
 /// A scratch folder holding the mutants of one kind and the seed folders' other files (the
@@ -278,10 +348,58 @@ impl Drop for Scratch {
     }
 }
 
+/// What a fuzz run saw: counts by outcome, a few errors per misplaced outcome, and the accepted
+/// mutation classes (what was done to which key) with their counts.
+#[derive(Default)]
+struct Tally {
+    counts: BTreeMap<Outcome, usize>,
+    misplaced: BTreeMap<Outcome, Vec<String>>,
+    accepted: BTreeMap<String, usize>,
+}
+
+impl Tally {
+    fn add(&mut self, outcome: Outcome, seed_file: &Path, class: &str, error: String) {
+        *self.counts.entry(outcome).or_insert(0) += 1;
+        let name = seed_file.file_name().unwrap().to_string_lossy();
+        match outcome {
+            Outcome::RejectedAtFileStart
+            | Outcome::RejectedAtTableHeader
+            | Outcome::RejectedWithoutPosition => {
+                let samples = self.misplaced.entry(outcome).or_default();
+                if samples.len() < 8 {
+                    samples.push(format!("{name} [{class}]: {error}"));
+                }
+            }
+            Outcome::AcceptedEvaluated | Outcome::AcceptedEvaluationFailed => {
+                for one in class.split(" + ") {
+                    *self.accepted.entry(format!("{name}: {one}")).or_insert(0) += 1;
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn count(&self, outcome: Outcome) -> usize {
+        self.counts.get(&outcome).copied().unwrap_or(0)
+    }
+
+    /// Mutants rejected without a position or at a misplaced one.
+    fn misplaced_total(&self) -> usize {
+        [
+            Outcome::RejectedAtFileStart,
+            Outcome::RejectedAtTableHeader,
+            Outcome::RejectedWithoutPosition,
+        ]
+        .into_iter()
+        .map(|o| self.count(o))
+        .sum()
+    }
+}
+
 /// Mutates the seed files of `kind` into `count` files (round robin over the seeds, whose
-/// names are kept: imports resolve against the scratch folder), probes each, and returns the
-/// counts by outcome. Panics (with the mutant's text) on a panic or an overrun of the time limit.
-fn fuzz(kind: &str, seed: u64, count: usize, only: &[&str]) -> BTreeMap<Outcome, usize> {
+/// names are kept: imports resolve against the scratch folder), probes each, and tallies the
+/// outcomes. Panics (with the mutant's text) on a panic or an overrun of the time limit.
+fn fuzz(kind: &str, seed: u64, count: usize, only: &[&str]) -> Tally {
     let files: Vec<PathBuf> = seeds(kind)
         .into_iter()
         .filter(|p| only.is_empty() || only.iter().any(|o| p.ends_with(o)))
@@ -293,19 +411,19 @@ fn fuzz(kind: &str, seed: u64, count: usize, only: &[&str]) -> BTreeMap<Outcome,
         .collect();
     let scratch = Scratch::new(kind, &seed.to_string());
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut counts = BTreeMap::new();
+    let mut tally = Tally::default();
     for k in 0..count {
         let which = k % files.len();
-        let text = mutant(&texts[which], &mut rng);
+        let (text, class) = mutant(&texts[which], &mut rng);
         let path = scratch.0.join(files[which].file_name().unwrap());
         std::fs::write(&path, &text).unwrap();
         if std::env::var_os("FUZZ_TRACE").is_some() {
-            eprintln!("{kind} mutant {k}: {}", path.display());
+            eprintln!("{kind} mutant {k}: {} [{class}]", path.display());
         }
         let started = Instant::now();
         let outcome = catch_unwind(AssertUnwindSafe(|| probe(kind, &path)));
         let took = started.elapsed();
-        let Ok(outcome) = outcome else {
+        let Ok((outcome, error)) = outcome else {
             panic!(
                 "{kind} mutant {k} of {} panicked:\n{text}",
                 files[which].display()
@@ -316,15 +434,29 @@ fn fuzz(kind: &str, seed: u64, count: usize, only: &[&str]) -> BTreeMap<Outcome,
             "{kind} mutant {k} of {} took {took:?}:\n{text}",
             files[which].display()
         );
-        *counts.entry(outcome).or_insert(0) += 1;
+        tally.add(outcome, &files[which], &class, error);
     }
-    counts
+    tally
 }
 
-fn report(kind: &str, counts: &BTreeMap<Outcome, usize>) {
-    let total: usize = counts.values().sum();
-    let parts: Vec<String> = counts.iter().map(|(o, n)| format!("{o:?} {n}")).collect();
+/// Prints the counts by outcome, the misplaced errors' samples and, with `accepted`, every
+/// accepted mutation class with its count.
+fn report(kind: &str, tally: &Tally, accepted: bool) {
+    let total: usize = tally.counts.values().sum();
+    let parts: Vec<String> = (tally.counts.iter())
+        .map(|(o, n)| format!("{o:?} {n}"))
+        .collect();
     println!("{kind}: {total} mutants: {}", parts.join(", "));
+    for (outcome, samples) in &tally.misplaced {
+        for sample in samples {
+            println!("  {outcome:?}: {sample}");
+        }
+    }
+    if accepted {
+        for (class, n) in &tally.accepted {
+            println!("  accepted {n:>4}  {class}");
+        }
+    }
 }
 
 /// The bounded sample in the normal test run: the fast seed files of each kind.
@@ -335,15 +467,16 @@ fn mutated_problem_files_never_panic_or_hang() {
         ("cmc", &["tennis_cushion.toml", "double_bubble.toml"][..]),
         ("gait", &["pogo_crouch.toml", "ball.toml"][..]),
     ] {
-        let counts = fuzz(kind, 1, 60, only);
-        report(kind, &counts);
+        let tally = fuzz(kind, 1, 60, only);
+        report(kind, &tally, false);
         assert!(
-            counts
-                .get(&Outcome::RejectedWithPosition)
-                .copied()
-                .unwrap_or(0)
-                > 0,
+            tally.count(Outcome::RejectedWithPosition) > 0,
             "{kind}: some mutants must be rejected"
+        );
+        assert_eq!(
+            tally.misplaced_total(),
+            0,
+            "{kind}: errors without a position or at a misplaced one"
         );
     }
 }
@@ -357,8 +490,8 @@ fn mutated_problem_files_full_run() {
     let kinds = std::env::var("FUZZ_KINDS").unwrap_or_else(|_| "truss,cmc,gait".into());
     for kind in kinds.split(',') {
         let started = Instant::now();
-        let counts = fuzz(kind, seed, count, &[]);
-        report(kind, &counts);
+        let tally = fuzz(kind, seed, count, &[]);
+        report(kind, &tally, true);
         println!("{kind}: {:.0} s", started.elapsed().as_secs_f64());
     }
 }

@@ -165,3 +165,61 @@ fn an_obj_bubble_with_one_reversed_face_is_refused() {
     let out = check("cmc", &dir.join("b.toml"));
     assert_positioned(&out, &["enclose -"]);
 }
+
+/// Exit 2 with the error at the 1-based line and column where `needle` first occurs in `path`,
+/// and its message containing `fragment`.
+fn assert_at(out: &Output, path: &Path, needle: &str, fragment: &str) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let offset = text.find(needle).expect("the needle is in the file");
+    let line = text[..offset].matches('\n').count() + 1;
+    let col = offset - text[..offset].rfind('\n').map_or(0, |i| i + 1) + 1;
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains(&format!(".toml:{line}:{col}: ")) && stderr.contains(fragment),
+        "expected `{fragment}` at {line}:{col}: {stderr}"
+    );
+}
+
+#[test]
+fn errors_inside_shape_tables_point_at_the_key_or_value() {
+    // (kind, problem, text, its mutation, where the error must point, what it must say)
+    let cases = [
+        (
+            "cmc",
+            "problems/cmc/catenoid.toml",
+            "radius = 1.0 ",
+            "radius = 1.0\nbogus = 1 ",
+            "bogus",
+            "unknown key `bogus`",
+        ),
+        (
+            "cmc",
+            "problems/cmc/catenoid.toml",
+            "separation = 1.0",
+            "separation = \"far\"",
+            "\"far\"",
+            "wrong type",
+        ),
+        (
+            "gait",
+            "problems/gait/pogo_crouch.toml",
+            "size = [0.06, 0.20, 0.03]",
+            "size = [0.06, 0.20, 0.03, 1.0]",
+            "[0.06, 0.20, 0.03, 1.0]",
+            "expected 3 elements, found 4",
+        ),
+        (
+            "gait",
+            "problems/gait/ball.toml",
+            "height = 2.0",
+            "height = -2.0",
+            "height = -2.0",
+            "`height` must be positive m",
+        ),
+    ];
+    for (i, (kind, problem, from, to, needle, fragment)) in cases.into_iter().enumerate() {
+        let p = mutant(problem, from, to, &format!("shape-{i}"));
+        assert_at(&check(kind, &p), &p, needle, fragment);
+    }
+}

@@ -1327,13 +1327,7 @@ mod tests {
             // lie on the footprint's edges.
             let q = crate::cmc::figures::quality(m);
             assert!(q.min_angle_deg > 30.0, "{q:?}");
-            let rim: Vec<&Point> = m
-                .positions()
-                .iter()
-                .zip(m.flags())
-                .filter(|(_, f)| f.fixed)
-                .map(|(p, _)| p)
-                .collect();
+            let rim: Vec<&Point> = m.fixed_positions().collect();
             assert_eq!(rim.len(), 2 * 6 * levels);
             for p in rim {
                 assert!(p.y.abs() < 1e-12);

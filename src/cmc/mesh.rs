@@ -367,6 +367,15 @@ impl Mesh {
         &self.flags
     }
 
+    /// Positions of the fixed vertices (the wires), m, in vertex order.
+    pub fn fixed_positions(&self) -> impl Iterator<Item = &Point> {
+        self.positions
+            .iter()
+            .zip(&self.flags)
+            .filter(|(_, f)| f.fixed)
+            .map(|(p, _)| p)
+    }
+
     /// Guides referred to by [`VertexFlags::guide`].
     pub fn guides(&self) -> &[Guide] {
         &self.guides

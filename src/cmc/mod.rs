@@ -33,6 +33,7 @@ pub mod orientation;
 pub mod preview;
 pub mod refinement;
 pub mod remesh;
+pub mod restart;
 pub mod ring_tent;
 pub mod spec;
 pub mod stability;
@@ -76,7 +77,12 @@ pub struct Problem {
 /// Reads, parses and validates a CMC problem file, and builds its start mesh once to report
 /// geometry problems now rather than at run time.
 pub fn load(path: &Path) -> Result<Problem, InputError> {
-    let source = Source::read(path)?;
+    load_source(Source::read(path)?)
+}
+
+/// [`load`] from a file's text (with any `--set` overrides already applied).
+pub fn load_source(source: Source) -> Result<Problem, InputError> {
+    let path = source.path.clone();
     let spec = spec::parse(source)?;
     let name = spec.file.name.clone().unwrap_or_else(|| {
         path.file_stem().map_or_else(
@@ -161,8 +167,8 @@ impl Application for Cmc {
     const KIND: Kind = Kind::Cmc;
     type Problem = Problem;
 
-    fn load(path: &Path) -> Result<Problem, Error> {
-        Ok(load(path)?)
+    fn load(source: Source) -> Result<Problem, Error> {
+        Ok(load_source(source)?)
     }
 
     fn name(problem: &Problem) -> &str {
@@ -217,16 +223,45 @@ fn mesh_solver_options(mut options: solver::Options) -> solver::Options {
     options
 }
 
+/// The stability analysis of the solved `mesh` under the problem's volume constraints
+/// ([`stability`]), logged in one line and returned as its `figures.stability` value.
+fn stability_figure(
+    nlp: &CmcNlp,
+    mesh: &mesh::Mesh,
+    opts: &RunOptions,
+) -> Result<serde_json::Value, Error> {
+    let regions: Vec<&volume::Region> = nlp.volumes().iter().map(|v| &v.region).collect();
+    let stability = stability::analyse(mesh, &regions);
+    opts.say(&format!(
+        "stability: {} (smallest eigenvalues [{}] 1/m², {} normal degrees of freedom)",
+        stability.verdict,
+        stability
+            .smallest_eigenvalues
+            .iter()
+            .map(|e| format!("{e:.4e}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        stability.degrees_of_freedom
+    ));
+    serde_json::to_value(&stability).map_err(|e| Error::Runtime(format!("stability: {e}")))
+}
+
 /// Builds the problem and solves it.
 pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let started = Instant::now();
-    let nlp = problem.build()?;
+    let mut nlp = problem.build()?;
+    if let Some(previous) = &opts.start {
+        nlp = restart::nlp_from(&nlp, previous)?;
+    }
     let build_seconds = started.elapsed().as_secs_f64();
     let options = mesh_solver_options(opts.solver_options(&problem.spec.file.solver));
     let solve_started = Instant::now();
-    let mut nlp = nlp;
-    // Coarse-to-fine start (cmc::multilevel): the coarse levels' work counts in the totals.
-    let staged = multilevel::coarse_to_fine(problem, &options)?;
+    // Coarse-to-fine start (cmc::multilevel), unless the run starts from a previous result: the
+    // coarse levels' work counts in the totals.
+    let staged = match opts.start {
+        Some(_) => None,
+        None => multilevel::coarse_to_fine(problem, &options)?,
+    };
     let coarse_seconds = solve_started.elapsed().as_secs_f64();
     let mut coarse_stages = Vec::new();
     let mut tally = Tally {
@@ -296,22 +331,8 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     summary.figures = figures_json(&nlp, &mesh, &solution.x)?;
     if let Some(obj) = summary.figures.as_object_mut() {
         obj.insert("flip_rounds".into(), rounds.into());
-        let regions: Vec<&volume::Region> = nlp.volumes().iter().map(|v| &v.region).collect();
-        let stability = stability::analyse(&mesh, &regions);
-        opts.say(&format!(
-            "stability: {} (smallest eigenvalues [{}] 1/m², {} normal degrees of freedom)",
-            stability.verdict,
-            stability
-                .smallest_eigenvalues
-                .iter()
-                .map(|e| format!("{e:.4e}"))
-                .collect::<Vec<_>>()
-                .join(", "),
-            stability.degrees_of_freedom
-        ));
-        let value = serde_json::to_value(&stability)
-            .map_err(|e| Error::Runtime(format!("stability: {e}")))?;
-        obj.insert("stability".into(), value);
+        obj.insert("mesh".into(), restart::mesh_json(&mesh));
+        obj.insert("stability".into(), stability_figure(&nlp, &mesh, opts)?);
         if let Some(study) = &study {
             let value = serde_json::to_value(study)
                 .map_err(|e| Error::Runtime(format!("refinement study: {e}")))?;

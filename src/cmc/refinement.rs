@@ -165,13 +165,7 @@ pub fn table(study: &Study) -> Vec<String> {
 /// generator's start at the finer resolution) when one lies within `reach` (m); returns how
 /// many moved.
 pub fn snap_fixed_vertices(refined: &mut Mesh, wire: &Mesh, reach: f64) -> usize {
-    let targets: Vec<Point> = wire
-        .positions()
-        .iter()
-        .zip(wire.flags())
-        .filter(|(_, f)| f.fixed)
-        .map(|(p, _)| *p)
-        .collect();
+    let targets: Vec<Point> = wire.fixed_positions().copied().collect();
     if targets.is_empty() || reach <= 0.0 {
         return 0;
     }

@@ -63,13 +63,7 @@ mod tests {
     fn wires_are_the_square_and_the_ring() {
         let shape = ring_tent(1.0, 0.4, 0.3, 2).unwrap();
         let m = &shape.mesh;
-        let fixed: Vec<&Point> = m
-            .positions()
-            .iter()
-            .zip(m.flags())
-            .filter(|(_, f)| f.fixed)
-            .map(|(p, _)| p)
-            .collect();
+        let fixed: Vec<&Point> = m.fixed_positions().collect();
         assert_eq!(fixed.len(), 2 * 16);
         for p in fixed {
             let on_ring = (p.y - 0.3).abs() < 1e-12 && (p.x.hypot(p.z) - 0.4).abs() < 1e-12;

@@ -63,6 +63,7 @@ pub struct CmcFile {
     #[serde(default)]
     pub formulation: Formulation,
     /// The start shape.
+    #[serde(deserialize_with = "crate::spec::tagged::deserialize")]
     pub shape: ShapeSpec,
     /// Mesh-quality settings.
     #[serde(default)]
@@ -163,8 +164,10 @@ pub struct ChordSpec {
 }
 
 /// `[shape]`: which start shape, with its parameters.
+///
+/// Read from a table whose `type` key names the variant ([`crate::spec::tagged`]).
 #[derive(Debug, Clone, Deserialize, PartialEq)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum ShapeSpec {
     /// One bubble of `volume` m³ (an icosphere).
     Sphere {
@@ -417,6 +420,21 @@ pub struct CmcSpec {
 }
 
 /// Parses and validates a problem file.
+/// The key path `shape.<key>`.
+fn shape(key: &'static str) -> [Key<'static>; 2] {
+    [Key::Name("shape"), Key::Name(key)]
+}
+
+/// The key path `shape.<table>[i].<key>` (an entry of an array of tables inside `[shape]`).
+fn shape_entry(table: &'static str, i: usize, key: &'static str) -> [Key<'static>; 4] {
+    [
+        Key::Name("shape"),
+        Key::Name(table),
+        Key::Index(i),
+        Key::Name(key),
+    ]
+}
+
 pub fn parse(source: Source) -> Result<CmcSpec, InputError> {
     let file: CmcFile = source.parse()?;
     let spec = CmcSpec { file, source };
@@ -429,9 +447,18 @@ impl CmcSpec {
         self.source.error_at(path, message)
     }
 
+    /// Checks every range of the file, in the order of its tables: solver, meshing
+    /// (resolution, quality, refine, chords), the mesh size, then the shape.
     fn validate(&self) -> Result<(), InputError> {
+        validate_solver(&self.file.solver, &self.source, &[Key::Name("solver")])?;
+        self.validate_meshing()?;
+        self.validate_size()?;
+        self.validate_shape()
+    }
+
+    /// The meshing keys: `resolution`, `[quality]`, `[refine]` and the chord lengths (m).
+    fn validate_meshing(&self) -> Result<(), InputError> {
         let f = &self.file;
-        validate_solver(&f.solver, &self.source, &[Key::Name("solver")])?;
         let src = &self.source;
         if let Some(r) = f.resolution {
             src.count_in(&["resolution".into()], r, 1, MAX_RESOLUTION)?;
@@ -479,14 +506,13 @@ impl CmcSpec {
         for (i, c) in f.chord.iter().enumerate() {
             src.positive(&["chord".into(), i.into(), "length".into()], c.length)?;
         }
-        let shape = |key: &'static str| [Key::Name("shape"), Key::Name(key)];
-        let check_volumes = |volumes: &[f64]| match volumes.iter().find(|v| !positive(**v)) {
-            Some(v) => Err(self.err(
-                &shape("volumes"),
-                format!("volumes must be positive cubic metres, got {v}"),
-            )),
-            None => Ok(()),
-        };
+        Ok(())
+    }
+
+    /// The start mesh (times `4^(levels − 1)` for a refinement study) stays within
+    /// `MAX_FACES` faces.
+    fn validate_size(&self) -> Result<(), InputError> {
+        let (f, src) = (&self.file, &self.source);
         let resolution = f.resolution.unwrap_or_else(|| f.shape.default_resolution());
         let sized_by: &[Key<'_>] = if f.resolution.is_some() {
             &[Key::Name("resolution")]
@@ -503,7 +529,19 @@ impl CmcSpec {
             } else {
                 "start-mesh faces"
             },
-        )?;
+        )
+    }
+
+    /// The `[shape]` table's dimensions (m) and volumes (m³).
+    fn validate_shape(&self) -> Result<(), InputError> {
+        let (f, src) = (&self.file, &self.source);
+        let check_volumes = |volumes: &[f64]| match volumes.iter().find(|v| !positive(**v)) {
+            Some(v) => Err(self.err(
+                &shape("volumes"),
+                format!("volumes must be positive cubic metres, got {v}"),
+            )),
+            None => Ok(()),
+        };
         match &f.shape {
             ShapeSpec::Sphere { volume } => src.positive(&shape("volume"), *volume)?,
             ShapeSpec::DoubleBubble { volumes } => check_volumes(volumes)?,
@@ -563,86 +601,78 @@ impl CmcSpec {
                     src.positive(&shape(key), *v)?;
                 }
             }
-            ShapeSpec::Tents { tent } => {
-                if tent.is_empty() {
-                    return Err(self.err(&shape("tent"), "at least one `[[shape.tent]]`"));
-                }
-                for (i, t) in tent.iter().enumerate() {
-                    let at = |k: &'static str| {
-                        [
-                            Key::Name("shape"),
-                            Key::Name("tent"),
-                            Key::Index(i),
-                            Key::Name(k),
-                        ]
-                    };
-                    self.check_outline(t.boundary.is_some(), t.rim.as_ref(), &at("name"))?;
-                    if let Some(b) = &t.boundary {
-                        let flat: Vec<[f64; 2]> = b.iter().map(|p| [p[0], p[2]]).collect();
-                        self.check_polygon(&flat, &at("boundary"))?;
-                    }
-                    for (j, p) in t.pole.iter().enumerate() {
-                        let path = [
-                            Key::Name("shape"),
-                            Key::Name("tent"),
-                            Key::Index(i),
-                            Key::Name("pole"),
-                            Key::Index(j),
-                        ];
-                        if !(positive(p.cap) && p.height.is_finite()) {
-                            return Err(self.err(&path, "a pole needs a positive `cap` radius"));
-                        }
-                    }
-                    for (j, r) in t.pole_ring.iter().enumerate() {
-                        let path = [
-                            Key::Name("shape"),
-                            Key::Name("tent"),
-                            Key::Index(i),
-                            Key::Name("pole_ring"),
-                            Key::Index(j),
-                        ];
-                        if !(positive(r.cap) && positive(r.radius) && r.count > 0) {
-                            return Err(self.err(
-                                &path,
-                                "a pole ring needs positive `cap`, `radius` and `count`",
-                            ));
-                        }
-                    }
-                }
-            }
-            ShapeSpec::Cells { cell } => {
-                if cell.is_empty() {
-                    return Err(self.err(&shape("cell"), "at least one `[[shape.cell]]`"));
-                }
-                for (i, c) in cell.iter().enumerate() {
-                    let at = |k: &'static str| {
-                        [
-                            Key::Name("shape"),
-                            Key::Name("cell"),
-                            Key::Index(i),
-                            Key::Name(k),
-                        ]
-                    };
-                    self.check_outline(c.footprint.is_some(), c.circle.as_ref(), &at("name"))?;
-                    if let Some(fp) = &c.footprint {
-                        self.check_polygon(fp, &at("footprint"))?;
-                    }
-                    src.positive(&at("volume"), c.volume)?;
-                    if let Some(h) = c.height {
-                        src.positive(&at("height"), h)?;
-                    }
-                }
-            }
+            ShapeSpec::Tents { tent } => self.validate_tents(tent)?,
+            ShapeSpec::Cells { cell } => self.validate_cells(cell)?,
             ShapeSpec::Obj { volume, .. } | ShapeSpec::Gltf { volume, .. } => {
                 for (i, v) in volume.iter().enumerate() {
-                    let at = [
-                        Key::Name("shape"),
-                        Key::Name("volume"),
-                        Key::Index(i),
-                        Key::Name("volume"),
-                    ];
+                    let at = shape_entry("volume", i, "volume");
                     src.positive(&at, v.volume)?;
                 }
+            }
+        }
+        Ok(())
+    }
+
+    /// `[[shape.tent]]`: at least one, each with one outline, a simple boundary, positive
+    /// pole caps (m) and pole rings.
+    fn validate_tents(&self, tent: &[TentToml]) -> Result<(), InputError> {
+        if tent.is_empty() {
+            return Err(self.err(&shape("tent"), "at least one `[[shape.tent]]`"));
+        }
+        for (i, t) in tent.iter().enumerate() {
+            let at = |k: &'static str| shape_entry("tent", i, k);
+            self.check_outline(t.boundary.is_some(), t.rim.as_ref(), &at("name"))?;
+            if let Some(b) = &t.boundary {
+                let flat: Vec<[f64; 2]> = b.iter().map(|p| [p[0], p[2]]).collect();
+                self.check_polygon(&flat, &at("boundary"))?;
+            }
+            for (j, p) in t.pole.iter().enumerate() {
+                let path = [
+                    Key::Name("shape"),
+                    Key::Name("tent"),
+                    Key::Index(i),
+                    Key::Name("pole"),
+                    Key::Index(j),
+                ];
+                if !(positive(p.cap) && p.height.is_finite()) {
+                    return Err(self.err(&path, "a pole needs a positive `cap` radius"));
+                }
+            }
+            for (j, r) in t.pole_ring.iter().enumerate() {
+                let path = [
+                    Key::Name("shape"),
+                    Key::Name("tent"),
+                    Key::Index(i),
+                    Key::Name("pole_ring"),
+                    Key::Index(j),
+                ];
+                if !(positive(r.cap) && positive(r.radius) && r.count > 0) {
+                    return Err(self.err(
+                        &path,
+                        "a pole ring needs positive `cap`, `radius` and `count`",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// `[[shape.cell]]`: at least one, each with one outline, a simple footprint, a positive
+    /// volume (m³) and height (m).
+    fn validate_cells(&self, cell: &[CellToml]) -> Result<(), InputError> {
+        let src = &self.source;
+        if cell.is_empty() {
+            return Err(self.err(&shape("cell"), "at least one `[[shape.cell]]`"));
+        }
+        for (i, c) in cell.iter().enumerate() {
+            let at = |k: &'static str| shape_entry("cell", i, k);
+            self.check_outline(c.footprint.is_some(), c.circle.as_ref(), &at("name"))?;
+            if let Some(fp) = &c.footprint {
+                self.check_polygon(fp, &at("footprint"))?;
+            }
+            src.positive(&at("volume"), c.volume)?;
+            if let Some(h) = c.height {
+                src.positive(&at("height"), h)?;
             }
         }
         Ok(())
@@ -819,12 +849,7 @@ impl CmcSpec {
                 };
                 let s = mesh.surface_index(bare).ok_or_else(|| {
                     self.err(
-                        &[
-                            Key::Name("shape"),
-                            Key::Name("volume"),
-                            Key::Index(i),
-                            Key::Name("surfaces"),
-                        ],
+                        &shape_entry("volume", i, "surfaces"),
                         format!(
                             "no surface `{bare}` in the mesh; it has: {}",
                             mesh.surfaces().join(", ")
@@ -840,12 +865,7 @@ impl CmcSpec {
             let enclosed = region.volume(&mesh);
             if enclosed.is_nan() || enclosed <= 0.0 {
                 return Err(self.err(
-                    &[
-                        Key::Name("shape"),
-                        Key::Name("volume"),
-                        Key::Index(i),
-                        Key::Name("surfaces"),
-                    ],
+                    &shape_entry("volume", i, "surfaces"),
                     format!(
                         "the surfaces of volume `{}` enclose {enclosed:.3e} m³ as wound: their \
                          normals must point out of the region (reverse the faces, or prefix a \

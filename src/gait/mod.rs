@@ -23,6 +23,7 @@ pub mod feasibility;
 pub mod formulation;
 pub mod global;
 pub mod reduced;
+pub mod restart;
 pub mod shaping;
 pub mod sim;
 pub mod spatial;
@@ -86,8 +87,7 @@ impl Application for Gait {
     const KIND: Kind = Kind::Gait;
     type Problem = GaitProblem;
 
-    fn load(path: &Path) -> Result<GaitProblem, Error> {
-        let source = Source::read(path)?;
+    fn load(source: Source) -> Result<GaitProblem, Error> {
         Ok(if collocation::spec::selects_collocation(&source) {
             GaitProblem::Collocation(Box::new(collocation::load_source(&source)?))
         } else {
@@ -124,6 +124,15 @@ impl Application for Gait {
     fn run(problem: &GaitProblem, opts: &RunOptions) -> Result<Outcome, Error> {
         match problem {
             GaitProblem::Reduced(p) => solve_trials(p, opts),
+            GaitProblem::Collocation(_) if opts.start.is_some() => {
+                Err(Error::Input(InputError::whole_file(
+                    &opts
+                        .start
+                        .as_ref()
+                        .map_or_else(Default::default, |s| s.path.clone()),
+                    "--start is not available for the collocation formulation",
+                )))
+            }
             GaitProblem::Collocation(p) => collocation::run(p, opts),
         }
     }
@@ -170,7 +179,18 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
         interrupt: opts.interrupt.clone(),
         ..problem.clone()
     };
-    let results = trials::run_trials(&polled, opts.seed, opts.trial, &options);
+    let results = match &opts.start {
+        Some(previous) => {
+            let mut options = options.clone();
+            options.log.objective = crate::solver::log::ObjectiveUnit::new(
+                "effort",
+                "N²·s",
+                formulation::Formulation::new(&polled).objective_scale(),
+            );
+            vec![restart::trial_from(&polled, previous, &options)?]
+        }
+        None => trials::run_trials(&polled, opts.seed, opts.trial, &options),
+    };
     let solve_seconds = clock.elapsed().as_secs_f64();
     let tol = problem.trials.tolerance;
     let table = trials::table(&results, tol);
@@ -235,6 +255,7 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
         evaluations,
         timings,
         seed: opts.seed,
+        overrides: Vec::new(),
         figures: serde_json::json!({
             "best_trial": chosen.trial,
             "best_status": format!("{:?}", chosen.status),
@@ -246,6 +267,7 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
             "failures": counts(trials::TrialStatus::Failure),
             "unimproved": counts(trials::TrialStatus::Unimproved),
             "trials": trials::table_json(&results, tol),
+            "knots": restart::knots_json(problem, &chosen.x),
             "median_trial_seconds": median(results.iter().map(|r| r.seconds).collect()),
             "global_seconds": results
                 .iter()

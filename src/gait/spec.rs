@@ -226,6 +226,7 @@ pub struct LinkSpec {
     #[serde(default, deserialize_with = "crate::spec::arrays::exact_opt")]
     pub inertia_products: Option<[f64; 3]>,
     /// Display shape (link coordinates, m).
+    #[serde(deserialize_with = "crate::spec::tagged::deserialize")]
     pub shape: ShapeSpec,
     /// Contact points in link coordinates (m).
     #[serde(default, deserialize_with = "crate::spec::arrays::exact_vec")]
@@ -235,8 +236,10 @@ pub struct LinkSpec {
 }
 
 /// Display shape.
+///
+/// Read from a table whose `type` key names the variant ([`crate::spec::tagged`]).
 #[derive(Debug, Clone, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum ShapeSpec {
     /// A box of full side lengths `size` (m) centred at `center` (m).
     Box {
@@ -1463,6 +1466,8 @@ fn build_initial(
     Ok(State { q, v })
 }
 
+/// The task rows and the shaping rows of `[[task]]` (each sorted by time), in file order
+/// within a time.
 fn build_tasks(
     source: &Source,
     file: &FileSpec,
@@ -1471,185 +1476,230 @@ fn build_tasks(
 ) -> Result<(Vec<PoseConstraint>, Vec<PoseConstraint>), InputError> {
     let (mut tasks, mut shaping) = (Vec::new(), Vec::new());
     for (k, t) in file.task.iter().enumerate() {
+        let at = |key: &'static str| [Key::Name("task"), Key::Index(k), Key::Name(key)];
+        let step = task_step(source, file.dt, t, &at)?;
+        let (lower, upper) = task_bounds(source, t, &at)?;
+        let quantities = task_quantities(source, model, index, t, &at)?;
         let out = if t.shaping { &mut shaping } else { &mut tasks };
-        let at = |key: &'static str| vec![Key::Name("task"), Key::Index(k), Key::Name(key)];
-        let steps = t.time / file.dt;
-        if !(t.time > 0.0 && t.time.is_finite())
-            || (steps - steps.round()).abs() > 1e-6 * steps.max(1.0)
-        {
-            return Err(source.error_at(
-                &at("time"),
-                format!(
-                    "`time` must be a positive multiple of dt = {} s, got {}",
-                    file.dt, t.time
-                ),
-            ));
-        }
-        source.within_limit(&at("time"), steps, MAX_STEPS as f64, "RK4 steps of `dt`")?;
-        let step = steps.round() as usize;
-        let (lower, upper) = match (t.value, t.min, t.max) {
-            (Some(v), None, None) => (v, v),
-            (None, lo, hi) if lo.is_some() || hi.is_some() => {
-                (lo.unwrap_or(f64::NEG_INFINITY), hi.unwrap_or(f64::INFINITY))
-            }
-            (Some(_), _, _) => {
-                return Err(
-                    source.error_at(&at("value"), "give either `value` or `min`/`max`, not both")
-                );
-            }
-            _ => {
-                return Err(
-                    source.error_at(&at("quantity"), "a task needs `value`, `min` or `max`")
-                );
-            }
-        };
-        if lower.is_nan() || upper.is_nan() || lower > upper {
-            return Err(source.error_at(&at("min"), "bounds must satisfy min ≤ max"));
-        }
-        let link =
-            match &t.link {
-                None => None,
-                Some(name) => Some(*index.get(name.as_str()).ok_or_else(|| {
-                    source.error_at(&at("link"), format!("no link named `{name}`"))
-                })?),
-            };
-        let need_link =
-            || link.ok_or_else(|| source.error_at(&at("quantity"), "this quantity needs `link`"));
-        let need_axis = || {
-            t.axis.map(|a| a as usize).ok_or_else(|| {
-                source.error_at(
-                    &at("quantity"),
-                    "this quantity needs `axis` (\"x\", \"y\" or \"z\")",
-                )
-            })
-        };
-        let point = t.point.unwrap_or([0.0; 3]);
-        if !finite_all(&point) {
-            return Err(source.error_at(&at("point"), "`point` must be finite"));
-        }
-        let scalar_joint = |l: usize| {
-            if model.links[l].joint.is_scalar() {
-                Ok(l)
-            } else {
-                Err(source.error_at(
-                    &at("link"),
-                    "joint quantities apply to revolute and prismatic joints",
-                ))
-            }
-        };
-        let name = |what: String| {
-            let b = match (lower == upper, lower.is_finite(), upper.is_finite()) {
-                (true, _, _) => format!("= {lower}"),
-                (false, true, true) => format!("in [{lower}, {upper}]"),
-                (false, true, false) => format!("≥ {lower}"),
-                _ => format!("≤ {upper}"),
-            };
-            format!("t={:.3} {what} {b}", t.time)
-        };
-        let axis_name = |a: usize| ["x", "y", "z"][a];
-        let mut push = |quantity: Quantity, what: String| {
-            out.push(PoseConstraint {
-                name: name(what),
-                time: t.time,
-                step,
-                quantity,
-                lower,
-                upper,
-            });
-        };
-        match t.quantity {
-            QuantitySpec::PointPosition | QuantitySpec::PointVelocity => {
-                let (l, a) = (need_link()?, need_axis()?);
-                let lname = &model.links[l].name;
-                if t.quantity == QuantitySpec::PointPosition {
-                    push(
-                        Quantity::PointPosition {
-                            link: l,
-                            point,
-                            axis: a,
-                        },
-                        format!("{lname}.{}", axis_name(a)),
-                    );
-                } else {
-                    push(
-                        Quantity::PointVelocity {
-                            link: l,
-                            point,
-                            axis: a,
-                        },
-                        format!("{lname}.v{}", axis_name(a)),
-                    );
-                }
-            }
-            QuantitySpec::JointPosition => {
-                let l = scalar_joint(need_link()?)?;
-                push(
-                    Quantity::JointPosition {
-                        q_index: model.links[l].q_index,
-                    },
-                    format!("{}.q", model.links[l].name),
-                );
-            }
-            QuantitySpec::JointVelocity => {
-                let l = scalar_joint(need_link()?)?;
-                push(
-                    Quantity::JointVelocity {
-                        v_index: model.links[l].v_index,
-                    },
-                    format!("{}.qdot", model.links[l].name),
-                );
-            }
-            QuantitySpec::ComPosition => {
-                let a = need_axis()?;
-                push(
-                    Quantity::ComPosition { axis: a },
-                    format!("com.{}", axis_name(a)),
-                );
-            }
-            QuantitySpec::ComVelocity => {
-                let a = need_axis()?;
-                push(
-                    Quantity::ComVelocity { axis: a },
-                    format!("com.v{}", axis_name(a)),
-                );
-            }
-            QuantitySpec::Airborne => {
-                if t.max.is_some()
-                    || t.value.is_some()
-                    || t.link.is_some()
-                    || t.axis.is_some()
-                    || t.point.is_some()
-                {
-                    return Err(source.error_at(
-                        &at("quantity"),
-                        "`airborne` takes only `time` and `min` (m above the ground)",
-                    ));
-                }
-                let mut any = false;
-                for (li, l) in model.links.iter().enumerate() {
-                    for (ci, c) in l.contacts.iter().enumerate() {
-                        any = true;
-                        push(
-                            Quantity::Height {
-                                link: li,
-                                point: *c,
-                            },
-                            format!("{}.contact{ci}.height", l.name),
-                        );
-                    }
-                }
-                if !any {
-                    return Err(source.error_at(
-                        &at("quantity"),
-                        "`airborne` needs contact points on the character",
-                    ));
-                }
-            }
-        }
+        out.extend(
+            quantities
+                .into_iter()
+                .map(|(quantity, what)| PoseConstraint {
+                    name: task_name(t.time, &what, lower, upper),
+                    time: t.time,
+                    step,
+                    quantity,
+                    lower,
+                    upper,
+                }),
+        );
     }
     tasks.sort_by(|a, b| a.time.total_cmp(&b.time));
     shaping.sort_by(|a, b| a.time.total_cmp(&b.time));
     Ok((tasks, shaping))
+}
+
+/// The key path `task[k].<key>` of the task being read.
+type TaskKey<'a> = dyn Fn(&'static str) -> [Key<'static>; 3] + 'a;
+
+/// The RK4 step of a task's `time` (s): a positive multiple of `dt` (s), within `MAX_STEPS`.
+fn task_step(
+    source: &Source,
+    dt: f64,
+    t: &TaskSpec,
+    at: &TaskKey<'_>,
+) -> Result<usize, InputError> {
+    let steps = t.time / dt;
+    if !(t.time > 0.0 && t.time.is_finite())
+        || (steps - steps.round()).abs() > 1e-6 * steps.max(1.0)
+    {
+        return Err(source.error_at(
+            &at("time"),
+            format!(
+                "`time` must be a positive multiple of dt = {} s, got {}",
+                dt, t.time
+            ),
+        ));
+    }
+    source.within_limit(&at("time"), steps, MAX_STEPS as f64, "RK4 steps of `dt`")?;
+    Ok(steps.round() as usize)
+}
+
+/// A task's `(lower, upper)` bounds, in its quantity's unit: `value` for both, or `min`/`max`
+/// (an absent one infinite).
+fn task_bounds(source: &Source, t: &TaskSpec, at: &TaskKey<'_>) -> Result<(f64, f64), InputError> {
+    let (lower, upper) = match (t.value, t.min, t.max) {
+        (Some(v), None, None) => (v, v),
+        (None, lo, hi) if lo.is_some() || hi.is_some() => {
+            (lo.unwrap_or(f64::NEG_INFINITY), hi.unwrap_or(f64::INFINITY))
+        }
+        (Some(_), _, _) => {
+            return Err(
+                source.error_at(&at("value"), "give either `value` or `min`/`max`, not both")
+            );
+        }
+        _ => {
+            return Err(source.error_at(&at("quantity"), "a task needs `value`, `min` or `max`"));
+        }
+    };
+    if lower.is_nan() || upper.is_nan() || lower > upper {
+        return Err(source.error_at(&at("min"), "bounds must satisfy min ≤ max"));
+    }
+    Ok((lower, upper))
+}
+
+/// A pose row's name: `t=<time> <what> <bounds>`, time in s to the ms.
+fn task_name(time: f64, what: &str, lower: f64, upper: f64) -> String {
+    let b = match (lower == upper, lower.is_finite(), upper.is_finite()) {
+        (true, _, _) => format!("= {lower}"),
+        (false, true, true) => format!("in [{lower}, {upper}]"),
+        (false, true, false) => format!("≥ {lower}"),
+        _ => format!("≤ {upper}"),
+    };
+    format!("t={time:.3} {what} {b}")
+}
+
+/// The quantities a task bounds, each with the name of what it reads (`foot.x`, `com.vy`,
+/// `knee.q`, …): one, or one per contact point for `airborne`.
+fn task_quantities(
+    source: &Source,
+    model: &Model,
+    index: &HashMap<&str, usize>,
+    t: &TaskSpec,
+    at: &TaskKey<'_>,
+) -> Result<Vec<(Quantity, String)>, InputError> {
+    let link = match &t.link {
+        None => None,
+        Some(name) => Some(
+            *index
+                .get(name.as_str())
+                .ok_or_else(|| source.error_at(&at("link"), format!("no link named `{name}`")))?,
+        ),
+    };
+    let need_link =
+        || link.ok_or_else(|| source.error_at(&at("quantity"), "this quantity needs `link`"));
+    let need_axis = || {
+        t.axis.map(|a| a as usize).ok_or_else(|| {
+            source.error_at(
+                &at("quantity"),
+                "this quantity needs `axis` (\"x\", \"y\" or \"z\")",
+            )
+        })
+    };
+    let point = t.point.unwrap_or([0.0; 3]);
+    if !finite_all(&point) {
+        return Err(source.error_at(&at("point"), "`point` must be finite"));
+    }
+    let scalar_joint = |l: usize| {
+        if model.links[l].joint.is_scalar() {
+            Ok(l)
+        } else {
+            Err(source.error_at(
+                &at("link"),
+                "joint quantities apply to revolute and prismatic joints",
+            ))
+        }
+    };
+    let axis_name = |a: usize| ["x", "y", "z"][a];
+    let one = match t.quantity {
+        QuantitySpec::PointPosition | QuantitySpec::PointVelocity => {
+            let (l, a) = (need_link()?, need_axis()?);
+            let lname = &model.links[l].name;
+            if t.quantity == QuantitySpec::PointPosition {
+                (
+                    Quantity::PointPosition {
+                        link: l,
+                        point,
+                        axis: a,
+                    },
+                    format!("{lname}.{}", axis_name(a)),
+                )
+            } else {
+                (
+                    Quantity::PointVelocity {
+                        link: l,
+                        point,
+                        axis: a,
+                    },
+                    format!("{lname}.v{}", axis_name(a)),
+                )
+            }
+        }
+        QuantitySpec::JointPosition => {
+            let l = scalar_joint(need_link()?)?;
+            (
+                Quantity::JointPosition {
+                    q_index: model.links[l].q_index,
+                },
+                format!("{}.q", model.links[l].name),
+            )
+        }
+        QuantitySpec::JointVelocity => {
+            let l = scalar_joint(need_link()?)?;
+            (
+                Quantity::JointVelocity {
+                    v_index: model.links[l].v_index,
+                },
+                format!("{}.qdot", model.links[l].name),
+            )
+        }
+        QuantitySpec::ComPosition => {
+            let a = need_axis()?;
+            (
+                Quantity::ComPosition { axis: a },
+                format!("com.{}", axis_name(a)),
+            )
+        }
+        QuantitySpec::ComVelocity => {
+            let a = need_axis()?;
+            (
+                Quantity::ComVelocity { axis: a },
+                format!("com.v{}", axis_name(a)),
+            )
+        }
+        QuantitySpec::Airborne => return airborne_quantities(source, model, t, at),
+    };
+    Ok(vec![one])
+}
+
+/// `airborne`: the height (m) of every contact point of the character; the task takes only
+/// `time` and `min`.
+fn airborne_quantities(
+    source: &Source,
+    model: &Model,
+    t: &TaskSpec,
+    at: &TaskKey<'_>,
+) -> Result<Vec<(Quantity, String)>, InputError> {
+    if t.max.is_some()
+        || t.value.is_some()
+        || t.link.is_some()
+        || t.axis.is_some()
+        || t.point.is_some()
+    {
+        return Err(source.error_at(
+            &at("quantity"),
+            "`airborne` takes only `time` and `min` (m above the ground)",
+        ));
+    }
+    let mut out = Vec::new();
+    for (li, l) in model.links.iter().enumerate() {
+        for (ci, c) in l.contacts.iter().enumerate() {
+            out.push((
+                Quantity::Height {
+                    link: li,
+                    point: *c,
+                },
+                format!("{}.contact{ci}.height", l.name),
+            ));
+        }
+    }
+    if out.is_empty() {
+        return Err(source.error_at(
+            &at("quantity"),
+            "`airborne` needs contact points on the character",
+        ));
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -48,7 +48,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::continuation::stage_problems;
-use super::feasibility::{FeasibilitySettings, restore};
+use super::feasibility::{Feasibility, FeasibilitySettings, restore};
 use super::formulation::Formulation;
 use super::global::{GlobalReport, search};
 use super::shaping::shape;
@@ -276,9 +276,42 @@ fn improves(a: Option<&Assessment>, b: Option<&Assessment>, tol: f64) -> bool {
     }
 }
 
+/// A trial's kept point and running totals while its phases run.
+struct Kept {
+    /// The best point met so far (physical units: spline parameters, then segment start
+    /// states until [`finish`] drops them).
+    x: Vec<f64>,
+    /// Its assessment.
+    end: Option<Assessment>,
+    /// Iterations of every phase and solve so far.
+    iterations: usize,
+    /// Evaluations of every phase and solve so far.
+    evaluations: Evaluations,
+    /// The solves' iteration log so far, numbered on ([`append_log`]).
+    log: Vec<IterationRecord>,
+}
+
+impl Kept {
+    /// Adds a feasibility phase's iterations and evaluations.
+    fn count_phase(&mut self, phase: &Feasibility) {
+        self.iterations += phase.iterations;
+        self.evaluations.functions += phase.evaluations.functions;
+        self.evaluations.derivatives += phase.evaluations.derivatives;
+    }
+
+    /// Adds a solve's (or the shaping solves') iterations and evaluations.
+    fn count_solves(&mut self, iterations: usize, evaluations: &Evaluations) {
+        self.iterations += iterations;
+        self.evaluations.functions += evaluations.functions;
+        self.evaluations.derivatives += evaluations.derivatives;
+        self.evaluations.hessians += evaluations.hessians;
+    }
+}
+
 /// Solves one trial from physical start `x0`: the feasibility phase first when the problem asks
-/// for it ([`crate::gait::feasibility`]), then the SQP solve (and restarts) from its end point;
-/// the best point met (by `improves`) is the trial's result.
+/// for it ([`crate::gait::feasibility`]), then the shaping solves when the problem has shaping
+/// rows, then the SQP solve (and restarts) from their end point; the best point met (by
+/// `improves`) is the trial's result.
 pub fn solve_trial(
     problem: &Problem,
     f: &Formulation<'_>,
@@ -287,125 +320,166 @@ pub fn solve_trial(
     options: &Options,
 ) -> TrialResult {
     let clock = Instant::now();
-    let tol = problem.trials.tolerance;
     let mut nlp = f.starting_at(x0);
     let start = assess(f, nlp.hand_made_start());
-    let (mut x, mut end) = (nlp.hand_made_start().to_vec(), start.clone());
-    let (mut iterations, mut evaluations) = (0, Evaluations::default());
+    let mut kept = Kept {
+        x: nlp.hand_made_start().to_vec(),
+        end: start.clone(),
+        iterations: 0,
+        evaluations: Evaluations::default(),
+        log: Vec::new(),
+    };
     if problem.trials.feasibility_first {
-        let settings = FeasibilitySettings {
-            target: FEASIBILITY_TARGET * tol,
-            max_iterations: options.max_iterations,
-            max_time: options.max_time.unwrap_or(f64::INFINITY),
-            log: if options.verbosity >= 1 {
-                options.log.clone()
-            } else {
-                LogTarget::default()
-            },
-        };
-        let params = &nlp.hand_made_start()[..f.reduced().parameters()];
-        let mut current = params.to_vec();
-        for stage in stage_problems(problem, params, problem.trials.continuation_stages) {
-            if problem.interrupt.is_raised() {
-                break;
-            }
-            let staged = Formulation::new(&stage).starting_at(&current);
-            let mut z0 = vec![0.0; staged.dims().n];
-            staged.start(&mut z0);
-            let phase = restore(&staged, &z0, &settings);
-            iterations += phase.iterations;
-            evaluations.functions += phase.evaluations.functions;
-            evaluations.derivatives += phase.evaluations.derivatives;
-            // Spline parameters only: the stages' shooting segments end at different steps,
-            // so their start states are rolled out afresh.
-            current = staged.physical(&phase.z);
-            current.truncate(params.len());
-        }
-        nlp = f.starting_at(&current);
-        let mut z0 = vec![0.0; nlp.dims().n];
-        nlp.start(&mut z0);
-        let phase = restore(&nlp, &z0, &settings);
-        iterations += phase.iterations;
-        evaluations.functions += phase.evaluations.functions;
-        evaluations.derivatives += phase.evaluations.derivatives;
-        let x_phase = nlp.physical(&phase.z);
-        let end_phase = assess(f, &x_phase);
-        if improves(end.as_ref(), end_phase.as_ref(), tol) {
-            (x, end) = (x_phase, end_phase);
-        }
-        nlp = f.starting_at(&x);
+        let phase = feasibility_phase(problem, f, &nlp, options, &mut kept);
+        nlp = f.starting_at(&kept.x);
         if !phase.reached {
             // The SQP solve lowers the effort from a feasible point; from a stationary point
             // of the violation it stalls as before (docs/notes/gait.md, feasibility phase).
-            let solver_status = if phase.iterations >= options.max_iterations {
-                Status::IterationLimit
-            } else {
-                Status::Stalled
-            };
-            let solution = Solution {
-                status: solver_status,
-                x: nlp.scaled(&x),
-                lambda: Vec::new(),
-                z: Vec::new(),
-                objective: end.as_ref().map_or(f64::NAN, |a| a.cost),
-                constraints: Vec::new(),
-                max_violation: phase.max_violation,
-                optimality: f64::NAN,
-                iterations: phase.iterations,
-                evaluations,
-                seconds: clock.elapsed().as_secs_f64(),
-                log: Vec::new(),
-            };
-            x.truncate(f.reduced().parameters());
-            let check = confirm(
-                problem,
-                &x,
-                end.as_ref(),
-                classify(start.as_ref(), end.as_ref(), tol),
-                tol,
-            );
-            return TrialResult {
-                trial,
-                origin: String::new(),
-                global: None,
-                x,
-                status: check.status,
-                fine: check.fine,
-                downgrade: check.downgrade,
-                start,
-                end,
-                solver_status,
-                iterations,
-                seconds: clock.elapsed().as_secs_f64(),
-                evaluations,
-                solution,
-            };
+            let solution = phase_solution(&nlp, &kept, &phase, options, &clock);
+            return finish(problem, f, trial, start, kept, solution, &clock);
         }
     }
-    let mut remaining = options.clone();
-    let mut log: Vec<IterationRecord> = Vec::new();
     let mut shaped_candidate = false;
-    let mut polished = false;
     if !problem.shaping.is_empty() {
-        // The shaping solves (`crate::gait::shaping`); the SQP solves below start from their
-        // end point.
-        let shaped = shape(problem, &x[..f.reduced().parameters()], tol, options);
-        iterations += shaped.iterations;
-        evaluations.functions += shaped.evaluations.functions;
-        evaluations.derivatives += shaped.evaluations.derivatives;
-        evaluations.hessians += shaped.evaluations.hessians;
-        log = shaped.log;
-        nlp = f.starting_at(&shaped.x);
-        if problem.trials.shaping_stages > 0 {
-            // The staged shaping's end point meets the task's rows when its last stage is
-            // met: a candidate like the feasibility phase's, replaced only by a better one.
-            shaped_candidate = true;
-            (x, end) = (
-                nlp.hand_made_start().to_vec(),
-                assess(f, nlp.hand_made_start()),
-            );
-        }
+        (nlp, shaped_candidate) = shaping_phase(problem, f, options, &mut kept);
     }
+    let solution = effort_solves(
+        problem,
+        f,
+        nlp,
+        options,
+        shaped_candidate,
+        &mut kept,
+        &clock,
+    );
+    finish(problem, f, trial, start, kept, solution, &clock)
+}
+
+/// The feasibility phase (module header) from `nlp`'s start: the key-time continuation
+/// stages, then Levenberg–Marquardt on the task's violations from their end point, whose end
+/// point replaces the kept one when it `improves` it. Returns the last phase's report.
+fn feasibility_phase(
+    problem: &Problem,
+    f: &Formulation<'_>,
+    nlp: &Formulation<'_>,
+    options: &Options,
+    kept: &mut Kept,
+) -> Feasibility {
+    let tol = problem.trials.tolerance;
+    let settings = FeasibilitySettings {
+        target: FEASIBILITY_TARGET * tol,
+        max_iterations: options.max_iterations,
+        max_time: options.max_time.unwrap_or(f64::INFINITY),
+        log: if options.verbosity >= 1 {
+            options.log.clone()
+        } else {
+            LogTarget::default()
+        },
+    };
+    let params = &nlp.hand_made_start()[..f.reduced().parameters()];
+    let mut current = params.to_vec();
+    for stage in stage_problems(problem, params, problem.trials.continuation_stages) {
+        if problem.interrupt.is_raised() {
+            break;
+        }
+        let staged = Formulation::new(&stage).starting_at(&current);
+        let mut z0 = vec![0.0; staged.dims().n];
+        staged.start(&mut z0);
+        let phase = restore(&staged, &z0, &settings);
+        kept.count_phase(&phase);
+        // Spline parameters only: the stages' shooting segments end at different steps,
+        // so their start states are rolled out afresh.
+        current = staged.physical(&phase.z);
+        current.truncate(params.len());
+    }
+    let nlp = f.starting_at(&current);
+    let mut z0 = vec![0.0; nlp.dims().n];
+    nlp.start(&mut z0);
+    let phase = restore(&nlp, &z0, &settings);
+    kept.count_phase(&phase);
+    let x_phase = nlp.physical(&phase.z);
+    let end_phase = assess(f, &x_phase);
+    if improves(kept.end.as_ref(), end_phase.as_ref(), tol) {
+        (kept.x, kept.end) = (x_phase, end_phase);
+    }
+    phase
+}
+
+/// The solution reported for a trial whose feasibility phase stopped short of its target
+/// (no SQP solve): Stalled, or IterationLimit when the phase used up its iterations; at the
+/// kept point `nlp` starts from, with the trial's counts so far.
+fn phase_solution(
+    nlp: &Formulation<'_>,
+    kept: &Kept,
+    phase: &Feasibility,
+    options: &Options,
+    clock: &Instant,
+) -> Solution {
+    let status = if phase.iterations >= options.max_iterations {
+        Status::IterationLimit
+    } else {
+        Status::Stalled
+    };
+    Solution {
+        status,
+        x: nlp.scaled(&kept.x),
+        lambda: Vec::new(),
+        z: Vec::new(),
+        objective: kept.end.as_ref().map_or(f64::NAN, |a| a.cost),
+        constraints: Vec::new(),
+        max_violation: phase.max_violation,
+        optimality: f64::NAN,
+        iterations: phase.iterations,
+        evaluations: kept.evaluations,
+        seconds: clock.elapsed().as_secs_f64(),
+        log: Vec::new(),
+    }
+}
+
+/// The shaping solves ([`crate::gait::shaping`]) from the kept point's spline parameters.
+/// Their iteration log opens the trial's. Returns the formulation starting at their end point
+/// and whether that end point is a candidate (staged shaping): then it has become the kept
+/// point.
+fn shaping_phase<'p>(
+    problem: &Problem,
+    f: &Formulation<'p>,
+    options: &Options,
+    kept: &mut Kept,
+) -> (Formulation<'p>, bool) {
+    let tol = problem.trials.tolerance;
+    let shaped = shape(problem, &kept.x[..f.reduced().parameters()], tol, options);
+    kept.count_solves(shaped.iterations, &shaped.evaluations);
+    kept.log = shaped.log;
+    let nlp = f.starting_at(&shaped.x);
+    // The staged shaping's end point meets the task's rows when its last stage is met: a
+    // candidate like the feasibility phase's, replaced only by a better one.
+    let candidate = problem.trials.shaping_stages > 0;
+    if candidate {
+        (kept.x, kept.end) = (
+            nlp.hand_made_start().to_vec(),
+            assess(f, nlp.hand_made_start()),
+        );
+    }
+    (nlp, candidate)
+}
+
+/// The effort-lowering SQP solves from `nlp`'s start (module header): the first solve, then
+/// restarts from the kept point while they are productive, and one polish of a cheaper point
+/// short of the tolerance. Each end point replaces the kept one when it `improves` it (the
+/// first solve's always, unless a phase before it left a candidate), and its iteration log
+/// is appended to the trial's. Returns the last solve's solution.
+fn effort_solves<'p>(
+    problem: &Problem,
+    f: &Formulation<'p>,
+    mut nlp: Formulation<'p>,
+    options: &Options,
+    shaped_candidate: bool,
+    kept: &mut Kept,
+    clock: &Instant,
+) -> Solution {
+    let tol = problem.trials.tolerance;
+    let mut remaining = options.clone();
+    let mut polished = false;
     let mut last: Option<Solution> = None;
     let mut unproductive = 0;
     for attempt in 0..MAX_SOLVES {
@@ -413,11 +487,8 @@ pub fn solve_trial(
             remaining.max_time = Some((limit - clock.elapsed().as_secs_f64()).max(0.0));
         }
         let solution = solve(&nlp, &remaining);
-        iterations += solution.iterations;
-        evaluations.functions += solution.evaluations.functions;
-        evaluations.derivatives += solution.evaluations.derivatives;
-        evaluations.hessians += solution.evaluations.hessians;
-        append_log(&mut log, &solution.log);
+        kept.count_solves(solution.iterations, &solution.evaluations);
+        append_log(&mut kept.log, &solution.log);
         let x_solved = nlp.physical(&solution.x);
         let end_solved = assess(f, &x_solved);
         // Without a feasibility phase the first solve's end point is the trial's result even
@@ -426,7 +497,7 @@ pub fn solve_trial(
         // A solve that ends short of the tolerance at a lower effort than a kept point that
         // meets it is re-solved once from its own end point (a fresh quasi-Newton model often
         // brings such a point back onto the rows); the kept point stays unless beaten.
-        let cheaper_unmet = match (end.as_ref(), end_solved.as_ref()) {
+        let cheaper_unmet = match (kept.end.as_ref(), end_solved.as_ref()) {
             (Some(a), Some(b)) => a.max() <= tol && b.max() > tol && b.cost < a.cost,
             _ => false,
         };
@@ -435,9 +506,10 @@ pub fn solve_trial(
             && cheaper_unmet
             && !matches!(solution.status, Status::TimeLimit | Status::Interrupted))
         .then(|| x_solved.clone());
-        let productive = attempt > 0 && halves_violation(end.as_ref(), end_solved.as_ref(), tol);
-        if first || improves(end.as_ref(), end_solved.as_ref(), tol) {
-            (x, end) = (x_solved, end_solved);
+        let productive =
+            attempt > 0 && halves_violation(kept.end.as_ref(), end_solved.as_ref(), tol);
+        if first || improves(kept.end.as_ref(), end_solved.as_ref(), tol) {
+            (kept.x, kept.end) = (x_solved, end_solved);
         }
         if attempt > 0 && !productive {
             unproductive += 1;
@@ -457,12 +529,36 @@ pub fn solve_trial(
         }
         if budget
             || unproductive >= problem.trials.restarts
-            || end.as_ref().is_some_and(|a| a.max() <= tol)
+            || kept.end.as_ref().is_some_and(|a| a.max() <= tol)
         {
             break;
         }
-        nlp = f.starting_at(&x);
+        nlp = f.starting_at(&kept.x);
     }
+    last.expect("at least one solve")
+}
+
+/// The trial's result: the kept point cut to its spline parameters, classified (module
+/// header) and confirmed at `dt/4` ([`confirm`]), with the last solve's `solution` carrying
+/// the trial's whole iteration log.
+fn finish(
+    problem: &Problem,
+    f: &Formulation<'_>,
+    trial: usize,
+    start: Option<Assessment>,
+    kept: Kept,
+    mut solution: Solution,
+    clock: &Instant,
+) -> TrialResult {
+    let tol = problem.trials.tolerance;
+    let Kept {
+        mut x,
+        end,
+        iterations,
+        evaluations,
+        log,
+    } = kept;
+    solution.log = log;
     x.truncate(f.reduced().parameters());
     let check = confirm(
         problem,
@@ -471,9 +567,6 @@ pub fn solve_trial(
         classify(start.as_ref(), end.as_ref(), tol),
         tol,
     );
-    let mut solution = last.expect("at least one solve");
-    solution.log = log;
-    let solver_status = solution.status;
     TrialResult {
         trial,
         origin: String::new(),
@@ -484,7 +577,7 @@ pub fn solve_trial(
         fine: check.fine,
         downgrade: check.downgrade,
         status: check.status,
-        solver_status,
+        solver_status: solution.status,
         iterations,
         seconds: clock.elapsed().as_secs_f64(),
         evaluations,

@@ -66,6 +66,9 @@ pub struct Node {
     pub rotation: [f32; 4],
     /// Child nodes (indices into [`Scene::nodes`]).
     pub children: Vec<usize>,
+    /// Application data written as the node's glTF `extras` (e.g. a beam's force, length and
+    /// mass), if any.
+    pub extras: Option<Value>,
 }
 
 impl Node {
@@ -77,6 +80,7 @@ impl Node {
             translation: [0.0; 3],
             rotation: [0.0, 0.0, 0.0, 1.0],
             children: Vec::new(),
+            extras: None,
         }
     }
 }
@@ -314,6 +318,9 @@ impl Scene {
                 }
                 if !n.children.is_empty() {
                     v["children"] = json!(n.children);
+                }
+                if let Some(extras) = &n.extras {
+                    v["extras"] = extras.clone();
                 }
                 v
             })

@@ -6,10 +6,12 @@
 //! SVG: beams drawn with stroke width ∝ √mass (cross-section radius), compression blue, tension
 //! orange, idle beams (below 1e-3 of the largest |λ|) thin grey; anchors as black triangles, load
 //! joints as green discs, free joints as small grey discs.
-//! glTF (`model.glb`, through the shared writer in `crate::io::gltf`): every working beam as a
-//! cylinder whose radius is that of a solid round bar of its cross-section, A = m/(ρ·L) with
-//! steel's ρ = 7850 kg/m³, coloured by compression/tension; joints as spheres, loads as larger
-//! green spheres, anchors as dark blocks under the joint. Idle beams are left out.
+//! glTF (`model.glb`, through the shared writer in `crate::io::gltf`): every working beam its own
+//! node, a cylinder whose radius is that of a solid round bar of its cross-section,
+//! A = m/(ρ·L) with steel's ρ = 7850 kg/m³, but at least [`MIN_SHOWN_RADIUS`] of the bounding
+//! box's diagonal so that the structure is visible; coloured by compression/tension; the node's
+//! `extras` carry the beam's forces, length, mass and true radius. Joints as spheres, loads as
+//! larger green spheres, anchors as dark blocks under the joint. Idle beams are left out.
 
 use std::fmt::Write;
 
@@ -253,79 +255,104 @@ fn round_metres(length: f64) -> String {
     text.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
-/// `model.glb` bytes (module header).
+/// Smallest radius a beam is drawn with in `model.glb`, as a fraction of the structure's
+/// bounding-box diagonal (real bars are centimetres thick on spans of tens of metres).
+pub const MIN_SHOWN_RADIUS: f64 = 0.004;
+
+/// `model.glb` bytes (module header): one node and mesh per working beam, named `beam J` (J as
+/// in `beams.csv`), drawn at its true radius or [`MIN_SHOWN_RADIUS`] of the bounding-box
+/// diagonal, whichever is larger, with `extras` `{force_n: [λ per load case, + compression],
+/// length_m, mass_kg, radius_m}` (the true radius); then one mesh each for free joints, loads
+/// and anchors.
 pub fn model_glb(design: &Design) -> Result<Vec<u8>, GltfError> {
     let joints = &design.structure.joints;
     let peaks = design.peak_forces();
     let top = peaks.iter().copied().fold(0.0, f64::max);
     let f32s = |p: &Vec3| [p.x as f32, p.y as f32, p.z as f32];
-    let mut meshes: Vec<Mesh> = (0..5)
-        .map(|material| Mesh {
-            name: ["compression", "tension", "free joints", "loads", "anchors"][material].into(),
-            material,
-            ..Default::default()
-        })
-        .collect();
-    let mut largest_radius: f64 = 0.0;
-    for (j, beam) in design.structure.beams.iter().enumerate() {
-        let kind = match state(design, j, peaks[j], top) {
-            "compression" => 0,
-            "tension" => 1,
-            _ => continue,
-        };
-        let area = design.masses[j] / (STEEL_DENSITY * design.lengths[j]);
-        let radius = (area / std::f64::consts::PI).sqrt();
-        largest_radius = largest_radius.max(radius);
-        let [a, b] = beam.ends;
-        let bar = shapes::cylinder(
-            f32s(&joints[a].position),
-            f32s(&joints[b].position),
-            radius as f32,
-            12,
-        );
-        shapes::append(&mut meshes[kind], &bar);
-    }
     let mut lo = Vec3::repeat(f64::INFINITY);
     let mut hi = Vec3::repeat(f64::NEG_INFINITY);
     for j in joints {
         lo = lo.inf(&j.position);
         hi = hi.sup(&j.position);
     }
-    let joint_radius = (1.5 * largest_radius).max(2e-3 * (hi - lo).norm());
+    let min_radius = MIN_SHOWN_RADIUS * (hi - lo).norm();
+    let mut scene = Scene {
+        materials: vec![
+            Material::matte("compression", [0.12, 0.44, 0.71, 1.0]),
+            Material::matte("tension", [0.85, 0.51, 0.17, 1.0]),
+            Material::matte("free joint", [0.4, 0.4, 0.4, 1.0]),
+            Material::matte("load", [0.16, 0.62, 0.23, 1.0]),
+            Material::matte("anchor", [0.1, 0.1, 0.1, 1.0]),
+        ],
+        ..Scene::default()
+    };
+    let mut largest_shown: f64 = 0.0;
+    for (j, beam) in design.structure.beams.iter().enumerate() {
+        let material = match state(design, j, peaks[j], top) {
+            "compression" => 0,
+            "tension" => 1,
+            _ => continue,
+        };
+        let area = design.masses[j] / (STEEL_DENSITY * design.lengths[j]);
+        let radius = (area / std::f64::consts::PI).sqrt();
+        let shown = radius.max(min_radius);
+        largest_shown = largest_shown.max(shown);
+        let [a, b] = beam.ends;
+        let mut mesh = Mesh {
+            name: format!("beam {j}"),
+            material,
+            ..Mesh::default()
+        };
+        let bar = shapes::cylinder(
+            f32s(&joints[a].position),
+            f32s(&joints[b].position),
+            shown as f32,
+            12,
+        );
+        shapes::append(&mut mesh, &bar);
+        let mut node = Node::with_mesh(&mesh.name, scene.meshes.len());
+        node.extras = Some(serde_json::json!({
+            "force_n": design.forces.iter().map(|f| f[j]).collect::<Vec<f64>>(),
+            "length_m": design.lengths[j],
+            "mass_kg": design.masses[j],
+            "radius_m": radius,
+        }));
+        scene.meshes.push(mesh);
+        scene.nodes.push(node);
+    }
+    let joint_radius = (1.5 * largest_shown).max(2e-3 * (hi - lo).norm());
+    let mut joint_meshes: Vec<Mesh> = (2..5)
+        .map(|material| Mesh {
+            name: ["free joints", "loads", "anchors"][material - 2].into(),
+            material,
+            ..Mesh::default()
+        })
+        .collect();
     for j in joints {
         let c = f32s(&j.position);
         let r = joint_radius as f32;
         match j.kind {
-            JointKind::Free => shapes::append(&mut meshes[2], &shapes::sphere(c, r, 10)),
-            JointKind::Load => shapes::append(&mut meshes[3], &shapes::sphere(c, 2.0 * r, 14)),
+            JointKind::Free => shapes::append(&mut joint_meshes[0], &shapes::sphere(c, r, 10)),
+            JointKind::Load => {
+                shapes::append(&mut joint_meshes[1], &shapes::sphere(c, 2.0 * r, 14))
+            }
             JointKind::Anchor(_) => {
-                shapes::append(&mut meshes[4], &shapes::sphere(c, r, 10));
+                shapes::append(&mut joint_meshes[2], &shapes::sphere(c, r, 10));
                 let base = [c[0], c[1] - 2.0 * r, c[2]];
-                shapes::append(&mut meshes[4], &shapes::cuboid(base, [2.0 * r, r, 2.0 * r]));
+                shapes::append(
+                    &mut joint_meshes[2],
+                    &shapes::cuboid(base, [2.0 * r, r, 2.0 * r]),
+                );
             }
         }
     }
-    let materials = vec![
-        Material::matte("compression", [0.12, 0.44, 0.71, 1.0]),
-        Material::matte("tension", [0.85, 0.51, 0.17, 1.0]),
-        Material::matte("free joint", [0.4, 0.4, 0.4, 1.0]),
-        Material::matte("load", [0.16, 0.62, 0.23, 1.0]),
-        Material::matte("anchor", [0.1, 0.1, 0.1, 1.0]),
-    ];
-    let meshes: Vec<Mesh> = meshes
-        .into_iter()
-        .filter(|m| !m.indices.is_empty())
-        .collect();
-    let nodes: Vec<Node> = (meshes.iter().enumerate())
-        .map(|(k, m)| Node::with_mesh(&m.name, k))
-        .collect();
-    let scene = Scene {
-        materials,
-        roots: (0..nodes.len()).collect(),
-        meshes,
-        nodes,
-        animations: Vec::new(),
-    };
+    for mesh in joint_meshes.into_iter().filter(|m| !m.indices.is_empty()) {
+        scene
+            .nodes
+            .push(Node::with_mesh(&mesh.name, scene.meshes.len()));
+        scene.meshes.push(mesh);
+    }
+    scene.roots = (0..scene.nodes.len()).collect();
     scene.to_glb()
 }
 
@@ -400,7 +427,7 @@ mod tests {
     }
 
     #[test]
-    fn glb_holds_the_working_beams_and_the_joints() {
+    fn glb_holds_a_node_per_working_beam_and_the_joints() {
         let bytes = model_glb(&design()).unwrap();
         assert_eq!(&bytes[0..4], b"glTF");
         let (doc, buffers, _) = gltf::import_slice(&bytes).unwrap();
@@ -410,8 +437,36 @@ mod tests {
             .collect();
         assert_eq!(
             names,
-            ["compression", "tension", "free joints", "loads", "anchors"]
+            ["beam 0", "beam 1", "free joints", "loads", "anchors"]
         );
         assert_eq!(buffers.len(), 1);
+        // Beam 0: tension, 4 m, 1 kg: a 3.2 mm bar, drawn at 0.4 % of the 4.47 m diagonal.
+        let node = doc.nodes().next().unwrap();
+        assert_eq!(node.name(), Some("beam 0"));
+        // The glTF crate reads extras only with a feature this crate does not enable: read the
+        // GLB's JSON chunk (length at bytes 12..16, text from byte 20).
+        let length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        let json: serde_json::Value = serde_json::from_slice(&bytes[20..20 + length]).unwrap();
+        let extras = &json["nodes"][0]["extras"];
+        let radius = (1.0 / (STEEL_DENSITY * 4.0) / std::f64::consts::PI).sqrt();
+        assert_eq!(extras["force_n"], serde_json::json!([-10.0, -3.0]));
+        assert_eq!(
+            (extras["length_m"].as_f64(), extras["mass_kg"].as_f64()),
+            (Some(4.0), Some(1.0))
+        );
+        assert!((extras["radius_m"].as_f64().unwrap() / radius - 1.0).abs() < 1e-12);
+        let bbox = node
+            .mesh()
+            .unwrap()
+            .primitives()
+            .next()
+            .unwrap()
+            .bounding_box();
+        let shown = 0.5 * f64::from(bbox.max[1] - bbox.min[1]);
+        let minimum = MIN_SHOWN_RADIUS * 20f64.sqrt();
+        assert!(
+            radius < minimum && (shown / minimum - 1.0).abs() < 1e-3,
+            "{shown} vs {minimum}"
+        );
     }
 }

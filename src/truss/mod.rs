@@ -21,6 +21,7 @@ pub mod model;
 pub mod nlp;
 pub mod plastic;
 pub mod quality;
+pub mod restart;
 pub mod spec;
 pub mod start;
 pub mod topology;
@@ -68,7 +69,12 @@ pub struct Problem {
 /// Reads, parses and validates a truss problem file, and builds its ground structure and NLP once
 /// so that every problem-file error is reported here, positioned in the file.
 pub fn load(path: &Path) -> Result<Problem, InputError> {
-    let source = Source::read(path)?;
+    load_source(Source::read(path)?)
+}
+
+/// [`load`] from a file's text (with any `--set` overrides already applied).
+pub fn load_source(source: Source) -> Result<Problem, InputError> {
+    let path = source.path.clone();
     let spec: TrussSpec = source.parse()?;
     spec::validate(&spec, &source)?;
     let name = spec.name.clone().unwrap_or_else(|| {
@@ -210,8 +216,8 @@ impl Application for Truss {
     const KIND: Kind = Kind::Truss;
     type Problem = Problem;
 
-    fn load(path: &Path) -> Result<Problem, Error> {
-        Ok(load(path)?)
+    fn load(source: Source) -> Result<Problem, Error> {
+        Ok(load_source(source)?)
     }
 
     fn name(problem: &Problem) -> &str {
@@ -250,7 +256,14 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let started = Instant::now();
     let model = problem.model_for(seed)?;
     let mut timings = BTreeMap::new();
-    let (mut nlp, start_report, lp) = problem.staged_nlp(&model, seed)?;
+    let (mut nlp, start_report, lp) = match &opts.start {
+        Some(previous) => (
+            restart::nlp_from(previous, &model)?,
+            json!({ "method": "result", "file": previous.path }),
+            None,
+        ),
+        None => problem.staged_nlp(&model, seed)?,
+    };
     let start = quality::Point::start(&nlp)
         .ok()
         .map(|point| (nlp.clone(), point));
@@ -382,6 +395,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         "rounds": reports,
         "rounds_run": rounds_run,
         "result_round": result_round,
+        "design": restart::design_json(&design),
     });
     let caption = format!(
         "{}: {}, {} beams; {}",

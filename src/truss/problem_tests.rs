@@ -387,3 +387,23 @@ fn a_round_that_does_not_converge_does_not_replace_an_optimal_one() {
     // No round converged: the last one is reported.
     assert_eq!(super::reported_round(5, false, None), 5);
 }
+
+#[test]
+fn a_far_away_joint_does_not_make_distinct_joints_coincide() {
+    // Anchors 4 m apart with a joint at x = 1e15: the size-relative tolerance would be 1e6 m;
+    // the absolute cap keeps it at COINCIDENCE_TOLERANCE, so whatever the verdict on the far
+    // joint, it is not "same position".
+    let far = MINIMAL.replace(
+        "[ground]",
+        "[[joint]]\nkind = \"load\"\nat = [1e15, 0.0, 0.0]\nmass = 1.0\n[ground]",
+    );
+    if let Err(e) = load_text(&far) {
+        assert!(!e.message.contains("same position"), "{e}");
+    }
+    // Two joints closer than the tolerance (here 1e-9 of the 4 m span) still coincide, and the
+    // error states the tolerance.
+    let close = MINIMAL.replace("at = [2.0, 0.0, 0.0]", "at = [4.0, 0.0, 1e-10]");
+    let e = load_text(&close).unwrap_err();
+    assert!(e.message.contains("same position"), "{e}");
+    assert!(e.message.contains(" m)"), "{e}");
+}

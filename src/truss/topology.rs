@@ -129,6 +129,9 @@ impl Groups {
     }
 }
 
+/// Beams with their forces per load case (N).
+type BeamForces = Vec<(Beam, Vec<f64>)>;
+
 /// One clean-up round on `structure` at solved `positions` with `forces[case][beam]` (N).
 /// Returns the new structure (joints at the solved positions), its start forces (case-major) and
 /// a report.
@@ -138,10 +141,8 @@ pub fn clean(
     forces: &[Vec<f64>],
     settings: &RoundSettings,
 ) -> (Structure, Vec<f64>, RoundReport) {
-    let cases = forces.len();
-    let n = structure.joints.len();
     let mut report = RoundReport {
-        joints_before: n,
+        joints_before: structure.joints.len(),
         beams_before: structure.beams.len(),
         ..Default::default()
     };
@@ -149,9 +150,44 @@ pub fn clean(
     for (j, p) in joints.iter_mut().zip(positions) {
         j.position = *p;
     }
-    let length = |b: &Beam| (joints[b.ends[1]].position - joints[b.ends[0]].position).norm();
+    let (roots, mut beams) =
+        merge_short_beams(structure, &mut joints, forces, settings, &mut report);
+    if settings.prune > 0.0 {
+        let before = beams.len();
+        prune(&mut beams, settings.prune);
+        report.pruned_beams = before - beams.len();
+    }
+    if settings.remove_crossings {
+        let before = beams.len();
+        beams = remove_crossings(&joints, beams);
+        report.crossings_removed = before - beams.len();
+    }
+    let mut alive: Vec<bool> = (0..joints.len()).map(|i| roots[i] == i).collect();
+    remove_dangling(&joints, &mut alive, &mut beams, settings, &mut report);
+    let (out, start) = renumber(&joints, &alive, beams, forces.len());
+    report.joints_after = out.joints.len();
+    report.beams_after = out.beams.len();
+    (out, start, report)
+}
 
-    // 1. Merge.
+/// The largest force magnitude of a beam over the load cases (N).
+fn peak(f: &[f64]) -> f64 {
+    f.iter().map(|v| v.abs()).fold(0.0, f64::max)
+}
+
+/// Step 1: merges the ends of beams at most `min_length·(1 + merge_tolerance)` long (m) into
+/// one joint (at their mean position unless fixed), summing the forces of beams that become
+/// one. Returns each joint's group root (a joint survives only as its own root) and the beams
+/// between roots.
+fn merge_short_beams(
+    structure: &Structure,
+    joints: &mut [Joint],
+    forces: &[Vec<f64>],
+    settings: &RoundSettings,
+    report: &mut RoundReport,
+) -> (Vec<usize>, BeamForces) {
+    let (n, cases) = (joints.len(), forces.len());
+    let length = |b: &Beam| (joints[b.ends[1]].position - joints[b.ends[0]].position).norm();
     let mut groups = Groups {
         parent: (0..n).collect(),
         fixed: joints.iter().map(|j| !j.is_free()).collect(),
@@ -187,62 +223,69 @@ pub fn clean(
             entry[k] += f[j];
         }
     }
-    let mut beams: Vec<(Beam, Vec<f64>)> = merged.into_iter().collect();
+    (roots, merged.into_iter().collect())
+}
 
-    // 2. Prune.
-    let peak = |f: &[f64]| f.iter().map(|v| v.abs()).fold(0.0, f64::max);
+/// Step 2: drops the beams whose peak force is below `prune` times the largest.
+fn prune(beams: &mut BeamForces, prune: f64) {
     let top = beams.iter().map(|(_, f)| peak(f)).fold(0.0, f64::max);
-    if settings.prune > 0.0 {
-        let before = beams.len();
-        beams.retain(|(_, f)| peak(f) >= settings.prune * top);
-        report.pruned_beams = before - beams.len();
-    }
+    beams.retain(|(_, f)| peak(f) >= prune * top);
+}
 
-    // 3. Crossings: drop the weaker beam of each crossing pair, strongest beams first.
-    if settings.remove_crossings {
-        let mut lo = Vec3::repeat(f64::INFINITY);
-        let mut hi = Vec3::repeat(f64::NEG_INFINITY);
-        for j in &joints {
-            lo = lo.inf(&j.position);
-            hi = hi.sup(&j.position);
-        }
-        let tol = 1e-9 * (hi - lo).norm();
-        let mut order: Vec<usize> = (0..beams.len()).collect();
-        order.sort_by(|&a, &b| {
-            peak(&beams[b].1)
-                .total_cmp(&peak(&beams[a].1))
-                .then(a.cmp(&b))
-        });
-        let mut kept: Vec<usize> = Vec::new();
-        for &k in &order {
-            let [a, b] = beams[k].0.ends;
-            let crosses = kept.iter().any(|&q| {
-                let [c, d] = beams[q].0.ends;
-                if a == c || a == d || b == c || b == d {
-                    return false;
-                }
-                let (dist, s, t) = segment_segment_distance(
-                    &joints[a].position,
-                    &joints[b].position,
-                    &joints[c].position,
-                    &joints[d].position,
-                );
-                dist <= tol && s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0
-            });
-            if !crosses {
-                kept.push(k);
+/// Step 3: drops the weaker beam of each crossing pair, strongest beams first (beams cross
+/// when their segments meet inside both, within 1e-9 of the joints' bounding-box diagonal).
+fn remove_crossings(joints: &[Joint], beams: BeamForces) -> BeamForces {
+    let mut lo = Vec3::repeat(f64::INFINITY);
+    let mut hi = Vec3::repeat(f64::NEG_INFINITY);
+    for j in joints {
+        lo = lo.inf(&j.position);
+        hi = hi.sup(&j.position);
+    }
+    let tol = 1e-9 * (hi - lo).norm();
+    let mut order: Vec<usize> = (0..beams.len()).collect();
+    order.sort_by(|&a, &b| {
+        peak(&beams[b].1)
+            .total_cmp(&peak(&beams[a].1))
+            .then(a.cmp(&b))
+    });
+    let mut kept: Vec<usize> = Vec::new();
+    for &k in &order {
+        let [a, b] = beams[k].0.ends;
+        let crosses = kept.iter().any(|&q| {
+            let [c, d] = beams[q].0.ends;
+            if a == c || a == d || b == c || b == d {
+                return false;
             }
+            let (dist, s, t) = segment_segment_distance(
+                &joints[a].position,
+                &joints[b].position,
+                &joints[c].position,
+                &joints[d].position,
+            );
+            dist <= tol && s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0
+        });
+        if !crosses {
+            kept.push(k);
         }
-        report.crossings_removed = beams.len() - kept.len();
-        kept.sort_unstable();
-        beams = kept.into_iter().map(|k| beams[k].clone()).collect();
     }
+    kept.sort_unstable();
+    kept.into_iter().map(|k| beams[k].clone()).collect()
+}
 
-    // 4. Dangling free joints, tension runs, and joints no longer used.
-    let mut alive: Vec<bool> = (0..n).map(|i| roots[i] == i).collect();
+/// Step 4: removes dangling free joints (at most one beam) with their beam until none is
+/// left, then, when merging, one tension run at a time ([`merge_tension_run`]) while that
+/// leaves none dangling; `alive` marks the joints that remain.
+fn remove_dangling(
+    joints: &[Joint],
+    alive: &mut [bool],
+    beams: &mut BeamForces,
+    settings: &RoundSettings,
+    report: &mut RoundReport,
+) {
+    let n = joints.len();
     loop {
         let mut degree = vec![0usize; n];
-        for (b, _) in &beams {
+        for (b, _) in beams.iter() {
             degree[b.ends[0]] += 1;
             degree[b.ends[1]] += 1;
         }
@@ -253,7 +296,7 @@ pub fn clean(
             if !settings.merge {
                 break;
             }
-            if let Some(i) = merge_tension_run(&joints, &alive, &mut beams, settings.max_length) {
+            if let Some(i) = merge_tension_run(joints, alive, beams, settings.max_length) {
                 alive[i] = false;
                 report.tension_runs += 1;
                 continue;
@@ -266,17 +309,25 @@ pub fn clean(
         report.dangling_joints += dangling.len();
         beams.retain(|(b, _)| alive[b.ends[0]] && alive[b.ends[1]]);
     }
+}
 
-    // 5. Renumber.
-    let mut index = vec![usize::MAX; n];
+/// Step 5: the structure of the `alive` joints, renumbered in order, and its beams sorted,
+/// with their forces as start values (case-major, `cases` load cases).
+fn renumber(
+    joints: &[Joint],
+    alive: &[bool],
+    beams: BeamForces,
+    cases: usize,
+) -> (Structure, Vec<f64>) {
+    let mut index = vec![usize::MAX; joints.len()];
     let mut new_joints = Vec::new();
-    for i in 0..n {
+    for i in 0..joints.len() {
         if alive[i] {
             index[i] = new_joints.len();
             new_joints.push(joints[i].clone());
         }
     }
-    let mut renumbered: Vec<(Beam, Vec<f64>)> = beams
+    let mut renumbered: BeamForces = beams
         .into_iter()
         .map(|(b, f)| (Beam::new(index[b.ends[0]], index[b.ends[1]]), f))
         .collect();
@@ -291,9 +342,7 @@ pub fn clean(
         joints: new_joints,
         beams: renumbered.into_iter().map(|(b, _)| b).collect(),
     };
-    report.joints_after = out.joints.len();
-    report.beams_after = out.beams.len();
-    (out, start, report)
+    (out, start)
 }
 
 /// Merges the first tension run (module header, step 4) among the `alive` joints: removes

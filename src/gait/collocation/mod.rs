@@ -12,6 +12,7 @@
 //! Selected by a gait problem file with a top-level `formulation = "collocation"`
 //! ([`crate::gait::Gait`]).
 
+pub mod export;
 pub mod nlp;
 pub mod spec;
 pub mod validate;
@@ -70,7 +71,23 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             .wall_clearance
             .map_or("n/a".into(), |c| format!("{c:.4} m")),
     ));
-    let mut artifacts = vec![trajectory_csv(&nlp.layout, &solution.x)];
+    let caption = format!(
+        "{}: {:?}, effort {:.4} N²·s",
+        problem.name, solution.status, solution.objective
+    );
+    let glb = export::model_glb(problem, &nlp.layout, &solution.x)
+        .map_err(|e| Error::Runtime(e.to_string()))?;
+    let mut artifacts = vec![
+        trajectory_csv(&nlp.layout, &solution.x),
+        Artifact {
+            name: "model.glb".into(),
+            bytes: glb,
+        },
+        Artifact {
+            name: "filmstrip.svg".into(),
+            bytes: export::filmstrip(problem, &nlp.layout, &solution.x, &caption).into_bytes(),
+        },
+    ];
     artifacts.extend(crate::io::result::iteration_files(
         &problem.name,
         &summary.headline,

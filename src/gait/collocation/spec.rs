@@ -209,7 +209,44 @@ pub fn load_source(source: &Source) -> Result<Problem, InputError> {
     build(source, file)
 }
 
+/// The problem of a parsed file, every range checked in the order of the file's keys:
+/// the scalars, the contact phases, the poses, the wall.
 fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
+    check_scalars(source, &file)?;
+    let contacts = contact_phases(source, &file)?;
+    let poses = (file.pose.iter().enumerate())
+        .map(|(i, p)| pose(source, &file, i, p))
+        .collect::<Result<Vec<_>, _>>()?;
+    if let Some(w) = &file.wall {
+        // `x` is finite like every float in the file (`Source::parse`).
+        source.positive_quantity(&[Key::Name("wall"), Key::Name("height")], w.height, "m")?;
+    }
+    let name = file.name.clone().unwrap_or_else(|| {
+        source
+            .path
+            .file_stem()
+            .map_or("ball".into(), |s| s.to_string_lossy().into_owned())
+    });
+    Ok(Problem {
+        name,
+        mass: file.mass,
+        gravity: file.gravity,
+        fps: file.fps,
+        duration: file.duration,
+        max_compression: file.max_compression,
+        friction: file.friction,
+        start: (file.start.position, file.start.velocity),
+        end: file.end.position,
+        contacts,
+        poses,
+        wall: file.wall,
+        solver: file.solver,
+    })
+}
+
+/// The top-level keys: `formulation`, `[solver]`, mass (kg), gravity (m/s²), fps, duration
+/// (s), max_compression (m), friction, start and end.
+fn check_scalars(source: &Source, file: &FileSpec) -> Result<(), InputError> {
     let err = |p: &[Key<'_>], msg: String| source.error_at(p, msg);
     let top = |k: &'static str| [Key::Name(k)];
     if file.formulation != "collocation" {
@@ -268,6 +305,13 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
     if !finite(&file.end.position) {
         return Err(err(&top("end"), "`end` must be finite".into()));
     }
+    Ok(())
+}
+
+/// The `[[contact]]` phases as `(start, end)` times (s): inside the motion, at least two
+/// frames long, in time order at least a frame apart.
+fn contact_phases(source: &Source, file: &FileSpec) -> Result<Vec<(f64, f64)>, InputError> {
+    let err = |p: &[Key<'_>], msg: String| source.error_at(p, msg);
     let frame = 1.0 / file.fps;
     let mut contacts: Vec<(f64, f64)> = Vec::new();
     for (i, c) in file.contact.iter().enumerate() {
@@ -301,88 +345,63 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
         }
         contacts.push((c.start, c.end));
     }
-    let mut poses = Vec::new();
-    for (i, p) in file.pose.iter().enumerate() {
-        let at = |k: &'static str| [Key::Name("pose"), Key::Index(i), Key::Name(k)];
-        if !(p.time >= 0.0 && p.time <= file.duration) {
-            return Err(err(
-                &at("time"),
-                format!("`time` must be in [0, {}] s, got {}", file.duration, p.time),
-            ));
-        }
-        let axis = match p.axis.as_str() {
-            "x" => 0,
-            "y" => 1,
-            other => {
-                return Err(err(
-                    &at("axis"),
-                    format!("`axis` must be \"x\" or \"y\", got {other:?}"),
-                ));
-            }
-        };
-        let quantity = match p.quantity.as_deref() {
-            None | Some("position") => Quantity::Position,
-            Some("velocity") => Quantity::Velocity,
-            Some(other) => {
-                return Err(err(
-                    &at("quantity"),
-                    format!("`quantity` must be \"position\" or \"velocity\", got {other:?}"),
-                ));
-            }
-        };
-        let (min, max) = match (p.value, p.min, p.max) {
-            (Some(v), None, None) => (v, v),
-            (None, lo, hi) if lo.is_some() || hi.is_some() => {
-                (lo.unwrap_or(f64::NEG_INFINITY), hi.unwrap_or(f64::INFINITY))
-            }
-            _ => {
-                return Err(err(
-                    &[Key::Name("pose"), Key::Index(i)],
-                    "give either `value` or `min`/`max`".into(),
-                ));
-            }
-        };
-        if min.is_nan() || max.is_nan() || min > max || (min == max && !min.is_finite()) {
-            return Err(err(
-                &[Key::Name("pose"), Key::Index(i)],
-                format!("the bounds [{min}, {max}] are empty or not numbers"),
-            ));
-        }
-        poses.push(Pose {
-            time: p.time,
-            axis,
-            quantity,
-            min,
-            max,
-        });
-    }
-    if let Some(w) = file.wall
-        && !(w.x.is_finite() && positive(w.height))
-    {
+    Ok(contacts)
+}
+
+/// `[[pose]]` number `i`: a time within the motion (s), an axis, a quantity (position m or
+/// velocity m/s) and non-empty bounds.
+fn pose(source: &Source, file: &FileSpec, i: usize, p: &PoseSpec) -> Result<Pose, InputError> {
+    let err = |path: &[Key<'_>], msg: String| source.error_at(path, msg);
+    let at = |k: &'static str| [Key::Name("pose"), Key::Index(i), Key::Name(k)];
+    if !(p.time >= 0.0 && p.time <= file.duration) {
         return Err(err(
-            &top("wall"),
-            "the wall needs a finite `x` and a positive `height`".into(),
+            &at("time"),
+            format!("`time` must be in [0, {}] s, got {}", file.duration, p.time),
         ));
     }
-    let name = file.name.clone().unwrap_or_else(|| {
-        source
-            .path
-            .file_stem()
-            .map_or("ball".into(), |s| s.to_string_lossy().into_owned())
-    });
-    Ok(Problem {
-        name,
-        mass: file.mass,
-        gravity: file.gravity,
-        fps: file.fps,
-        duration: file.duration,
-        max_compression: file.max_compression,
-        friction: file.friction,
-        start: (file.start.position, file.start.velocity),
-        end: file.end.position,
-        contacts,
-        poses,
-        wall: file.wall,
-        solver: file.solver,
+    let axis = match p.axis.as_str() {
+        "x" => 0,
+        "y" => 1,
+        other => {
+            return Err(err(
+                &at("axis"),
+                format!("`axis` must be \"x\" or \"y\", got {other:?}"),
+            ));
+        }
+    };
+    let quantity = match p.quantity.as_deref() {
+        None | Some("position") => Quantity::Position,
+        Some("velocity") => Quantity::Velocity,
+        Some(other) => {
+            return Err(err(
+                &at("quantity"),
+                format!("`quantity` must be \"position\" or \"velocity\", got {other:?}"),
+            ));
+        }
+    };
+    let (min, max) = match (p.value, p.min, p.max) {
+        (Some(v), None, None) => (v, v),
+        (None, lo, hi) if lo.is_some() || hi.is_some() => {
+            (lo.unwrap_or(f64::NEG_INFINITY), hi.unwrap_or(f64::INFINITY))
+        }
+        _ => {
+            return Err(err(
+                &[Key::Name("pose"), Key::Index(i)],
+                "give either `value` or `min`/`max`".into(),
+            ));
+        }
+    };
+    if min.is_nan() || max.is_nan() || min > max || (min == max && !min.is_finite()) {
+        return Err(err(
+            &[Key::Name("pose"), Key::Index(i)],
+            format!("the bounds [{min}, {max}] are empty or not numbers"),
+        ));
+    }
+    Ok(Pose {
+        time: p.time,
+        axis,
+        quantity,
+        min,
+        max,
     })
 }

@@ -242,187 +242,311 @@ fn generate(x: &[f64], bounds: &Bounds, t: f64, rng: &mut ChaCha8Rng) -> Vec<f64
         .collect()
 }
 
+/// The temperature schedules of the module header: `T(k) = T₀·exp(−c·k^(1/D))` for the
+/// parameters (dimensionless) and `T_cost(k_a) = T₀,cost·exp(−c·ρ·k_a^(1/D))` for the cost
+/// (units of f), each at least 1e-300.
+struct Schedule {
+    /// T₀.
+    t0: f64,
+    /// T₀,cost.
+    t0_cost: f64,
+    /// c.
+    c: f64,
+    /// c·ρ.
+    c_cost: f64,
+    /// D, the number of variables (at least 1).
+    n: f64,
+}
+
+impl Schedule {
+    /// The parameter temperature after `k` generated states.
+    fn temperature(&self, k: f64) -> f64 {
+        (self.t0 * (-self.c * k.powf(1.0 / self.n)).exp()).max(1e-300)
+    }
+
+    /// The cost temperature after `accepted` acceptances.
+    fn cost_temperature(&self, accepted: usize) -> f64 {
+        (self.t0_cost * (-self.c_cost * (accepted as f64).powf(1.0 / self.n)).exp()).max(1e-300)
+    }
+}
+
+/// A run in progress: the current and best states, the penalty weight, the cost-repeat test
+/// and the counters.
+struct Annealer<'a> {
+    nlp: &'a dyn Nlp,
+    bounds: Bounds,
+    options: &'a AnnealOptions,
+    rng: ChaCha8Rng,
+    clock: Instant,
+    schedule: Schedule,
+    /// Evaluations of the functions (the start and cost samples included).
+    evaluations: usize,
+    /// One row per check.
+    log: Vec<IterationRecord>,
+    stats: AnnealStats,
+    current: State,
+    best: State,
+    /// Penalty weight μ and its start μ₀.
+    mu: f64,
+    mu0: f64,
+    /// The best cost at the last check, and how many checks in a row repeated it.
+    last_checked: f64,
+    repeats: usize,
+}
+
 /// Runs simulated annealing on `nlp` from its start (see the module header).
 pub fn anneal(nlp: &dyn Nlp, options: &AnnealOptions) -> AnnealResult {
     let clock = Instant::now();
     let bounds = Bounds::of(nlp);
-    let n = bounds.x0.len().max(1) as f64;
-    let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
-    let mut evaluations = 1;
-    let mut log = Vec::new();
-
     let start = match evaluate(nlp, &bounds, bounds.x0.clone()) {
         Ok(Some(s)) => s,
         Ok(None) | Err(_) => {
             return failed_start(nlp, &bounds, clock.elapsed().as_secs_f64());
         }
     };
-    let mu0 = options.penalty_weight * start.f.abs().max(1.0);
-    let mut mu = mu0;
-    let c =
-        -options.temperature_ratio_scale.ln() * (-options.temperature_anneal_scale.ln() / n).exp();
-    let c_cost = c * options.cost_parameter_scale_ratio;
-    let t0 = options.initial_temperature;
-    let mut stats = AnnealStats {
-        generated: 0,
-        accepted: 0,
-        rejected_evaluations: 0,
-        temperature: t0,
-        cost_temperature: 0.0,
-        penalty: mu,
-        stop: AnnealStop::EvaluationLimit,
-    };
-
-    // ASA's initial cost temperature: mean |E| over the start and a few generated states.
-    let t0_cost = match options.initial_cost_temperature {
-        Some(t) => t,
-        None => {
-            let mut total = start.cost(mu).abs();
-            let mut count = 1.0;
-            for _ in 0..options.cost_samples {
-                let x = generate(&start.x, &bounds, t0, &mut rng);
-                evaluations += 1;
-                if let Ok(Some(s)) = evaluate(nlp, &bounds, x) {
-                    total += s.cost(mu).abs();
-                    count += 1.0;
-                }
-            }
-            let mean = total / count;
-            if mean > 0.0 && mean.is_finite() {
-                mean
-            } else {
-                1.0
-            }
-        }
-    };
-    stats.cost_temperature = t0_cost;
-
-    let mut current = start.clone();
-    let mut best = start;
-    let mut last_checked = best.cost(mu);
-    let mut repeats = 0;
-    let record = |log: &mut Vec<IterationRecord>, k: usize, best: &State, t: f64, mu: f64| {
-        log.push(IterationRecord {
-            iter: k,
-            objective: best.f,
-            infeasibility: best.max,
-            optimality: f64::NAN,
-            step: t,
-            merit: best.cost(mu),
-            qp_iterations: 0,
-            elapsed: clock.elapsed().as_secs_f64(),
-            stage: String::new(),
-        });
-    };
-    record(&mut log, 0, &best, t0, mu);
-
-    loop {
+    let mut run = Annealer::new(nlp, bounds, options, clock, start);
+    let stop = loop {
         if options
             .interrupt
             .as_ref()
             .is_some_and(|i| i.load(Ordering::Relaxed))
         {
-            stats.stop = AnnealStop::Interrupted;
-            break;
+            break AnnealStop::Interrupted;
         }
-        if stats.generated >= options.max_evaluations {
-            stats.stop = AnnealStop::EvaluationLimit;
-            break;
+        if run.stats.generated >= options.max_evaluations {
+            break AnnealStop::EvaluationLimit;
         }
-        stats.generated += 1;
-        let k = stats.generated as f64;
-        let t = (t0 * (-c * k.powf(1.0 / n)).exp()).max(1e-300);
-        stats.temperature = t;
-        let x = generate(&current.x, &bounds, t, &mut rng);
-        evaluations += 1;
-        let candidate = match evaluate(nlp, &bounds, x) {
-            Ok(Some(s)) => Some(s),
-            Ok(None) => None,
-            Err(_) => {
-                stats.stop = AnnealStop::EvaluationError;
-                break;
-            }
+        if let Some(stop) = run.generate_and_test() {
+            break stop;
+        }
+        run.update_penalty();
+    };
+    run.finish(stop)
+}
+
+impl<'a> Annealer<'a> {
+    /// The run at the evaluated `start`: μ₀, the schedules (the initial cost temperature
+    /// sampled when not given) and the first log row.
+    fn new(
+        nlp: &'a dyn Nlp,
+        bounds: Bounds,
+        options: &'a AnnealOptions,
+        clock: Instant,
+        start: State,
+    ) -> Self {
+        let n = bounds.x0.len().max(1) as f64;
+        let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
+        let mut evaluations = 1;
+        let mu0 = options.penalty_weight * start.f.abs().max(1.0);
+        let c = -options.temperature_ratio_scale.ln()
+            * (-options.temperature_anneal_scale.ln() / n).exp();
+        let t0 = options.initial_temperature;
+        let t0_cost = match options.initial_cost_temperature {
+            Some(t) => t,
+            None => sampled_cost_temperature(
+                nlp,
+                &bounds,
+                options,
+                &start,
+                mu0,
+                &mut rng,
+                &mut evaluations,
+            ),
+        };
+        let stats = AnnealStats {
+            generated: 0,
+            accepted: 0,
+            rejected_evaluations: 0,
+            temperature: t0,
+            cost_temperature: t0_cost,
+            penalty: mu0,
+            stop: AnnealStop::EvaluationLimit,
+        };
+        let mut run = Annealer {
+            nlp,
+            bounds,
+            options,
+            rng,
+            clock,
+            schedule: Schedule {
+                t0,
+                t0_cost,
+                c,
+                c_cost: c * options.cost_parameter_scale_ratio,
+                n,
+            },
+            evaluations,
+            log: Vec::new(),
+            stats,
+            last_checked: start.cost(mu0),
+            current: start.clone(),
+            best: start,
+            mu: mu0,
+            mu0,
+            repeats: 0,
+        };
+        run.record(0, t0);
+        run
+    }
+
+    /// A log row for the best state after `k` generated states at temperature `t`.
+    fn record(&mut self, k: usize, t: f64) {
+        self.log.push(IterationRecord {
+            iter: k,
+            objective: self.best.f,
+            infeasibility: self.best.max,
+            optimality: f64::NAN,
+            step: t,
+            merit: self.best.cost(self.mu),
+            qp_iterations: 0,
+            elapsed: self.clock.elapsed().as_secs_f64(),
+            stage: String::new(),
+        });
+    }
+
+    /// Generates and evaluates the next state and applies the Metropolis test; `Some` when
+    /// the run stops (a fatal evaluation error, or the cost-repeat test).
+    fn generate_and_test(&mut self) -> Option<AnnealStop> {
+        self.stats.generated += 1;
+        let t = self.schedule.temperature(self.stats.generated as f64);
+        self.stats.temperature = t;
+        let x = generate(&self.current.x, &self.bounds, t, &mut self.rng);
+        self.evaluations += 1;
+        let candidate = match evaluate(self.nlp, &self.bounds, x) {
+            Ok(candidate) => candidate,
+            Err(_) => return Some(AnnealStop::EvaluationError),
         };
         // The acceptance draw is made for every state so the stream does not depend on
         // evaluation failures.
-        let u: f64 = rng.random();
-        match candidate {
-            None => stats.rejected_evaluations += 1,
-            Some(s) => {
-                let t_cost =
-                    (t0_cost * (-c_cost * (stats.accepted as f64).powf(1.0 / n)).exp()).max(1e-300);
-                stats.cost_temperature = t_cost;
-                let delta = s.cost(mu) - current.cost(mu);
-                if delta <= 0.0 || u < (-delta / t_cost).exp() {
-                    stats.accepted += 1;
-                    if s.better_than(&best, options.feasibility_tolerance) {
-                        best = s.clone();
-                    }
-                    current = s;
-                    if stats
-                        .accepted
-                        .is_multiple_of(options.acceptance_check_interval.max(1))
-                    {
-                        record(&mut log, stats.generated, &best, t, mu);
-                        let now = best.cost(mu);
-                        if (now - last_checked).abs() <= options.cost_precision * now.abs().max(1.0)
-                        {
-                            repeats += 1;
-                        } else {
-                            repeats = 0;
-                        }
-                        last_checked = now;
-                        if repeats >= options.maximum_cost_repeat {
-                            stats.stop = AnnealStop::CostRepeat;
-                            break;
-                        }
-                    }
-                }
-            }
+        let u: f64 = self.rng.random();
+        let Some(s) = candidate else {
+            self.stats.rejected_evaluations += 1;
+            return None;
+        };
+        let t_cost = self.schedule.cost_temperature(self.stats.accepted);
+        self.stats.cost_temperature = t_cost;
+        let delta = s.cost(self.mu) - self.current.cost(self.mu);
+        if !(delta <= 0.0 || u < (-delta / t_cost).exp()) {
+            return None;
         }
-        if stats
-            .generated
-            .is_multiple_of(options.penalty_interval.max(1))
-            && current.max > options.feasibility_tolerance
-            && mu < 1e12 * mu0
+        self.stats.accepted += 1;
+        if s.better_than(&self.best, self.options.feasibility_tolerance) {
+            self.best = s.clone();
+        }
+        self.current = s;
+        if self
+            .stats
+            .accepted
+            .is_multiple_of(self.options.acceptance_check_interval.max(1))
         {
-            mu = (mu * options.penalty_growth).min(1e12 * mu0);
-            last_checked = best.cost(mu);
-            repeats = 0;
+            return self.check_repeats(t);
         }
-    }
-    stats.penalty = mu;
-    if log.last().is_none_or(|r| r.iter != stats.generated) {
-        record(&mut log, stats.generated, &best, stats.temperature, mu);
+        None
     }
 
-    let status = match stats.stop {
-        AnnealStop::Interrupted => Status::Interrupted,
-        AnnealStop::EvaluationError => Status::EvaluationError,
-        _ if best.max > options.feasibility_tolerance => Status::Infeasible,
-        AnnealStop::EvaluationLimit => Status::IterationLimit,
-        AnnealStop::CostRepeat => Status::Stalled,
-    };
-    let m = best.c.len();
-    let solution = Solution {
-        status,
-        lambda: vec![0.0; m],
-        z: vec![0.0; best.x.len()],
-        objective: best.f,
-        max_violation: best.max,
-        constraints: best.c,
-        x: best.x,
-        optimality: f64::NAN,
-        iterations: stats.generated,
-        evaluations: Evaluations {
-            functions: evaluations,
-            derivatives: 0,
-            hessians: 0,
-        },
-        seconds: clock.elapsed().as_secs_f64(),
-        log,
-    };
-    AnnealResult { solution, stats }
+    /// The cost-repeat test at a check (module header), with its log row at temperature `t`.
+    fn check_repeats(&mut self, t: f64) -> Option<AnnealStop> {
+        self.record(self.stats.generated, t);
+        let now = self.best.cost(self.mu);
+        if (now - self.last_checked).abs() <= self.options.cost_precision * now.abs().max(1.0) {
+            self.repeats += 1;
+        } else {
+            self.repeats = 0;
+        }
+        self.last_checked = now;
+        (self.repeats >= self.options.maximum_cost_repeat).then_some(AnnealStop::CostRepeat)
+    }
+
+    /// Every `penalty_interval` states, μ grows while the current state is infeasible (at
+    /// most 10¹² μ₀); the cost-repeat test starts again at the re-weighted best cost.
+    fn update_penalty(&mut self) {
+        let o = self.options;
+        if self
+            .stats
+            .generated
+            .is_multiple_of(o.penalty_interval.max(1))
+            && self.current.max > o.feasibility_tolerance
+            && self.mu < 1e12 * self.mu0
+        {
+            self.mu = (self.mu * o.penalty_growth).min(1e12 * self.mu0);
+            self.last_checked = self.best.cost(self.mu);
+            self.repeats = 0;
+        }
+    }
+
+    /// The result of a run ended by `stop`: the best state as a [`Solution`] (status in the
+    /// module header) and the counters.
+    fn finish(mut self, stop: AnnealStop) -> AnnealResult {
+        self.stats.stop = stop;
+        self.stats.penalty = self.mu;
+        if self
+            .log
+            .last()
+            .is_none_or(|r| r.iter != self.stats.generated)
+        {
+            self.record(self.stats.generated, self.stats.temperature);
+        }
+        let best = self.best;
+        let status = match stop {
+            AnnealStop::Interrupted => Status::Interrupted,
+            AnnealStop::EvaluationError => Status::EvaluationError,
+            _ if best.max > self.options.feasibility_tolerance => Status::Infeasible,
+            AnnealStop::EvaluationLimit => Status::IterationLimit,
+            AnnealStop::CostRepeat => Status::Stalled,
+        };
+        let m = best.c.len();
+        let solution = Solution {
+            status,
+            lambda: vec![0.0; m],
+            z: vec![0.0; best.x.len()],
+            objective: best.f,
+            max_violation: best.max,
+            constraints: best.c,
+            x: best.x,
+            optimality: f64::NAN,
+            iterations: self.stats.generated,
+            evaluations: Evaluations {
+                functions: self.evaluations,
+                derivatives: 0,
+                hessians: 0,
+            },
+            seconds: self.clock.elapsed().as_secs_f64(),
+            log: self.log,
+        };
+        AnnealResult {
+            solution,
+            stats: self.stats,
+        }
+    }
+}
+
+/// ASA's initial cost temperature: the mean |E| (units of f) at weight `mu` over `start` and
+/// `cost_samples` states generated from it at T₀ (1 when that mean is not a positive number).
+fn sampled_cost_temperature(
+    nlp: &dyn Nlp,
+    bounds: &Bounds,
+    options: &AnnealOptions,
+    start: &State,
+    mu: f64,
+    rng: &mut ChaCha8Rng,
+    evaluations: &mut usize,
+) -> f64 {
+    let mut total = start.cost(mu).abs();
+    let mut count = 1.0;
+    for _ in 0..options.cost_samples {
+        let x = generate(&start.x, bounds, options.initial_temperature, rng);
+        *evaluations += 1;
+        if let Ok(Some(s)) = evaluate(nlp, bounds, x) {
+            total += s.cost(mu).abs();
+            count += 1.0;
+        }
+    }
+    let mean = total / count;
+    if mean > 0.0 && mean.is_finite() {
+        mean
+    } else {
+        1.0
+    }
 }
 
 /// The result when the start itself cannot be evaluated.

@@ -266,6 +266,30 @@ impl ActiveSet {
             rotate_columns(&mut self.j, c, c + 1, cs, sn);
         }
     }
+
+    /// `u ← u − t·r`: the active multipliers after a step of length `t` along `r`.
+    fn step_multipliers(&mut self, t: f64, r: &DVector<f64>) {
+        for (uk, rk) in self.u.iter_mut().zip(r.iter()) {
+            *uk -= t * rk;
+        }
+    }
+
+    /// The largest dual step keeping the active inequality multipliers non-negative along
+    /// `r`, and the position of the one that blocks it (`(∞, None)` when none does).
+    fn dual_step_limit(&self, r: &DVector<f64>) -> (f64, Option<usize>) {
+        let mut t1 = f64::INFINITY;
+        let mut drop: Option<usize> = None;
+        for k in 0..self.len() {
+            if !self.equality[k] && r[k] > 0.0 {
+                let t = self.u[k] / r[k];
+                if t < t1 {
+                    t1 = t;
+                    drop = Some(k);
+                }
+            }
+        }
+        (t1, drop)
+    }
 }
 
 /// Iteration cap of the dual active-set loop, in additions plus drops.
@@ -293,90 +317,137 @@ pub fn solve(h: &DMatrix<f64>, problem: &QpProblem, preferred: &[ConstraintId]) 
     {
         return fail(QpStatus::Infeasible);
     }
-    let Some(chol) = h.clone().cholesky() else {
+    let Some(mut dual) = DualIteration::start(h, problem, preferred) else {
         return fail(QpStatus::Numerical);
     };
-    let cons = Constraints::new(problem);
-    // J = L⁻ᵀ, so that J Jᵀ = H⁻¹.
-    let l_t = chol.l().transpose();
-    let Some(j) = l_t.solve_upper_triangular(&DMatrix::identity(n, n)) else {
-        return fail(QpStatus::Numerical);
-    };
-    let g = DVector::from_column_slice(problem.g);
-    let mut x = -chol.solve(&g);
-    let mut set = ActiveSet {
-        j,
-        r: DMatrix::zeros(n, n),
-        ids: Vec::new(),
-        u: Vec::new(),
-        equality: Vec::new(),
-        r_norm: 1.0,
-    };
-    let mut iterations = 0;
-    let scale_x = |x: &DVector<f64>| x.amax();
-    let violation_tol = |id: ConstraintId, b: f64, x: &DVector<f64>| {
-        1e-11 * (1.0 + b.abs() + cons.normal_norm(id) * scale_x(x))
-    };
-
-    // Equalities first: each is added by a full primal step (no drops are possible).
-    for id in 0..cons.count() {
-        if !cons.is_equality_lower(id) {
-            continue;
-        }
-        let Some(b) = cons.rhs(id) else { continue };
-        let d = cons.jt_times_normal(id, &set.j);
-        let (z, r) = set.directions(&d);
-        let s = cons.dot(id, &x) - b;
-        let zn = cons.dot(id, &z);
-        if zn.abs() <= 1e-14 * (1.0 + cons.normal_norm(id).powi(2)) {
-            // Dependent on earlier equalities: consistent ones are redundant.
-            if s.abs() > violation_tol(id, b, &x) * 1e3 {
-                return fail(QpStatus::Infeasible);
-            }
-            continue;
-        }
-        let t = -s / zn;
-        x.axpy(t, &z, 1.0);
-        for (uk, rk) in set.u.iter_mut().zip(r.iter()) {
-            *uk -= t * rk;
-        }
-        if !set.add(d, id, t, true) {
-            let s = cons.dot(id, &x) - b;
-            if s.abs() > violation_tol(id, b, &x) * 1e3 {
-                return fail(QpStatus::Infeasible);
-            }
-        }
-        iterations += 1;
-    }
-
-    let cap = iteration_cap(n, m);
-    let mut active = vec![false; cons.count()];
-    for &id in &set.ids {
-        active[id] = true;
-    }
-    let mut is_preferred = vec![false; cons.count()];
-    for &id in preferred {
-        if id < cons.count() {
-            is_preferred[id] = true;
-        }
+    if let Err(status) = dual.add_equalities() {
+        return fail(status);
     }
     loop {
-        if iterations > cap {
-            return finish(&cons, &set, x, iterations, QpStatus::IterationLimit);
+        if dual.iterations > dual.cap {
+            return dual.finish(QpStatus::IterationLimit);
         }
-        // Step 1: choose the most violated constraint (normalized), preferred ones first.
+        let Some(ip) = dual.most_violated() else {
+            return dual.finish(QpStatus::Optimal);
+        };
+        if let Err(status) = dual.add_violated(ip) {
+            return dual.finish(status);
+        }
+    }
+}
+
+/// The dual active-set iteration in progress: the constraints, the factored active set, the
+/// primal iterate `x` and the counters.
+struct DualIteration<'a> {
+    cons: Constraints<'a>,
+    set: ActiveSet,
+    x: DVector<f64>,
+    /// Additions plus drops so far, and their cap ([`iteration_cap`]).
+    iterations: usize,
+    cap: usize,
+    /// Whether each constraint is in the active set.
+    active: Vec<bool>,
+    /// Whether each constraint was in the previous working set.
+    preferred: Vec<bool>,
+}
+
+impl<'a> DualIteration<'a> {
+    /// The start: `J = L⁻ᵀ` (so that `J Jᵀ = H⁻¹`) from the Cholesky factor `L` of `h`, the
+    /// unconstrained minimizer `x = −H⁻¹g` and an empty active set; `None` when `h` is not
+    /// positive definite.
+    fn start(
+        h: &DMatrix<f64>,
+        problem: &'a QpProblem<'a>,
+        preferred: &[ConstraintId],
+    ) -> Option<Self> {
+        let n = problem.g.len();
+        let m = problem.a.nrows();
+        let chol = h.clone().cholesky()?;
+        let cons = Constraints::new(problem);
+        let l_t = chol.l().transpose();
+        let j = l_t.solve_upper_triangular(&DMatrix::identity(n, n))?;
+        let g = DVector::from_column_slice(problem.g);
+        let x = -chol.solve(&g);
+        let mut is_preferred = vec![false; cons.count()];
+        for &id in preferred {
+            if id < cons.count() {
+                is_preferred[id] = true;
+            }
+        }
+        Some(DualIteration {
+            set: ActiveSet {
+                j,
+                r: DMatrix::zeros(n, n),
+                ids: Vec::new(),
+                u: Vec::new(),
+                equality: Vec::new(),
+                r_norm: 1.0,
+            },
+            x,
+            iterations: 0,
+            cap: iteration_cap(n, m),
+            active: vec![false; cons.count()],
+            preferred: is_preferred,
+            cons,
+        })
+    }
+
+    /// The violation below which constraint `id` (right-hand side `b`) counts as met at `x`.
+    fn violation_tol(&self, id: ConstraintId, b: f64) -> f64 {
+        1e-11 * (1.0 + b.abs() + self.cons.normal_norm(id) * self.x.amax())
+    }
+
+    /// Adds the equalities first, each by a full primal step (no drops are possible);
+    /// `Err(Infeasible)` when one dependent on earlier ones is inconsistent with them.
+    fn add_equalities(&mut self) -> Result<(), QpStatus> {
+        for id in 0..self.cons.count() {
+            if !self.cons.is_equality_lower(id) {
+                continue;
+            }
+            let Some(b) = self.cons.rhs(id) else { continue };
+            let d = self.cons.jt_times_normal(id, &self.set.j);
+            let (z, r) = self.set.directions(&d);
+            let s = self.cons.dot(id, &self.x) - b;
+            let zn = self.cons.dot(id, &z);
+            if zn.abs() <= 1e-14 * (1.0 + self.cons.normal_norm(id).powi(2)) {
+                // Dependent on earlier equalities: consistent ones are redundant.
+                if s.abs() > self.violation_tol(id, b) * 1e3 {
+                    return Err(QpStatus::Infeasible);
+                }
+                continue;
+            }
+            let t = -s / zn;
+            self.x.axpy(t, &z, 1.0);
+            self.set.step_multipliers(t, &r);
+            if self.set.add(d, id, t, true) {
+                self.active[id] = true;
+            } else {
+                let s = self.cons.dot(id, &self.x) - b;
+                if s.abs() > self.violation_tol(id, b) * 1e3 {
+                    return Err(QpStatus::Infeasible);
+                }
+            }
+            self.iterations += 1;
+        }
+        Ok(())
+    }
+
+    /// Step 1: the most violated inactive inequality (violation over the norm of its
+    /// normal), constraints of the previous working set first; `None` when all are met.
+    fn most_violated(&self) -> Option<ConstraintId> {
+        let cons = &self.cons;
         let mut best: Option<(ConstraintId, f64, bool)> = None;
         for id in 0..cons.count() {
-            if active[id] || cons.is_equality_lower(id) || cons.is_equality_upper(id) {
+            if self.active[id] || cons.is_equality_lower(id) || cons.is_equality_upper(id) {
                 continue;
             }
             let Some(b) = cons.rhs(id) else { continue };
-            let s = cons.dot(id, &x) - b;
-            if s >= -violation_tol(id, b, &x) {
+            let s = cons.dot(id, &self.x) - b;
+            if s >= -self.violation_tol(id, b) {
                 continue;
             }
             let score = s / cons.normal_norm(id);
-            let pref = is_preferred[id];
+            let pref = self.preferred[id];
             let better = match best {
                 None => true,
                 Some((_, bs, bp)) => (pref && !bp) || (pref == bp && score < bs),
@@ -385,71 +456,66 @@ pub fn solve(h: &DMatrix<f64>, problem: &QpProblem, preferred: &[ConstraintId]) 
                 best = Some((id, score, pref));
             }
         }
-        let Some((ip, _, _)) = best else {
-            return finish(&cons, &set, x, iterations, QpStatus::Optimal);
-        };
-        let b_ip = cons.rhs(ip).unwrap_or(0.0);
+        best.map(|(id, _, _)| id)
+    }
+
+    /// Step 2: moves until the violated constraint `ip` is met, by primal steps or dual steps
+    /// that drop a blocking active constraint, then adds it. `Err(IterationLimit)` past the
+    /// cap, `Err(Infeasible)` when `ip` can be reached neither way.
+    fn add_violated(&mut self, ip: ConstraintId) -> Result<(), QpStatus> {
+        let b_ip = self.cons.rhs(ip).unwrap_or(0.0);
         let mut u_new = 0.0;
-        // Step 2: move until constraint ip is satisfied, dropping blocking ones.
         loop {
-            iterations += 1;
-            if iterations > cap {
-                return finish(&cons, &set, x, iterations, QpStatus::IterationLimit);
+            self.iterations += 1;
+            if self.iterations > self.cap {
+                return Err(QpStatus::IterationLimit);
             }
-            let s = cons.dot(ip, &x) - b_ip;
-            let d = cons.jt_times_normal(ip, &set.j);
-            let (z, r) = set.directions(&d);
-            // Largest dual step keeping the active inequality multipliers non-negative.
-            let mut t1 = f64::INFINITY;
-            let mut drop: Option<usize> = None;
-            for k in 0..set.len() {
-                if !set.equality[k] && r[k] > 0.0 {
-                    let t = set.u[k] / r[k];
-                    if t < t1 {
-                        t1 = t;
-                        drop = Some(k);
-                    }
-                }
-            }
-            let zn = cons.dot(ip, &z);
+            let s = self.cons.dot(ip, &self.x) - b_ip;
+            let d = self.cons.jt_times_normal(ip, &self.set.j);
+            let (z, r) = self.set.directions(&d);
+            let (t1, drop) = self.set.dual_step_limit(&r);
+            let zn = self.cons.dot(ip, &z);
             let znorm = z.norm();
-            let t2 = if znorm > 1e-14 * (1.0 + scale_x(&x)) && zn > 0.0 {
+            let t2 = if znorm > 1e-14 * (1.0 + self.x.amax()) && zn > 0.0 {
                 -s / zn
             } else {
                 f64::INFINITY
             };
             let t = t1.min(t2);
             if !t.is_finite() {
-                return finish(&cons, &set, x, iterations, QpStatus::Infeasible);
+                return Err(QpStatus::Infeasible);
             }
             if t2.is_infinite() {
                 // Dual step only.
-                for (uk, rk) in set.u.iter_mut().zip(r.iter()) {
-                    *uk -= t * rk;
-                }
+                self.set.step_multipliers(t, &r);
                 u_new += t;
-                let pos = drop.expect("finite t1 has a blocking constraint");
-                active[set.ids[pos]] = false;
-                set.remove(pos);
+                self.drop_active(drop.expect("finite t1 has a blocking constraint"));
                 continue;
             }
-            x.axpy(t, &z, 1.0);
-            for (uk, rk) in set.u.iter_mut().zip(r.iter()) {
-                *uk -= t * rk;
-            }
+            self.x.axpy(t, &z, 1.0);
+            self.set.step_multipliers(t, &r);
             u_new += t;
             if t2 <= t1 {
-                if set.add(d, ip, u_new, false) {
-                    active[ip] = true;
+                if self.set.add(d, ip, u_new, false) {
+                    self.active[ip] = true;
                 } else {
                     // Numerically dependent although z ≠ 0: treat as satisfied.
                 }
-                break;
+                return Ok(());
             }
-            let pos = drop.expect("partial step has a blocking constraint");
-            active[set.ids[pos]] = false;
-            set.remove(pos);
+            self.drop_active(drop.expect("partial step has a blocking constraint"));
         }
+    }
+
+    /// Drops the active constraint at position `pos` of the active set.
+    fn drop_active(&mut self, pos: usize) {
+        self.active[self.set.ids[pos]] = false;
+        self.set.remove(pos);
+    }
+
+    /// The result with `status` at the current iterate.
+    fn finish(self, status: QpStatus) -> DenseQpResult {
+        finish(&self.cons, &self.set, self.x, self.iterations, status)
     }
 }
 
