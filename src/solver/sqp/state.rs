@@ -59,6 +59,46 @@ impl AcceptableRun {
     }
 }
 
+/// Feasible iterations in a row and the objective at the start of the current window (see
+/// `Options::progress_window`).
+#[derive(Default)]
+pub(super) struct ProgressWatch {
+    /// Feasible iterations in the current window (0: the last iterate was infeasible).
+    length: usize,
+    /// Objective (the solver's scaling) at the window's first iterate.
+    reference: f64,
+}
+
+impl ProgressWatch {
+    /// Records an iterate with objective `f`; true when `window` feasible iterations in a row
+    /// lowered the objective by no more than `tolerance·max(1, |f₀|)` (never when `window` is 0).
+    pub(super) fn creeping(
+        &mut self,
+        feasible: bool,
+        f: f64,
+        window: usize,
+        tolerance: f64,
+    ) -> bool {
+        if window == 0 || !feasible {
+            self.length = 0;
+            return false;
+        }
+        if self.length == 0 {
+            self.reference = f;
+        }
+        self.length += 1;
+        if self.length <= window {
+            return false;
+        }
+        if self.reference - f <= tolerance * self.reference.abs().max(1.0) {
+            return true;
+        }
+        self.reference = f;
+        self.length = 1;
+        false
+    }
+}
+
 /// One accepted point with everything evaluated there.
 #[derive(Clone)]
 pub(super) struct Point {
@@ -81,6 +121,8 @@ pub(super) struct State {
     pub(super) qp_iterations: usize,
     /// The acceptable-level watch.
     pub(super) acceptable: AcceptableRun,
+    /// The creep watch (`Options::progress_window`).
+    pub(super) progress: ProgressWatch,
     /// Whether the model was reset (or the exact Hessian abandoned) since the last accepted
     /// step: a second failure then ends the solve.
     pub(super) model_reset: bool,
@@ -100,6 +142,7 @@ impl State {
             alpha: 0.0,
             qp_iterations: 0,
             acceptable: AcceptableRun::default(),
+            progress: ProgressWatch::default(),
             model_reset: false,
             retreats_left: retreats,
             heavy_weights: 0,
