@@ -107,7 +107,7 @@ pub fn solve_rounds(
         }
         let settings = RoundSettings {
             merge: solution.max_violation <= MERGE_VIOLATION,
-            ..clean_up.clone()
+            ..*clean_up
         };
         let (structure, forces, report) = topology::clean(
             nlp.structure(),

@@ -304,3 +304,41 @@ impl Sqp<'_> {
         g
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::ProgressWatch;
+
+    /// Feeds objective values (all feasible unless NaN, which stands for an infeasible
+    /// iterate) and returns the index of the first iterate judged creeping.
+    fn first_creep(values: &[f64], window: usize, tolerance: f64) -> Option<usize> {
+        let mut watch = ProgressWatch::default();
+        values
+            .iter()
+            .position(|&f| watch.creeping(!f.is_nan(), f, window, tolerance))
+    }
+
+    #[test]
+    fn a_feasible_window_without_enough_decrease_is_a_creep() {
+        // 100 → 99.95 over 3 iterations: 5e-4 relative, below 1e-3.
+        let creep = [100.0, 99.99, 99.97, 99.95, 99.94];
+        assert_eq!(first_creep(&creep, 3, 1e-3), Some(3));
+        // A decrease of 2e-3 per window keeps going, then a flat stretch ends it.
+        let progress = [100.0, 99.9, 99.85, 99.8, 99.78, 99.76, 99.75, 99.75];
+        assert_eq!(first_creep(&progress, 3, 1e-3), Some(6));
+    }
+
+    #[test]
+    fn infeasible_iterates_and_a_zero_window_never_creep() {
+        let flat = [1.0; 10];
+        assert_eq!(first_creep(&flat, 0, 1e-3), None);
+        // An infeasible iterate restarts the window.
+        let mut interrupted = [1.0; 7];
+        interrupted[2] = f64::NAN;
+        interrupted[5] = f64::NAN;
+        assert_eq!(first_creep(&interrupted, 3, 1e-3), None);
+        // Relative to max(1, |f|): an objective near zero needs an absolute decrease of 1e-3.
+        assert_eq!(first_creep(&[1e-6, 0.0, -5e-4, -9e-4], 3, 1e-3), Some(3));
+        assert_eq!(first_creep(&[1e-6, 0.0, -5e-4, -2e-3], 3, 1e-3), None);
+    }
+}
