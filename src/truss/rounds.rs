@@ -51,7 +51,8 @@ pub struct Rounds {
     pub reports: Vec<RoundReport>,
     /// Rounds solved.
     pub rounds_run: usize,
-    /// The round whose design is reported (see [`reported_round`]).
+    /// The round whose design is reported: the last one, unless it did not end Optimal while an
+    /// earlier one did (then the last such round).
     pub result_round: usize,
     /// SQP iterations over all rounds.
     pub iterations: usize,
