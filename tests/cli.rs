@@ -637,28 +637,17 @@ fn an_output_folder_that_cannot_be_written_exits_1() {
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
+/// Runs the binary with `args` from the crate root, sends it SIGINT (what Ctrl-C sends) after
+/// `delay`, and returns its output and how long it took to exit after the signal.
 #[cfg(unix)]
-#[test]
-fn ctrl_c_writes_the_best_point_so_far_and_exits_130() {
-    // Eight pogo trials take a minute and more; SIGINT (what Ctrl-C sends) stops them at their
-    // next poll.
-    let scratch = Scratch::new("interrupt");
-    let out_dir = scratch.0.join("run");
+fn interrupted_after(args: &[&str], delay: std::time::Duration) -> (Output, std::time::Duration) {
     let child = Command::new(env!("CARGO_BIN_EXE_optimize"))
-        .args([
-            "gait",
-            "problems/gait/pogo_crouch.toml",
-            "-q",
-            "--threads",
-            "1",
-            "-o",
-            out_dir.to_str().unwrap(),
-        ])
+        .args(args)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .stderr(std::process::Stdio::piped())
         .spawn()
         .expect("the binary runs");
-    std::thread::sleep(std::time::Duration::from_millis(1500));
+    std::thread::sleep(delay);
     let kill = Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status()
@@ -666,16 +655,58 @@ fn ctrl_c_writes_the_best_point_so_far_and_exits_130() {
     assert!(kill.success());
     let started = std::time::Instant::now();
     let out = child.wait_with_output().unwrap();
+    (out, started.elapsed())
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_writes_the_best_point_so_far_and_exits_130() {
+    // Eight pogo trials take a minute and more; SIGINT stops them at their next poll.
+    let scratch = Scratch::new("interrupt");
+    let out_dir = scratch.0.join("run");
+    let args = [
+        "gait",
+        "problems/gait/pogo_crouch.toml",
+        "-q",
+        "--threads",
+        "1",
+        "-o",
+    ];
+    let args = [&args[..], &[out_dir.to_str().unwrap()]].concat();
+    let (out, took) = interrupted_after(&args, std::time::Duration::from_millis(1500));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(130), "{stderr}");
-    assert!(
-        started.elapsed().as_secs_f64() < 10.0,
-        "stopped after {:?}",
-        started.elapsed()
-    );
+    assert!(took.as_secs_f64() < 10.0, "stopped after {took:?}");
     let summary = read_result(&out_dir);
     assert_eq!(summary["status"], "Interrupted", "{summary}");
     assert!(out_dir.join("model.glb").is_file());
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_inside_a_long_rollout_of_a_check_exits_130_at_once() {
+    // Tasks at 25 s with dt = 5e-4 s: 50,000 RK4 steps per rollout, and `--check` takes half a
+    // minute; SIGINT after 1.5 s lands inside a rollout, which polls every few steps.
+    let scratch = Scratch::new("interrupt-rollout");
+    let out_dir = scratch.0.join("run");
+    let mut args = vec!["gait", "problems/gait/pogo_crouch.toml", "--check", "-q"];
+    args.extend(["--threads", "1", "--set", "controls.horizon=25"]);
+    let tasks = [
+        "task.0.time=25",
+        "task.1.time=25",
+        "task.2.time=25",
+        "task.3.time=25",
+    ];
+    for task in &tasks {
+        args.extend(["--set", task]);
+    }
+    args.extend(["-o", out_dir.to_str().unwrap()]);
+    let (out, took) = interrupted_after(&args, std::time::Duration::from_millis(1500));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(took.as_secs_f64() < 3.0, "stopped after {took:?}");
+    let summary = read_result(&out_dir.join("check"));
+    assert_eq!(summary["status"], "Interrupted", "{summary}");
 }
 
 #[test]

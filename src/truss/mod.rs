@@ -45,7 +45,7 @@ use crate::application::{Application, CheckCase};
 use crate::error::{Error, InputError};
 use crate::outcome::{Artifact, Headline, Kind, Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::CheckOptions;
-use crate::solver::{Evaluations, Nlp, Solution};
+use crate::solver::{Evaluations, Interrupt, Nlp, Solution};
 use crate::spec::{Key, Source};
 
 use build::Model;
@@ -143,12 +143,13 @@ impl Problem {
 
     /// The NLP the first solve starts from. With the `layout` start: the layout LP's forces on
     /// the ground structure without its idle beams ([`start::layout_start`]); should that LP have
-    /// no solution, the random start on the whole ground structure. Also returns a description
-    /// of the start for result.json.
+    /// no solution or be interrupted (`interrupt` raised), the random start on the whole ground
+    /// structure. Also returns a description of the start for result.json.
     pub fn staged_nlp(
         &self,
         model: &Model,
         seed: u64,
+        interrupt: &Interrupt,
     ) -> Result<(TrussNlp, serde_json::Value, Option<LpReport>), InputError> {
         if self.spec.start_forces != StartForces::Layout {
             let method = match self.spec.start_forces {
@@ -157,7 +158,8 @@ impl Problem {
             };
             return Ok((self.nlp(model, seed)?, json!({ "method": method }), None));
         }
-        let layout = start::layout_start(&model.structure, &model.settings, model.full.as_ref())
+        let full = model.full.as_ref();
+        let layout = start::layout_start(&model.structure, &model.settings, full, interrupt)
             .map_err(|e| e.to_string())
             .and_then(|layout| {
                 let report = json!({
@@ -262,7 +264,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             json!({ "method": "result", "file": previous.path }),
             None,
         ),
-        None => problem.staged_nlp(&model, seed)?,
+        None => problem.staged_nlp(&model, seed, &opts.interrupt)?,
     };
     let start = quality::Point::start(&nlp)
         .ok()
