@@ -260,6 +260,72 @@ fn cmc_problem_file_starts_from_a_shipped_glb() {
     );
 }
 
+/// Every file under `dir` (recursively) by its path relative to `dir`, with its bytes.
+fn snapshot(dir: &Path) -> std::collections::BTreeMap<PathBuf, Vec<u8>> {
+    let mut files = std::collections::BTreeMap::new();
+    for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            for (inner, bytes) in snapshot(&path) {
+                files.insert(Path::new(&entry.file_name()).join(inner), bytes);
+            }
+        } else {
+            files.insert(entry.file_name().into(), std::fs::read(&path).unwrap());
+        }
+    }
+    files
+}
+
+#[test]
+fn a_write_failing_at_any_step_over_an_older_run_leaves_that_run_whole() {
+    let scratch = Scratch::new("write-failure");
+    let out_dir = scratch.0.join("run");
+    let out = out_dir.to_str().unwrap();
+    solved("truss", SHIPPED, &out_dir, &[]);
+    let old = snapshot(&out_dir);
+    // A different run (stopped after 2 iterations) fails at each of its file writes in turn,
+    // then at the move of its complete folder into place.
+    let args = [
+        "truss",
+        SHIPPED,
+        "-q",
+        "--threads",
+        "1",
+        "--max-iter",
+        "2",
+        "-o",
+        out,
+    ];
+    for step in 0..=old.len() {
+        let failed = Command::new(env!("CARGO_BIN_EXE_optimize"))
+            .args(args)
+            .env("OPTIMIZE_FAIL_WRITE_AFTER", step.to_string())
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&failed.stderr);
+        assert_eq!(failed.status.code(), Some(1), "step {step}: {stderr}");
+        assert!(stderr.contains("injected"), "step {step}: {stderr}");
+        assert!(
+            snapshot(&out_dir) == old,
+            "step {step}: the older run changed"
+        );
+        let leftovers: Vec<_> = std::fs::read_dir(&scratch.0).unwrap().flatten().collect();
+        assert_eq!(leftovers.len(), 1, "step {step}: temporaries left");
+    }
+    // Without the failure the new run replaces the old one as a whole.
+    let new = optimize(&args);
+    assert_eq!(new.status.code(), Some(3));
+    let written = snapshot(&out_dir);
+    assert_eq!(
+        written.keys().collect::<Vec<_>>(),
+        old.keys().collect::<Vec<_>>()
+    );
+    assert_eq!(read_result(&out_dir)["status"], "IterationLimit");
+    let summary = Path::new("result.json");
+    assert_ne!(written[summary], old[summary]);
+}
+
 #[test]
 fn check_after_a_solve_leaves_the_solved_run_intact() {
     let scratch = Scratch::new("check-after-solve");
