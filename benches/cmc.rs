@@ -17,11 +17,7 @@ fn double_bubble_nlp(levels: usize) -> CmcNlp {
     let volumes = shape
         .volumes
         .into_iter()
-        .map(|(name, region, target)| VolumeConstraint {
-            name,
-            region,
-            target,
-        })
+        .map(|(name, region, target)| VolumeConstraint::with_target(name, region, target))
         .collect();
     CmcNlp::new(shape.mesh, volumes, Vec::new(), 0.01).expect("valid problem")
 }

@@ -237,11 +237,10 @@ fn sparse_qp_solves_the_first_subproblem_at_n_5000() {
             .map(|(r, c, v)| if r == c { *v } else { 2.0 * v })
             .sum();
     assert!(ones_curvature < 0.0);
-    assert_eq!(info.convexification, 0.0, "{info:?}");
-    let shift = info.convexification;
+    assert!(info.convexification.is_zero(), "{info:?}");
     // Stationarity of the convexified QP, feasibility and complementarity.
     let mut residual: Vec<f64> = (0..n)
-        .map(|j| qp.g[j] + shift * sol.d[j] + sol.z[j])
+        .map(|j| qp.g[j] + info.convexification.added(j) * sol.d[j] + sol.z[j])
         .collect();
     let (offsets, rows, values) = qp.h.csc_data();
     for c in 0..n {
@@ -319,7 +318,7 @@ fn inertia_decision_on_the_first_subproblem_agrees_with_a_dense_reduced_hessian(
         assert_eq!(sol.status, QpStatus::Optimal);
         assert_eq!(
             smallest > 0.0,
-            info.convexification == 0.0,
+            info.convexification.is_zero(),
             "n={n}: λmin {smallest}, {info:?}"
         );
     }

@@ -102,7 +102,12 @@ pub fn datafile(
                 let _ = write!(text, " {}", if sign < 0.0 { -id } else { id });
             }
         }
-        let _ = writeln!(text, " volume {:.17e}", v.target * scale.powi(3));
+        match v.pressure {
+            // −p·V: p scales as 1/length.
+            Some(p) => writeln!(text, " pressure {:.17e}", p / scale),
+            None => writeln!(text, " volume {:.17e}", v.target * scale.powi(3)),
+        }
+        .ok();
     }
     Ok(text)
 }
@@ -135,10 +140,8 @@ mod tests {
         shape
             .volumes
             .iter()
-            .map(|(name, region, target)| VolumeConstraint {
-                name: name.clone(),
-                region: region.clone(),
-                target: *target,
+            .map(|(name, region, target)| {
+                VolumeConstraint::with_target(name.clone(), region.clone(), *target)
             })
             .collect()
     }

@@ -41,8 +41,11 @@ pub struct VolumeFigures {
     pub name: String,
     /// Enclosed volume, m³.
     pub volume: f64,
-    /// Required volume, m³.
-    pub target: f64,
+    /// Required volume, m³ (`null` for a body at a prescribed pressure).
+    pub target: Option<f64>,
+    /// Prescribed pressure, 1/m (absent when the volume is held).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pressure: Option<f64>,
 }
 
 /// Triangle-quality figures.
@@ -122,7 +125,8 @@ pub fn figures(mesh: &Mesh, curvatures: &[Option<f64>], volumes: &[VolumeConstra
             .map(|v| VolumeFigures {
                 name: v.name.clone(),
                 volume: v.region.volume(mesh),
-                target: v.target,
+                target: v.pressure.is_none().then_some(v.target),
+                pressure: v.pressure,
             })
             .collect(),
         quality: quality(mesh),

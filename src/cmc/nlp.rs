@@ -47,15 +47,32 @@ use super::volume::{Region, chord, cone_volume_hessian};
 use crate::solver::log::ObjectiveUnit;
 use crate::solver::{Dims, EvalError, Nlp, Options, Solution};
 
-/// A volume constraint: the region must enclose `target` m³.
+/// A body: the region must enclose `target` m³, or, with a prescribed `pressure`, its volume
+/// is free and the energy gets the term `−p·V` (Surface Evolver's `pressure`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct VolumeConstraint {
     /// Name used in reports.
     pub name: String,
     /// The region.
     pub region: Region,
-    /// Required volume, m³.
+    /// Required volume, m³ (ignored when `pressure` is given).
     pub target: f64,
+    /// Prescribed pressure p, 1/m (pressure over surface tension: J/m³ per N/m): no volume row,
+    /// the objective is `A − p·V` and a surface bounding the region has `2H = p` at the
+    /// solution (a spherical cap of radius 2/p).
+    pub pressure: Option<f64>,
+}
+
+impl VolumeConstraint {
+    /// A body that must enclose `target` m³ (no prescribed pressure).
+    pub fn with_target(name: String, region: Region, target: f64) -> VolumeConstraint {
+        VolumeConstraint {
+            name,
+            region,
+            target,
+            pressure: None,
+        }
+    }
 }
 
 /// A chord-length constraint: vertices `a` and `b` stay `length` m apart.
@@ -280,7 +297,11 @@ impl CmcNlp {
             .iter()
             .map(|&(vertex, surface)| Row::Curvature { vertex, surface })
             .collect();
-        rows.extend((0..volumes.len()).map(Row::Volume));
+        rows.extend(
+            (0..volumes.len())
+                .filter(|&k| volumes[k].pressure.is_none())
+                .map(Row::Volume),
+        );
         rows.extend((0..chords.len()).map(Row::Chord));
         for (v, col) in column.iter().enumerate() {
             if let (Some(g), Some(_)) = (mesh.flags()[v].guide, col) {
@@ -468,6 +489,20 @@ impl CmcNlp {
             }
         }
         (value, grad)
+    }
+
+    /// The bodies with a prescribed pressure, with that pressure (1/m).
+    fn pressure_bodies(&self) -> impl Iterator<Item = (&VolumeConstraint, f64)> {
+        self.volumes
+            .iter()
+            .filter_map(|v| v.pressure.map(|p| (v, p)))
+    }
+
+    /// `Σ p·V` over the bodies with a prescribed pressure (m², the energy's pressure term).
+    fn pressure_work(&self, mesh: &Mesh) -> f64 {
+        self.pressure_bodies()
+            .map(|(body, p)| p * body.region.volume(mesh))
+            .sum()
     }
 
     fn build_pattern(&self) -> Vec<(usize, usize)> {
@@ -668,7 +703,7 @@ impl Nlp for CmcNlp {
         let l = self.scale;
         let reg = self.regularization(x);
         self.with_mesh(x, |mesh| {
-            *f = total_area(mesh) / (l * l) + reg;
+            *f = (total_area(mesh) - self.pressure_work(mesh)) / (l * l) + reg;
             for (r, row) in self.rows.iter().enumerate() {
                 c[r] = match *row {
                     Row::Curvature { vertex, surface } => {
@@ -725,6 +760,13 @@ impl Nlp for CmcNlp {
             for (v, g) in total_area_gradient(mesh).into_iter().enumerate() {
                 if let Some(c) = self.column[v] {
                     add3(grad, c, g / l);
+                }
+            }
+            for (body, p) in self.pressure_bodies() {
+                for (v, g) in body.region.volume_gradient(mesh) {
+                    if let Some(c) = self.column[v] {
+                        add3(grad, c, -p * g / l);
+                    }
                 }
             }
             let mut k = 0;
@@ -841,34 +883,30 @@ impl Nlp for CmcNlp {
                     }
                 }
             }
+            // ∇²V / L in scaled variables, times `factor`.
+            let add_volume = |values: &mut [f64], region: &Region, factor: f64| {
+                for &(s, sign) in &region.boundary {
+                    for t in mesh.surface_triangles(s) {
+                        let tri = mesh.triangles()[t];
+                        let blocks = cone_volume_hessian(&mesh.corners(t), &region.reference);
+                        for k in 0..3 {
+                            for m in 0..3 {
+                                h.add(values, column, tri[k], tri[m], &blocks[k][m], factor * sign);
+                            }
+                        }
+                    }
+                }
+            };
+            for (body, p) in self.pressure_bodies() {
+                add_volume(values, &body.region, -sigma * p);
+            }
             for (row, &lam) in self.rows.iter().zip(lambda) {
                 if lam == 0.0 {
                     continue;
                 }
                 match *row {
                     Row::Curvature { .. } | Row::Rigid(_) => {}
-                    Row::Volume(i) => {
-                        let region = &self.volumes[i].region;
-                        for &(s, sign) in &region.boundary {
-                            for t in mesh.surface_triangles(s) {
-                                let tri = mesh.triangles()[t];
-                                let blocks =
-                                    cone_volume_hessian(&mesh.corners(t), &region.reference);
-                                for k in 0..3 {
-                                    for m in 0..3 {
-                                        h.add(
-                                            values,
-                                            column,
-                                            tri[k],
-                                            tri[m],
-                                            &blocks[k][m],
-                                            lam * sign / l,
-                                        );
-                                    }
-                                }
-                            }
-                        }
-                    }
+                    Row::Volume(i) => add_volume(values, &self.volumes[i].region, lam / l),
                     Row::Chord(i) => {
                         let ch = self.chords[i];
                         let (len, u) = chord(mesh, ch.a, ch.b);
@@ -946,11 +984,7 @@ mod tests {
         let volumes = shape
             .volumes
             .into_iter()
-            .map(|(name, region, target)| VolumeConstraint {
-                name,
-                region,
-                target,
-            })
+            .map(|(name, region, target)| VolumeConstraint::with_target(name, region, target))
             .collect();
         CmcNlp::with_formulation(shape.mesh, volumes, Vec::new(), weight, formulation).unwrap()
     }
@@ -974,11 +1008,7 @@ mod tests {
         let target = region.volume(&mesh);
         let nlp = CmcNlp::new(
             mesh,
-            vec![VolumeConstraint {
-                name: "ball".into(),
-                region,
-                target,
-            }],
+            vec![VolumeConstraint::with_target("ball".into(), region, target)],
             Vec::new(),
             0.01,
         )
@@ -1072,6 +1102,20 @@ mod tests {
             assert_hessian(&area_nlp_of(shape.clone(), 0.05), what);
             assert_hessian(&nlp_of(shape, 0.05), what);
         }
+        // The smaller bubble at a prescribed pressure (1/m): the −p·V term of the objective.
+        let shape = generators::double_bubble([1e-6, 2e-6], 1).unwrap();
+        let mut volumes: Vec<VolumeConstraint> = shape
+            .volumes
+            .into_iter()
+            .map(|(name, region, target)| VolumeConstraint::with_target(name, region, target))
+            .collect();
+        volumes[0].pressure = Some(300.0);
+        let nlp =
+            CmcNlp::with_formulation(shape.mesh, volumes, Vec::new(), 0.05, Formulation::Area)
+                .unwrap();
+        assert_eq!(nlp.dims().m, 1 + 6, "one volume row and the rigid gauge");
+        assert_derivatives(&nlp, "double bubble at a pressure");
+        assert_hessian(&nlp, "double bubble at a pressure");
     }
 
     /// Diagnostic: eigenvalues of the Lagrangian Hessian reduced to the null space of the

@@ -20,6 +20,9 @@
 //! a = 0
 //! b = 12
 //! length = 0.5
+//! [[pressure]]                  # optional: a body at a prescribed pressure, no volume row
+//! body = "dome"                 # a volume of the shape, by name
+//! value = 2.0                   # pressure / surface tension, 1/m (a cap of radius 2/value)
 //! [solver]                      # the shared solver table
 //! ```
 //! Resolution: icosphere subdivision level (sphere), 12·resolution segments per ring (catenoid),
@@ -74,6 +77,9 @@ pub struct CmcFile {
     /// Chord-length constraints.
     #[serde(default)]
     pub chord: Vec<ChordSpec>,
+    /// Bodies at a prescribed pressure.
+    #[serde(default)]
+    pub pressure: Vec<PressureSpec>,
     /// Solver options.
     #[serde(default)]
     pub solver: Options,
@@ -149,6 +155,17 @@ impl Default for RefineSpec {
             expected_order: default_order(),
         }
     }
+}
+
+/// `[[pressure]]`: the shape's volume named `body` has the prescribed pressure `value`
+/// (pressure over surface tension, 1/m) instead of its volume (Surface Evolver's `pressure`).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PressureSpec {
+    /// Name of a volume of the shape (a cell, bubble or `[[shape.volume]]`).
+    pub body: String,
+    /// Pressure / surface tension, 1/m.
+    pub value: f64,
 }
 
 /// `[[chord]]`: vertices `a` and `b` (0-based indices of the built mesh) stay `length` m apart.
@@ -506,6 +523,14 @@ impl CmcSpec {
         for (i, c) in f.chord.iter().enumerate() {
             src.positive(&["chord".into(), i.into(), "length".into()], c.length)?;
         }
+        for (i, p) in f.pressure.iter().enumerate() {
+            if !p.value.is_finite() {
+                return Err(self.err(
+                    &["pressure".into(), i.into(), "value".into()],
+                    format!("a pressure must be a finite number (1/m), got {}", p.value),
+                ));
+            }
+        }
         Ok(())
     }
 
@@ -811,7 +836,37 @@ impl CmcSpec {
                 length: c.length,
             });
         }
+        self.pressures(&shape)?;
         Ok((shape, chords))
+    }
+
+    /// The prescribed pressure (1/m) of each of `shape`'s volumes, in their order (`None`: the
+    /// volume is held at its target); a `[[pressure]]` naming no volume, or one named twice, is
+    /// an error at its `body`.
+    pub fn pressures(&self, shape: &Shape) -> Result<Vec<Option<f64>>, InputError> {
+        let mut pressures = vec![None; shape.volumes.len()];
+        for (i, p) in self.file.pressure.iter().enumerate() {
+            let at = ["pressure".into(), i.into(), "body".into()];
+            let Some(k) = shape.volumes.iter().position(|(name, ..)| *name == p.body) else {
+                let names: Vec<&str> = shape.volumes.iter().map(|(n, ..)| n.as_str()).collect();
+                return Err(self.err(
+                    &at,
+                    format!(
+                        "no volume `{}` in this shape (volumes: {})",
+                        p.body,
+                        if names.is_empty() {
+                            "none".to_string()
+                        } else {
+                            names.join(", ")
+                        }
+                    ),
+                ));
+            };
+            if pressures[k].replace(p.value).is_some() {
+                return Err(self.err(&at, format!("volume `{}` has two pressures", p.body)));
+            }
+        }
+        Ok(pressures)
     }
 
     /// Reads an OBJ (`gltf` false) or glTF start mesh and resolves its volume regions.

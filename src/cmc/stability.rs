@@ -12,7 +12,8 @@
 //! discrete one) and is left out. Each degree of freedom is weighted by the vertex's mixed
 //! area `M` (the generalized problem `K u = λ M u`), so the eigenvalues approximate those of
 //! the Jacobi operator `−Δ − |II|²` in 1/m², independent of the resolution. The motion is
-//! further restricted to keep every volume (the rows `∇V_i`) and, for a mesh with no fixed
+//! further restricted to keep every volume held at a target (the rows `∇V_i`; a body at a
+//! prescribed pressure keeps its `p_i` and restricts nothing) and, for a mesh with no fixed
 //! vertex, to be orthogonal to the normal parts of the six rigid motions (which cost nothing).
 //!
 //! A film is stable when the smallest eigenvalue is positive; a negative one is a direction of
@@ -67,17 +68,19 @@ pub struct Stability {
     pub negative: usize,
     /// "stable", "saddle" or "not analysed: …".
     pub verdict: String,
-    /// Pressures `p_i` of the volume constraints, 1/m (J/m³ per unit surface tension).
+    /// Pressures `p_i` of the bodies, 1/m (J/m³ per unit surface tension): prescribed, or
+    /// fitted for the held volumes.
     pub pressures: Vec<f64>,
 }
 
-/// Analyses `mesh` (a solution) with its volume constraints `regions`.
-pub fn analyse(mesh: &Mesh, regions: &[&Region]) -> Stability {
-    analyse_with(mesh, regions, DENSE_LIMIT)
+/// Analyses `mesh` (a solution) with its bodies: each region with its prescribed pressure
+/// (1/m), or `None` when its volume is held.
+pub fn analyse(mesh: &Mesh, bodies: &[(&Region, Option<f64>)]) -> Stability {
+    analyse_with(mesh, bodies, DENSE_LIMIT)
 }
 
 /// [`analyse`] with the dense eigendecomposition up to `dense_limit` degrees of freedom.
-fn analyse_with(mesh: &Mesh, regions: &[&Region], dense_limit: usize) -> Stability {
+fn analyse_with(mesh: &Mesh, bodies: &[(&Region, Option<f64>)], dense_limit: usize) -> Stability {
     let dofs = normal_dofs(mesh);
     let k: usize = dofs.iter().map(|b| b.len()).sum();
     let mut result = Stability {
@@ -114,14 +117,24 @@ fn analyse_with(mesh: &Mesh, regions: &[&Region], dense_limit: usize) -> Stabili
         }
         row
     };
-    // Pressures: least squares of ∇A ≈ Σ p_i ∇V_i over the degrees of freedom.
+    // Pressures: the prescribed ones, and for the held volumes the least squares of
+    // ∇A − Σ_prescribed p_j ∇V_j ≈ Σ p_i ∇V_i over the degrees of freedom.
     let area_grad: Vec<(usize, Point)> =
         total_area_gradient(mesh).into_iter().enumerate().collect();
-    let volume_rows: Vec<DVector<f64>> = regions
+    let mut free_energy_grad = project(&area_grad);
+    let mut volume_rows: Vec<DVector<f64>> = Vec::new();
+    for (region, pressure) in bodies {
+        let row = project(&region.volume_gradient(mesh));
+        match pressure {
+            Some(p) => free_energy_grad -= row * *p,
+            None => volume_rows.push(row),
+        }
+    }
+    let mut fitted = least_squares(&volume_rows, &free_energy_grad).into_iter();
+    let pressures: Vec<f64> = bodies
         .iter()
-        .map(|r| project(&r.volume_gradient(mesh)))
+        .map(|(_, pressure)| pressure.or_else(|| fitted.next()).unwrap_or(0.0))
         .collect();
-    let pressures = least_squares(&volume_rows, &project(&area_grad));
     // K = Bᵀ (∇²A − Σ p_i ∇²V_i) B, mass-weighted, as (row, column, value) entries (both
     // triangles; repeated positions add up).
     let mut entries: Vec<(usize, usize, f64)> = Vec::new();
@@ -143,7 +156,7 @@ fn analyse_with(mesh: &Mesh, regions: &[&Region], dense_limit: usize) -> Stabili
     for (t, &tri) in mesh.triangles().iter().enumerate() {
         add_blocks(tri, &triangle_area_hessian(&mesh.corners(t)), 1.0);
     }
-    for (region, p) in regions.iter().zip(&pressures) {
+    for ((region, _), p) in bodies.iter().zip(&pressures) {
         for &(s, sign) in &region.boundary {
             for t in mesh.surface_triangles(s) {
                 let h = cone_volume_hessian(&mesh.corners(t), &region.reference);
@@ -368,7 +381,7 @@ mod tests {
             boundary: vec![(0, 1.0)],
             reference: Point::zeros(),
         };
-        let s = analyse(&mesh, &[&region]);
+        let s = analyse(&mesh, &[(&region, None)]);
         assert_eq!(s.negative, 0, "{s:?}");
         // The Jacobi operator −Δ − 2/R² with l = 0 (volume) and l = 1 (translations)
         // excluded: smallest eigenvalue (6 − 2)/R² = 1 /m², five-fold (l = 2).
@@ -378,6 +391,23 @@ mod tests {
         }
         assert!(s.smallest_eigenvalues[5] > 2.0, "{s:?}");
         assert_eq!(s.degrees_of_freedom, mesh.vertex_count());
+    }
+
+    #[test]
+    fn a_sphere_at_a_prescribed_pressure_is_a_saddle() {
+        // Radius 2 at p = 2/R = 1/m with the volume free: the l = 0 mode (uniform swelling)
+        // is allowed, at −2/R² = −0.5 /m² (a free bubble at fixed pressure is unstable).
+        let mesh = crate::cmc::generators::icosphere(2.0, 2, "skin").unwrap();
+        let region = Region {
+            boundary: vec![(0, 1.0)],
+            reference: Point::zeros(),
+        };
+        let s = analyse(&mesh, &[(&region, Some(1.0))]);
+        assert_eq!(s.pressures, vec![1.0]);
+        assert_eq!(s.negative, 1, "{s:?}");
+        assert!(s.verdict.starts_with("saddle"), "{s:?}");
+        assert!((s.smallest_eigenvalues[0] + 0.5).abs() < 0.05, "{s:?}");
+        assert!((s.smallest_eigenvalues[1] - 1.0).abs() < 0.05, "{s:?}");
     }
 
     #[test]
@@ -391,7 +421,7 @@ mod tests {
             boundary: vec![(0, 1.0)],
             reference: Point::zeros(),
         };
-        for (mesh, regions) in [(&catenoid, vec![]), (&sphere, vec![&region])] {
+        for (mesh, regions) in [(&catenoid, vec![]), (&sphere, vec![(&region, None)])] {
             let dense = analyse_with(mesh, &regions, usize::MAX);
             let sliced = analyse_with(mesh, &regions, 0);
             assert_eq!(dense.negative, sliced.negative, "{dense:?} {sliced:?}");

@@ -169,14 +169,14 @@ fn sphere_area_converges_at_second_order() {
         .map(|level| {
             let radius = (3.0 / (4.0 * std::f64::consts::PI)).cbrt();
             let mesh = icosphere(radius, level, "bubble").unwrap();
-            let bubble = VolumeConstraint {
-                name: "bubble".into(),
-                region: Region {
+            let bubble = VolumeConstraint::with_target(
+                "bubble".into(),
+                Region {
                     boundary: vec![(0, 1.0)],
                     reference: Point::zeros(),
                 },
-                target: 1.0,
-            };
+                1.0,
+            );
             let nlp = CmcNlp::new(mesh, vec![bubble.clone()], Vec::new(), 0.01).unwrap();
             let options = Options {
                 verbosity: 0,

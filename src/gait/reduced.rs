@@ -774,4 +774,84 @@ mod tests {
             out.summary.max_violation
         );
     }
+
+    /// The Luxo NLP with one Jacobian value scaled by `1 + error` (pattern position `slot`).
+    struct OneWrongEntry<'a> {
+        nlp: Reduced<'a>,
+        slot: usize,
+        error: f64,
+    }
+
+    impl Nlp for OneWrongEntry<'_> {
+        fn dims(&self) -> Dims {
+            self.nlp.dims()
+        }
+        fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
+            self.nlp.bounds(xl, xu, cl, cu)
+        }
+        fn start(&self, x: &mut [f64]) {
+            self.nlp.start(x)
+        }
+        fn jacobian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
+            self.nlp.jacobian_structure(rows, cols)
+        }
+        fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
+            self.nlp.eval(x, f, c)
+        }
+        fn eval_derivatives(
+            &self,
+            x: &[f64],
+            grad: &mut [f64],
+            jac: &mut [f64],
+        ) -> Result<(), EvalError> {
+            self.nlp.eval_derivatives(x, grad, jac)?;
+            jac[self.slot] *= 1.0 + self.error;
+            Ok(())
+        }
+    }
+
+    /// `--check`'s comparison passes on the exact Jacobian of a short Luxo leap at random forces
+    /// and fails, naming the entry, when one entry is off by 1e-4 relative (ten times the
+    /// tolerance).
+    #[test]
+    fn check_catches_one_wrong_jacobian_entry() {
+        let p = shortened("luxo_leap", 0.2);
+        let nlp = Reduced::new(&p);
+        let d = nlp.dims();
+        let mut x = vec![0.0; d.n];
+        nlp.start(&mut x);
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        for (a, v) in x.iter_mut().take(nlp.parameters()).enumerate() {
+            *v = rng.random_range(-3.0..3.0) * if a % 2 == 0 { 1.0 } else { 0.2 };
+        }
+        let (mut grad, mut jac) = (vec![0.0; d.n], vec![0.0; d.jac_nnz]);
+        nlp.eval_derivatives(&x, &mut grad, &mut jac).unwrap();
+        // The largest entry, so the relative error is 1e-4 whatever its size.
+        let slot = (0..d.jac_nnz)
+            .max_by(|&a, &b| jac[a].abs().total_cmp(&jac[b].abs()))
+            .unwrap();
+        let options = crate::gait::check_options();
+        for error in [0.0, 1e-4] {
+            let broken = OneWrongEntry {
+                nlp: nlp.clone(),
+                slot,
+                error,
+            };
+            let report =
+                crate::solver::derivatives::check_derivatives(&broken, &x, &options).unwrap();
+            if error == 0.0 {
+                assert!(report.passed(), "{report}");
+            } else {
+                assert!(!report.passed(), "{report}");
+                let (rows, cols) = (&mut vec![0; d.jac_nnz], &mut vec![0; d.jac_nnz]);
+                nlp.jacobian_structure(rows, cols);
+                let worst = &report.worst_per_function[0];
+                assert_eq!(
+                    (worst.row, worst.col),
+                    (Some(rows[slot]), cols[slot]),
+                    "{report}"
+                );
+            }
+        }
+    }
 }

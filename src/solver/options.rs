@@ -118,6 +118,13 @@ settings! {
     constraint_tolerance: f64 = 1e-6, valid: open_unit_interval;
     /// Major-iteration limit.
     max_iterations: usize = 1000;
+    /// Feasible iterations in a window over which the objective must fall by more than
+    /// `progress_tolerance` (relative to max(1, |f|)), or the solve ends `SlowProgress`; 0 (the
+    /// default) turns the test off. Meant for a solve that a caller follows with a change of
+    /// model (truss clean-up rounds), not for a final answer.
+    progress_window: usize = 0;
+    /// See `progress_window`; in (0, 1).
+    progress_tolerance: f64 = 1e-3, valid: open_unit_interval;
     /// Wall-clock limit for one solve in seconds (positive); `None`: unlimited.
     max_time: Option<f64> = None, valid: positive_seconds;
     /// Second-order information (see [`HessianMode`]).

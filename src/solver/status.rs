@@ -19,6 +19,9 @@ pub enum Status {
     TimeLimit,
     /// No further progress was possible before meeting the tolerances.
     Stalled,
+    /// Feasible, but the objective fell by less than `progress_tolerance` (relative) over the
+    /// last `progress_window` iterations (a creep; off by default).
+    SlowProgress,
     /// The problem's functions failed and backing off did not help.
     EvaluationError,
     /// Stopped from outside (Ctrl-C); the best point so far is returned.
@@ -49,6 +52,9 @@ impl Status {
             }
             Status::Stalled => {
                 "Stalled: no step makes progress, though the tolerances are not met."
+            }
+            Status::SlowProgress => {
+                "Slow progress: feasible, but the objective has nearly stopped falling; the last point is returned."
             }
             Status::EvaluationError => {
                 "Evaluation error: the problem's functions failed and backing off did not help."

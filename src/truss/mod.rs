@@ -22,6 +22,7 @@ pub mod nlp;
 pub mod plastic;
 pub mod quality;
 pub mod restart;
+pub mod rounds;
 pub mod spec;
 pub mod start;
 pub mod topology;
@@ -45,7 +46,7 @@ use crate::application::{Application, CheckCase};
 use crate::error::{Error, InputError};
 use crate::outcome::{Artifact, Headline, Kind, Outcome, ResultSummary, RunOptions};
 use crate::solver::derivatives::CheckOptions;
-use crate::solver::{Evaluations, Interrupt, Nlp, Solution};
+use crate::solver::{Interrupt, Nlp};
 use crate::spec::{Key, Source};
 
 use build::Model;
@@ -258,7 +259,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let started = Instant::now();
     let model = problem.model_for(seed)?;
     let mut timings = BTreeMap::new();
-    let (mut nlp, start_report, lp) = match &opts.start {
+    let (nlp, start_report, lp) = match &opts.start {
         Some(previous) => (
             restart::nlp_from(previous, &model)?,
             json!({ "method": "result", "file": previous.path }),
@@ -270,78 +271,20 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         .ok()
         .map(|point| (nlp.clone(), point));
     timings.insert("build".to_string(), started.elapsed().as_secs_f64());
+    let initial = (model.structure.joints.len(), model.structure.beams.len());
     let options = opts.solver_options(&problem.spec.solver);
     let count = opts.rounds.or(problem.spec.rounds.count);
-    let rounds = count.unwrap_or(ROUND_CAP).max(1);
-    // Default rounds: non-converged rounds in a row whose clean-up changed nothing.
-    let mut restarts = 0;
-    let initial = (model.structure.joints.len(), model.structure.beams.len());
-    let mut reports = Vec::new();
-    let mut iterations = 0;
-    let mut evaluations = Evaluations::default();
-    let mut logs = Vec::new();
     let solve_start = Instant::now();
-    let mut solution: Solution;
-    let mut round = 0;
-    // The last round that ended Optimal: its model, solution and number.
-    let mut converged: Option<(TrussNlp, Solution, usize)> = None;
-    loop {
-        let mut options = options.clone();
-        options.log = options.log.with_objective(nlp.objective_unit());
-        if rounds > 1 {
-            options.log.stage = format!("round {}", round + 1);
-        }
-        solution = crate::solver::solve(&nlp, &options);
-        iterations += solution.iterations;
-        evaluations.functions += solution.evaluations.functions;
-        evaluations.derivatives += solution.evaluations.derivatives;
-        evaluations.hessians += solution.evaluations.hessians;
-        logs.push(solution.log.clone());
-        round += 1;
-        let optimal = solution.status == crate::solver::Status::Optimal;
-        if optimal {
-            converged = Some((nlp.clone(), solution.clone(), round));
-        }
-        let interrupted = solution.status == crate::solver::Status::Interrupted;
-        if round == rounds || interrupted {
-            break;
-        }
-        let settings = RoundSettings {
-            merge: solution.max_violation <= MERGE_VIOLATION,
-            ..problem.round_settings()
-        };
-        let (structure, forces, report) = topology::clean(
-            nlp.structure(),
-            &nlp.positions(&solution.x),
-            &nlp.forces(&solution.x),
-            &settings,
-        );
-        if report.changes_nothing() {
-            // Another solve would start at this optimum of the same model; by default a
-            // non-converged round on an unchanged model is restarted once (fresh Hessian).
-            restarts += 1;
-            if optimal || (count.is_none() && restarts > DEFAULT_RESTARTS) {
-                break;
-            }
-        } else {
-            restarts = 0;
-        }
-        reports.push(report);
-        nlp = TrussNlp::new(structure, model.settings.clone(), forces)
-            .map_err(|e| Error::Runtime(format!("round {round}: {e}")))?;
-    }
-    let rounds_run = round;
-    let result_round = reported_round(
+    let rounds::Rounds {
+        mut nlp,
+        mut solution,
+        reports,
         rounds_run,
-        solution.status == crate::solver::Status::Optimal,
-        converged.as_ref().map(|c| c.2),
-    );
-    if let Some((converged_nlp, converged_solution, converged_round)) = converged
-        && converged_round == result_round
-    {
-        nlp = converged_nlp;
-        solution = converged_solution;
-    }
+        result_round,
+        iterations,
+        evaluations,
+        logs,
+    } = rounds::solve_rounds(nlp, &options, count, &problem.round_settings())?;
     let unit = nlp.objective_unit();
     let final_value = solution.objective * unit.scale;
     let mut kept_start = false;
@@ -435,32 +378,6 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         check_passed: None,
         artifacts,
     })
-}
-
-/// Most solve + clean-up rounds by default (without `[rounds] count` or `--rounds`): rounds
-/// run until the design stops changing, this cap only guards against a clean-up that never
-/// settles.
-pub const ROUND_CAP: usize = 20;
-
-/// By default, a round that did not converge and whose clean-up changed nothing is solved
-/// again from its end point this many times (the solver's Hessian state starts afresh), then
-/// the rounds stop.
-pub const DEFAULT_RESTARTS: usize = 1;
-
-/// Largest violation (the solver's scaled measure) of a round's end point after which its
-/// clean-up may merge joints and tension runs. Merging moves joints and adds forces; at a point
-/// that does not balance, inside a self-stressed knot of short beams, it turned crane seed 4's
-/// violation of 2.3e-3 into 4.6 (docs/notes/truss.md). Pruning and dangling joints are unaffected.
-const MERGE_VIOLATION: f64 = 1e-3;
-
-/// The round whose design a run reports: the last one, unless it did not end Optimal while an
-/// earlier one did (`last_converged`, the last such round) — a clean-up that the next solve
-/// cannot settle does not discard a converged design.
-fn reported_round(last: usize, last_optimal: bool, last_converged: Option<usize>) -> usize {
-    match last_converged {
-        Some(round) if !last_optimal => round,
-        _ => last,
-    }
 }
 
 /// The point a derivative check uses: the start, with every free-joint coordinate moved by a

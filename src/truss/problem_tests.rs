@@ -385,11 +385,11 @@ fn an_explicit_seed_overrides_the_files_seed() {
 #[test]
 fn a_round_that_does_not_converge_does_not_replace_an_optimal_one() {
     // Last round Optimal: it is reported, whatever came before.
-    assert_eq!(super::reported_round(5, true, Some(5)), 5);
+    assert_eq!(super::rounds::reported_round(5, true, Some(5)), 5);
     // Round 3 was the last Optimal one and round 5 ended at its limit: round 3 is reported.
-    assert_eq!(super::reported_round(5, false, Some(3)), 3);
+    assert_eq!(super::rounds::reported_round(5, false, Some(3)), 3);
     // No round converged: the last one is reported.
-    assert_eq!(super::reported_round(5, false, None), 5);
+    assert_eq!(super::rounds::reported_round(5, false, None), 5);
 }
 
 #[test]

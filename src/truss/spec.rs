@@ -471,7 +471,7 @@ pub struct CaseLoadSpec {
 #[serde(deny_unknown_fields)]
 pub struct RoundsSpec {
     /// At most this many solve + clean-up rounds (`--rounds` overrides); by default the rounds
-    /// run until the design stops changing, at most `ROUND_CAP` (src/truss/mod.rs).
+    /// run until the design stops changing, at most `ROUND_CAP` (src/truss/rounds.rs).
     pub count: Option<usize>,
     /// Drop beams whose largest |λ| is below this fraction of the largest |λ| (default 1e-6:
     /// zero-force members).

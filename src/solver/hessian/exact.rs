@@ -164,6 +164,44 @@ fn independent_rows(rows: &DMatrix<f64>) -> (Vec<usize>, DMatrix<f64>) {
     (kept, projector)
 }
 
+/// `h` as it is (no shift, no row term).
+fn unmodified(h: &DMatrix<f64>) -> Convexified {
+    Convexified {
+        matrix: h.clone(),
+        shift: 0.0,
+        row_weight: 0.0,
+        weighted: Vec::new(),
+    }
+}
+
+/// `h + γ·gram` (gram the unit rows' `UᵀU`) for the first γ of [`GAMMAS`] (relative to
+/// `scale`) that makes it safely positive definite.
+fn augmented(
+    h: &DMatrix<f64>,
+    gram: &DMatrix<f64>,
+    kept: &[usize],
+    scale: f64,
+) -> Option<Convexified> {
+    if kept.is_empty() {
+        return None;
+    }
+    GAMMAS.iter().find_map(|g| {
+        let augmented = h + gram * (g * scale);
+        safely_definite(&augmented, scale_of(&augmented)).then(|| Convexified {
+            matrix: augmented,
+            shift: 0.0,
+            row_weight: g * scale,
+            weighted: kept.to_vec(),
+        })
+    })
+}
+
+/// `2·max(0, −Hᵢᵢ)` per variable: the diagonal that turns every negative diagonal entry into
+/// its absolute value.
+fn negative_diagonal_flip(h: &DMatrix<f64>) -> Vec<f64> {
+    h.diagonal().iter().map(|&v| (-2.0 * v).max(0.0)).collect()
+}
+
 /// Relative residual below which a unit row counts as dependent on the rows before it.
 const RANK_TOLERANCE: f64 = 1e-8;
 
@@ -246,34 +284,38 @@ impl InertiaShift {
         };
         if safely_definite(h, scale) {
             self.last = 0.0;
-            return Some(Convexified {
-                matrix: h.clone(),
-                shift: 0.0,
-                row_weight: 0.0,
-                weighted: Vec::new(),
-            });
+            return Some(unmodified(h));
         }
+        // The independent rows, scaled to unit length so that a short row counts as much as a
+        // long one, and the projector onto their null space.
+        let (kept, projector) = basis.take().unwrap_or_else(|| independent_rows(rows));
+        let mut unit = rows.select_rows(&kept);
+        for mut r in unit.row_iter_mut() {
+            r /= r.norm();
+        }
+        let gram = unit.tr_mul(&unit);
+        if let Some(found) = augmented(h, &gram, &kept, scale) {
+            return Some(found);
+        }
+        // Negative diagonal entries flipped (see `qp::sparse`'s convexification): a separable
+        // concavity is corrected on its own variables before any shift damps every step.
+        let flip = negative_diagonal_flip(h);
+        let flipped;
+        let h = if flip.iter().any(|&f| f > 0.0) {
+            flipped = h + DMatrix::from_diagonal(&DVector::from_vec(flip));
+            if safely_definite(&flipped, scale) {
+                self.last = 0.0;
+                return Some(unmodified(&flipped));
+            }
+            if let Some(found) = augmented(&flipped, &gram, &kept, scale) {
+                return Some(found);
+            }
+            &flipped
+        } else {
+            h
+        };
         let mut base = (h.clone(), 0.0, Vec::new());
-        if rows.nrows() > 0 {
-            // The independent rows, scaled to unit length so that a short row counts as much
-            // as a long one.
-            let (kept, projector) = basis.take().unwrap_or_else(|| independent_rows(rows));
-            let mut unit = rows.select_rows(&kept);
-            for mut r in unit.row_iter_mut() {
-                r /= r.norm();
-            }
-            let gram = unit.tr_mul(&unit);
-            for g in GAMMAS {
-                let augmented = h + &gram * (g * scale);
-                if safely_definite(&augmented, scale_of(&augmented)) {
-                    return Some(Convexified {
-                        matrix: augmented,
-                        shift: 0.0,
-                        row_weight: g * scale,
-                        weighted: kept,
-                    });
-                }
-            }
+        if !kept.is_empty() {
             if let Some((matrix, shift, row_weight)) =
                 self.projected_shift(h, &unit, &projector, scale)
             {
@@ -337,31 +379,36 @@ mod tests {
 
     #[test]
     fn shift_makes_indefinite_matrix_definite_and_is_remembered() {
-        let h = assemble_dense(2, &[0, 1, 1], &[0, 0, 1], &[1.0, 0.0, -2.0]);
-        assert_eq!(h[(0, 1)], 0.0);
+        // A negative diagonal entry alone is flipped, without a shift.
+        let diagonal = assemble_dense(2, &[0, 1, 1], &[0, 0, 1], &[1.0, 0.0, -2.0]);
+        assert_eq!(diagonal[(0, 1)], 0.0);
+        let (m, d) = InertiaShift::default().convexify(&diagonal).unwrap();
+        assert_eq!(d, 0.0);
+        assert_eq!(m[(1, 1)], 2.0);
+        // Indefinite through the coupling (eigenvalues −0.5 and 2.5, no negative diagonal
+        // entry): shifted, and the shift remembered.
+        let h = assemble_dense(2, &[0, 1, 1], &[0, 0, 1], &[1.0, 1.5, 1.0]);
         let mut shift = InertiaShift::default();
         let (m, d) = shift.convexify(&h).unwrap();
-        assert!(d > 2.0 && m.cholesky().is_some());
+        assert!(d > 0.5 && m.cholesky().is_some());
         let (_, d2) = shift.convexify(&h).unwrap();
-        assert!(d2 > 2.0 && d2 <= d * 8.0);
+        assert!(d2 > 0.5 && d2 <= d * 8.0);
         // Positive definite on the null space of the row (1, 0): augmentation, no shift.
         let rows = DMatrix::from_row_slice(1, 2, &[0.0, 1.0]);
         let c = shift.convexify_with_rows(&h, &rows, 1, 0.0).unwrap();
         assert_eq!(c.shift, 0.0);
         assert!(c.row_weight > 0.0);
         assert!(c.matrix.cholesky().is_some());
-        // Indefinite on the null space of the row: shifted there only (the row's own direction
-        // keeps its curvature −2, lifted by the augmentation), by less than the shift of h
-        // alone.
-        let h3 = assemble_dense(3, &[0, 1, 2], &[0, 1, 2], &[1.0, -2.0, -0.01]);
+        // Indefinite on the null space of the row e₁ (the block of x₀, x₂ has eigenvalue
+        // −0.005) and along the row through its coupling to x₂: shifted on the null space only
+        // (the row's own direction is lifted by the augmentation), by much less than the shift
+        // of h alone (≥ 2.5).
+        let h3 = assemble_dense(3, &[0, 2, 2, 2], &[0, 0, 1, 2], &[1.0, 1.005, 3.0, 1.0]);
         let rows3 = DMatrix::from_row_slice(1, 3, &[0.0, 1.0, 0.0]);
-        // The schedule starts at δ₀ = 1 and falls by 1/3 per call while it suffices: on top of
-        // the augmentation δ·2 > 0.01 suffices, for h alone δ·2 > 2 is needed.
         let (mut on_rows, mut alone) = (InertiaShift::default(), InertiaShift::default());
         for _ in 0..4 {
             let c = on_rows.convexify_with_rows(&h3, &rows3, 1, 0.0).unwrap();
-            assert_eq!(c.row_weight, 1e2 * 2.0);
-            assert_eq!(c.matrix[(1, 1)], -2.0 + 1e2 * 2.0);
+            assert!(c.row_weight > 0.0);
             assert!(c.matrix.cholesky().is_some());
             alone.convexify(&h3).unwrap();
         }
@@ -371,21 +418,30 @@ mod tests {
 
     #[test]
     fn the_shift_follows_the_reduced_hessian_despite_a_strong_coupling_across_the_row() {
-        // h = [[0, 100], [100, −0.01]] with the row (1, 0): the reduced Hessian is −0.01, but
-        // the coupling 100 across the row leaks through the term γ·e₀e₀ᵀ as −100²/γ, so that
-        // with γ = 1e2 a shift of ~1e2 was needed; with γ = PROJECTED_GAMMA it is
-        // 0.01 + 1e4/γ.
-        let h = assemble_dense(2, &[0, 1, 1], &[0, 0, 1], &[0.0, 100.0, -0.01]);
-        let rows = DMatrix::from_row_slice(1, 2, &[1.0, 0.0]);
+        // Row e₀, coupled by 100 to x₁; on the row's null space (x₁, x₂) the block
+        // [[1, 1.005], [1.005, 1]] has eigenvalue −0.005 (no negative diagonal entry, so no
+        // flip). The coupling leaks through the term γ·e₀e₀ᵀ as −100²/γ on x₁: with γ = 1e2 a
+        // shift of ~1e2 was needed; with γ = PROJECTED_GAMMA the least shift is −λ_min of the
+        // block with the leak.
+        let h = assemble_dense(
+            3,
+            &[0, 1, 1, 2, 2],
+            &[0, 0, 1, 1, 2],
+            &[0.0, 100.0, 1.0, 1.005, 1.0],
+        );
+        let rows = DMatrix::from_row_slice(1, 3, &[1.0, 0.0, 0.0]);
         let mut shift = InertiaShift::default();
         for _ in 0..12 {
             let c = shift.convexify_with_rows(&h, &rows, 1, 0.0).unwrap();
             assert!(c.matrix.cholesky().is_some());
         }
-        // The schedule settles within its factor 8 of the least shift, 0.01 + 1e4/γ.
+        // The schedule settles within its factor 8 of the least shift.
         // (Hessian scale 1, so shifts are absolute here.)
-        let least = 0.01 + 1e4 / PROJECTED_GAMMA;
+        let leaked =
+            DMatrix::from_row_slice(2, 2, &[1.0 - 1e4 / PROJECTED_GAMMA, 1.005, 1.005, 1.0]);
+        let least = -leaked.symmetric_eigenvalues().min();
         let last = shift.last();
+        assert!(least > 0.0);
         assert!(last >= least && last < 8.0 * least, "{last} vs {least}");
     }
 

@@ -57,7 +57,8 @@ pub struct QpProblem<'a> {
 /// How a QP solve ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum QpStatus {
-    /// Solved to tolerance.
+    /// Solved to tolerance (the sparse method also ends here at a stall within 1e-5 of
+    /// feasibility: see `qp::sparse`).
     Optimal,
     /// The constraints are inconsistent (the SQP then switches to elastic mode).
     Infeasible,

@@ -32,7 +32,7 @@ use nalgebra_sparse::{CooMatrix, CscMatrix};
 use serde::{Deserialize, Serialize};
 
 use super::dense::{self, ConstraintId};
-use super::sparse::SparseQp;
+use super::sparse::{Convexification, SparseQp};
 use super::{QpHessian, QpProblem, QpSolution, QpStatus};
 use crate::solver::Interrupt;
 
@@ -84,8 +84,8 @@ pub struct WarmStart {
     method: QpMethod,
     working_set: Vec<ConstraintId>,
     sparse: Option<Box<SparseQp>>,
-    /// δ of the last sparse solve: the QP solved had `H + δI` (0 on the dense path).
-    convexification: f64,
+    /// What the last sparse solve added to H (nothing on the dense path).
+    convexification: Convexification,
     /// The last sparse shift relative to `max(1, maxⱼ|Hⱼⱼ|)`, where the next search starts.
     shift_memory: f64,
     /// The next sparse solve repeats the last shift (see [`WarmStart::snapshot`]).
@@ -135,16 +135,16 @@ impl WarmStart {
         let saved = Snapshot {
             working_set: self.working_set.clone(),
             shift_memory: self.shift_memory,
-            convexification: self.convexification,
+            convexification: self.convexification.clone(),
         };
         self.repeat_shift = true;
         saved
     }
 
-    /// The shift δ ≥ 0 the last sparse solve added to a `SparseLower` Hessian (the step is
-    /// that of `H + δI`); 0 after a dense solve, which receives H already convexified.
-    pub fn convexification(&self) -> f64 {
-        self.convexification
+    /// What the last sparse solve added to a `SparseLower` Hessian (the step is that of
+    /// `H + E`); nothing after a dense solve, which receives H already convexified.
+    pub fn convexification(&self) -> &Convexification {
+        &self.convexification
     }
 
     /// Sets the smallest convexification shift δ (absolute) of later sparse solves of a
@@ -173,7 +173,7 @@ impl WarmStart {
 pub struct Snapshot {
     working_set: Vec<ConstraintId>,
     shift_memory: f64,
-    convexification: f64,
+    convexification: Convexification,
 }
 
 /// Solves `problem`; `tolerance` is the relative KKT tolerance of the sparse method.
@@ -205,7 +205,7 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
         let (mut solution, info) = solver.solve(problem, tolerance);
         warm.convexification = info.convexification;
         if let QpHessian::SparseLower(h) = problem.h {
-            warm.shift_memory = info.convexification / max_diagonal(h).max(1.0);
+            warm.shift_memory = warm.convexification.shift / max_diagonal(h).max(1.0);
             // The inertia correction makes the reduced Hessian non-singular, not positive
             // definite on every direction of recession: an exact Hessian without curvature
             // along a descent direction gives an unbounded QP. As on the dense path, the
@@ -226,7 +226,10 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
                 fresh.interrupt = warm.interrupt.clone();
                 let (retried, info) = fresh.solve(&retry, tolerance);
                 solution = retried;
-                warm.convexification = shift + info.convexification;
+                warm.convexification = Convexification {
+                    shift: shift + info.convexification.shift,
+                    ..info.convexification
+                };
                 shift *= 100.0;
             }
         }
@@ -239,7 +242,7 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
         return solution;
     }
     let h = dense_hessian(&problem.h);
-    warm.convexification = 0.0;
+    warm.convexification = Convexification::default();
     let convexify = matches!(problem.h, QpHessian::SparseLower(_));
     let mut shift = 0.0;
     let base = 1e-8 * (1.0 + (0..n).map(|i| h[(i, i)].abs()).fold(0.0, f64::max));
@@ -338,9 +341,9 @@ fn polish(
         ..*problem
     };
     let solver = warm.sparse.as_mut()?;
-    solver.fixed_shift = Some(warm.convexification);
+    solver.fixed_convexification = Some(warm.convexification.clone());
     let (polished, _) = solver.solve(&reduced, tolerance);
-    solver.fixed_shift = None;
+    solver.fixed_convexification = None;
     if polished.status != QpStatus::Optimal {
         return None;
     }

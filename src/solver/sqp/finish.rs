@@ -21,7 +21,8 @@ impl Sqp<'_> {
     /// The termination tests at the current point, in order: optimal; infeasible (a stationary
     /// point of the violation, unless a retreat is left); unbounded (feasible within 100×
     /// the tolerance with f < [`Tuning::unbounded_objective`] or ‖x‖∞ >
-    /// [`Tuning::unbounded_step`]); progress stopped at the acceptable level; a limit
+    /// [`Tuning::unbounded_step`]); progress stopped at the acceptable level; a creep
+    /// (`Options::progress_window`); a limit
     /// (interrupt, time, iterations). None: the iteration goes on.
     pub(super) fn termination(
         &mut self,
@@ -61,6 +62,14 @@ impl Sqp<'_> {
             .stalled((kkt.primal / ctol).max(kkt.optimality / tol), self.tuning)
         {
             return Some(Next::Finish(Status::Acceptable));
+        }
+        if state.progress.creeping(
+            kkt.primal <= ctol,
+            state.point.values.f,
+            self.options.progress_window,
+            self.options.progress_tolerance,
+        ) {
+            return Some(Next::Finish(Status::SlowProgress));
         }
         self.limit_reached(state.iteration).map(Next::Finish)
     }

@@ -304,7 +304,9 @@ impl Sqp<'_> {
             let dhd = descent.dhd - self.model.augmentation_curvature(jac, d);
             self.damp_exact_steps(alpha, dhd, d);
         }
-        self.lambda = step.qp.lambda.clone();
+        if self.model.is_quasi_newton() || !multipliers_jumped(&self.lambda, &step.qp.lambda) {
+            self.lambda = step.qp.lambda.clone();
+        }
         let updated = self.update_model(&state.point, &next);
         state.point = next;
         if let Err(e) = updated {
@@ -343,4 +345,19 @@ impl Sqp<'_> {
         }
         Next::Finish(status)
     }
+}
+
+/// Largest jump of the QP multipliers (max-norm) that the exact Hessian follows.
+const MULTIPLIER_JUMP: f64 = 1e3;
+
+/// Whether the QP's multipliers exceed [`MULTIPLIER_JUMP`]·max(1, ‖λ‖∞) of the current ones.
+/// Such multipliers come from a nearly inconsistent linearization (truss balance rows of a
+/// joint whose members all went idle reached 1e11): weighting the constraint curvature by them
+/// makes the next Hessian need a shift of 1e7–1e13, and the steps freeze. The exact Hessian
+/// then keeps the current multipliers; the step, the merit weights and the termination tests
+/// still use the QP's. (Quasi-Newton updates use the QP's in any case: their Lagrangian gradient
+/// differences need the multipliers of the step.)
+fn multipliers_jumped(current: &[f64], qp: &[f64]) -> bool {
+    let largest = |v: &[f64]| v.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
+    largest(qp) > MULTIPLIER_JUMP * largest(current).max(1.0)
 }

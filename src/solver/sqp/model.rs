@@ -146,10 +146,10 @@ impl Sqp<'_> {
                 dense: Some(_),
                 inertia,
                 ..
-            } => *inertia,
-            _ => (self.warm.convexification() - self.warm.shift_floor()).max(0.0),
+            } => inertia * dd,
+            _ => (self.warm.convexification().curvature(d) - self.warm.shift_floor() * dd).max(0.0),
         };
-        let curvature = dhd - correction * dd;
+        let curvature = dhd - correction;
         let floor = if alpha <= self.tuning.damping_cut && dd > 0.0 && curvature > 0.0 {
             self.warm
                 .shift_floor()

@@ -53,7 +53,7 @@ impl Sqp<'_> {
             .zip(d)
             .map(|(a, b)| a * b)
             .sum::<f64>()
-            + shift * d.iter().map(|v| v * v).sum::<f64>();
+            + shift.curvature(d);
         // Byrd–Nocedal safeguard: the weighted linearized violation decrease must pay for
         // a tenth more than the model's objective change, or the weights of the rows that
         // decrease are raised uniformly (Powell's rule decays the excess later).
@@ -73,9 +73,11 @@ impl Sqp<'_> {
         let slope = gd - reduction;
         if self.options.verbosity >= 2 {
             self.say(&format!(
-                "      |d| = {:.3e}  g'd = {gd:.3e}  d'Hd = {dhd:.3e}  lin.red = {reduction:.3e}  max rho = {:.3e}  slope = {slope:.3e}  shift = {shift:.2e}  qp = {:?}",
+                "      |d| = {:.3e}  g'd = {gd:.3e}  d'Hd = {dhd:.3e}  lin.red = {reduction:.3e}  max rho = {:.3e}  slope = {slope:.3e}  shift = {:.2e}  flipped = {}  qp = {:?}",
                 d.iter().fold(0.0_f64, |a, v| a.max(v.abs())),
                 self.rho.iter().fold(0.0_f64, |a, v| a.max(*v)),
+                shift.shift,
+                shift.flip.iter().filter(|&&f| f > 0.0).count(),
                 step.qp.status
             ));
         }

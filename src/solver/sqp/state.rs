@@ -59,6 +59,46 @@ impl AcceptableRun {
     }
 }
 
+/// Feasible iterations in a row and the objective at the start of the current window (see
+/// `Options::progress_window`).
+#[derive(Default)]
+pub(super) struct ProgressWatch {
+    /// Feasible iterations in the current window (0: the last iterate was infeasible).
+    length: usize,
+    /// Objective (the solver's scaling) at the window's first iterate.
+    reference: f64,
+}
+
+impl ProgressWatch {
+    /// Records an iterate with objective `f`; true when `window` feasible iterations in a row
+    /// lowered the objective by no more than `tolerance·max(1, |f₀|)` (never when `window` is 0).
+    pub(super) fn creeping(
+        &mut self,
+        feasible: bool,
+        f: f64,
+        window: usize,
+        tolerance: f64,
+    ) -> bool {
+        if window == 0 || !feasible {
+            self.length = 0;
+            return false;
+        }
+        if self.length == 0 {
+            self.reference = f;
+        }
+        self.length += 1;
+        if self.length <= window {
+            return false;
+        }
+        if self.reference - f <= tolerance * self.reference.abs().max(1.0) {
+            return true;
+        }
+        self.reference = f;
+        self.length = 1;
+        false
+    }
+}
+
 /// One accepted point with everything evaluated there.
 #[derive(Clone)]
 pub(super) struct Point {
@@ -81,6 +121,8 @@ pub(super) struct State {
     pub(super) qp_iterations: usize,
     /// The acceptable-level watch.
     pub(super) acceptable: AcceptableRun,
+    /// The creep watch (`Options::progress_window`).
+    pub(super) progress: ProgressWatch,
     /// Whether the model was reset (or the exact Hessian abandoned) since the last accepted
     /// step: a second failure then ends the solve.
     pub(super) model_reset: bool,
@@ -100,6 +142,7 @@ impl State {
             alpha: 0.0,
             qp_iterations: 0,
             acceptable: AcceptableRun::default(),
+            progress: ProgressWatch::default(),
             model_reset: false,
             retreats_left: retreats,
             heavy_weights: 0,
@@ -259,5 +302,43 @@ impl Sqp<'_> {
             g[c] += self.lambda[r] * p.derivatives.jac[k];
         }
         g
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ProgressWatch;
+
+    /// Feeds objective values (all feasible unless NaN, which stands for an infeasible
+    /// iterate) and returns the index of the first iterate judged creeping.
+    fn first_creep(values: &[f64], window: usize, tolerance: f64) -> Option<usize> {
+        let mut watch = ProgressWatch::default();
+        values
+            .iter()
+            .position(|&f| watch.creeping(!f.is_nan(), f, window, tolerance))
+    }
+
+    #[test]
+    fn a_feasible_window_without_enough_decrease_is_a_creep() {
+        // 100 → 99.95 over 3 iterations: 5e-4 relative, below 1e-3.
+        let creep = [100.0, 99.99, 99.97, 99.95, 99.94];
+        assert_eq!(first_creep(&creep, 3, 1e-3), Some(3));
+        // A decrease of 2e-3 per window keeps going, then a flat stretch ends it.
+        let progress = [100.0, 99.9, 99.85, 99.8, 99.78, 99.76, 99.75, 99.75];
+        assert_eq!(first_creep(&progress, 3, 1e-3), Some(6));
+    }
+
+    #[test]
+    fn infeasible_iterates_and_a_zero_window_never_creep() {
+        let flat = [1.0; 10];
+        assert_eq!(first_creep(&flat, 0, 1e-3), None);
+        // An infeasible iterate restarts the window.
+        let mut interrupted = [1.0; 7];
+        interrupted[2] = f64::NAN;
+        interrupted[5] = f64::NAN;
+        assert_eq!(first_creep(&interrupted, 3, 1e-3), None);
+        // Relative to max(1, |f|): an objective near zero needs an absolute decrease of 1e-3.
+        assert_eq!(first_creep(&[1e-6, 0.0, -5e-4, -9e-4], 3, 1e-3), Some(3));
+        assert_eq!(first_creep(&[1e-6, 0.0, -5e-4, -2e-3], 3, 1e-3), None);
     }
 }

@@ -30,11 +30,14 @@ pub(super) fn converged_except_feasibility(measures: Measures, tolerance: f64) -
 /// Status after a factorization breakdown or a non-finite iterate. The duals of an infeasible
 /// QP diverge and its slacks shrink until they round to zero, so a breakdown after a dual
 /// feasible iterate whose primal residual had converged except for feasibility, or had
-/// stalled, means infeasible; anything else is a numerical failure.
+/// stalled, means infeasible — unless that residual was below `near_feasible`, where the last
+/// finite iterate is kept as the solution (the parent module's near-feasibility rule); anything
+/// else is a numerical failure.
 pub(super) fn breakdown_status(
     previous: Option<Measures>,
     stalled: bool,
     tolerance: f64,
+    near_feasible: f64,
 ) -> QpStatus {
     match previous {
         Some(m)
@@ -42,7 +45,11 @@ pub(super) fn breakdown_status(
                 && m.dual <= tolerance
                 && (stalled || converged_except_feasibility(m, tolerance)) =>
         {
-            QpStatus::Infeasible
+            if m.primal <= near_feasible && m.gap <= tolerance {
+                QpStatus::Optimal
+            } else {
+                QpStatus::Infeasible
+            }
         }
         _ => QpStatus::Numerical,
     }
@@ -128,4 +135,33 @@ pub(super) fn unboundedness_detected(qp: &QpProblem<'_>, layout: &Layout, ws: &W
         }
     }
     true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn measures(primal: f64) -> Measures {
+        Measures {
+            primal,
+            dual: 1e-14,
+            gap: 1e-12,
+            mu: 1e-14,
+        }
+    }
+
+    #[test]
+    fn a_breakdown_near_feasibility_keeps_the_iterate_and_far_from_it_means_infeasible() {
+        let tolerance = 1e-8;
+        let near = breakdown_status(Some(measures(2e-8)), true, tolerance, 1e-5);
+        assert_eq!(near, QpStatus::Optimal);
+        let far = breakdown_status(Some(measures(1e-3)), true, tolerance, 1e-5);
+        assert_eq!(far, QpStatus::Infeasible);
+        let unconverged = Measures {
+            dual: 1e-3,
+            ..measures(2e-8)
+        };
+        let numerical = breakdown_status(Some(unconverged), true, tolerance, 1e-5);
+        assert_eq!(numerical, QpStatus::Numerical);
+    }
 }

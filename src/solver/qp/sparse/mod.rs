@@ -27,13 +27,19 @@
 //! `S = dlᵀz_l − duᵀz_u + blᵀw_l − buᵀw_u − b_Eᵀy_E` (finite bounds; fixed variables add
 //! `dl_j (Aᵀy)_j`) and `R = ‖Aᵀy − z_l + z_u‖∞` (fixed variables excluded), every feasible d
 //! satisfies `S ≤ ‖d‖₁ R`; so `S > 10⁶ (1 + ‖d_k‖₁) R` proves that no feasible point lies within
-//! that ℓ₁ radius, and the QP is reported [`QpStatus::Infeasible`]. Unboundedness: when
+//! that ℓ₁ radius, and the QP is reported [`QpStatus::Infeasible`]. A primal residual that stops
+//! halving (over 5 iterations) while the dual residual and the complementarity have converged
+//! marks a least-infeasible point: `Infeasible`, unless the residual is below 1e-5 (relative),
+//! where it ends `Optimal`: near feasibility the complementarity can converge first, the
+//! iterates then sit on the boundary and the residual shrinks by a few per cent per iteration
+//! (truss QPs stalled at 2e-6 and were sent to the elastic mode, whose weights steering then
+//! drove to 1e12); the rows hold to 1e-5 and the SQP measures the true violation anyway. Unboundedness: when
 //! ‖d‖∞ exceeds 10⁸ times the data scale, the normalized d̂ is tested as a direction of
 //! recession with `gᵀd̂ < 0` and `d̂ᵀH d̂ ≈ 0`.
 //!
-//! Indefinite H is convexified first (`newton.rs`: IPOPT-style inertia correction); the shift
-//! δ_c actually used is reported in [`SparseQpInfo::convexification`] — the QP solved is then
-//! the one with H + δ_c I.
+//! Indefinite H is convexified first (`newton.rs`: IPOPT-style inertia correction, after a flip
+//! of negative diagonal entries, see `convexification.rs`); the diagonal E actually added is
+//! reported in [`SparseQpInfo::convexification`] — the QP solved is then the one with H + E.
 //!
 //! Use from an SQP: keep one [`SparseQp`] for the whole NLP solve and call
 //! [`SparseQp::solve`] each major iteration; the symbolic analysis is redone only when the
@@ -49,6 +55,7 @@
 //! within one iteration: one factorization of the Newton matrix and its refined solves.
 
 mod certificates;
+mod convexification;
 mod layout;
 mod newton;
 mod operators;
@@ -59,6 +66,7 @@ mod tests;
 use certificates::{
     breakdown_status, converged_except_feasibility, infeasibility_certified, unboundedness_detected,
 };
+pub use convexification::Convexification;
 use layout::{Layout, RowKind, is_finite_bound};
 use newton::NewtonSystem;
 use operators::{a_times, a_transpose_times, dot, hessian_times, inf_norm};
@@ -69,6 +77,9 @@ use crate::solver::Interrupt;
 
 /// Iterations over which a primal residual that fails to halve counts as stalled.
 const STALL_WINDOW: usize = 5;
+/// Relative primal residual below which a stalled iterate that has converged except for
+/// feasibility ends `Optimal` rather than `Infeasible` (module header).
+const NEAR_FEASIBLE: f64 = 1e-5;
 
 /// Default first convexification shift (relative), see [`SparseQp::first_shift`].
 pub const DEFAULT_FIRST_SHIFT: f64 = 1e-4;
@@ -80,10 +91,10 @@ pub const DEFAULT_SHIFT_GROWTH: f64 = 10.0;
 pub const DEFAULT_MAX_ITERATIONS: usize = 200;
 
 /// What one solve did besides the [`QpSolution`].
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct SparseQpInfo {
-    /// The shift δ_c ≥ 0 added to H to make the QP convex (0 when H already was).
-    pub convexification: f64,
+    /// The diagonal added to H to make the QP convex (zero when H already was).
+    pub convexification: Convexification,
     /// Numeric KKT factorizations performed (convexification trials included).
     pub factorizations: usize,
     /// True when the symbolic analysis of the previous solve was reused.
@@ -137,9 +148,9 @@ pub struct SparseQp {
     pub first_shift: f64,
     /// Factor between successive convexification trials ([`DEFAULT_SHIFT_GROWTH`]).
     pub shift_growth: f64,
-    /// When set, the absolute shift δ_c used without an inertia search (the caller knows it
+    /// When set, the convexification used without an inertia search (the caller knows it
     /// suffices, e.g. the QP has more equality rows than one already convexified with it).
-    pub fixed_shift: Option<f64>,
+    pub fixed_convexification: Option<Convexification>,
     /// Smallest shift δ_c tried (absolute, default 0): an SQP damps its steps with it when
     /// the exact Hessian's Newton steps were much longer than its line search could accept.
     pub min_shift: f64,
@@ -205,6 +216,8 @@ struct Workspace {
     rp: Vec<f64>,
     rs: Vec<f64>,
     sig_d: Vec<f64>,
+    /// The convexification's diagonal, per variable.
+    added: Vec<f64>,
     sig_s: Vec<f64>,
     dual_diag: Vec<f64>,
     rcl: Vec<f64>,
@@ -226,6 +239,7 @@ impl Workspace {
             &mut self.aty,
             &mut self.rd,
             &mut self.sig_d,
+            &mut self.added,
             &mut self.rcl,
             &mut self.rcu,
         ] {
@@ -267,7 +281,7 @@ impl SparseQp {
             max_iterations: DEFAULT_MAX_ITERATIONS,
             first_shift: DEFAULT_FIRST_SHIFT,
             shift_growth: DEFAULT_SHIFT_GROWTH,
-            fixed_shift: None,
+            fixed_convexification: None,
             min_shift: 0.0,
             interrupt: Interrupt::new(),
             system: None,
@@ -325,8 +339,8 @@ impl SparseQp {
         let ws = &mut self.ws;
         let layout = &self.layout;
         ws.resize(n, m, p);
-        let shift = match self.fixed_shift {
-            Some(shift) => shift,
+        let convexification = match &self.fixed_convexification {
+            Some(fixed) => fixed.clone(),
             None => match system.convexify(
                 qp,
                 layout,
@@ -336,15 +350,18 @@ impl SparseQp {
                 &mut ws.sig_d,
                 &mut ws.dual_diag,
             ) {
-                Ok(Some(shift)) => shift,
+                Ok(Some(convexification)) => convexification,
                 _ => return (fail(QpStatus::Numerical), info),
             },
         };
-        info.convexification = shift;
+        for (j, added) in ws.added.iter_mut().enumerate() {
+            *added = convexification.added(j);
+        }
+        info.convexification = convexification;
         // Without complementarity pairs the Newton matrix is the one whose inertia was just
         // tested (H + δI with the equality rows): its factors, with the inertia test's dual
         // regularization, serve the step, refined against the same unregularized matrix.
-        system.strong_step = self.fixed_shift.is_none()
+        system.strong_step = self.fixed_convexification.is_none()
             && layout.pairs == 0
             && !matches!(qp.h, QpHessian::LowRank { .. });
         initial_point(qp, layout, ws);
@@ -355,15 +372,15 @@ impl SparseQp {
         let mut previous: Option<Measures> = None;
         let mut stalled = false;
         while iterations <= self.max_iterations {
-            let measures = residuals(qp, layout, ws, shift);
+            let measures = residuals(qp, layout, ws);
             if !(measures.primal.is_finite()
                 && measures.dual.is_finite()
                 && measures.gap.is_finite())
             {
                 // Return the last finite iterate (slacks rounding to zero end here).
                 std::mem::swap(&mut ws.x, &mut ws.backup);
-                residuals(qp, layout, ws, shift);
-                status = breakdown_status(previous, stalled, tolerance);
+                residuals(qp, layout, ws);
+                status = breakdown_status(previous, stalled, tolerance, NEAR_FEASIBLE);
                 break;
             }
             info.primal_residual = measures.primal;
@@ -379,9 +396,13 @@ impl SparseQp {
             primal_history[iterations % (STALL_WINDOW + 1)] = measures.primal;
             let window_start = primal_history[(iterations + 1) % (STALL_WINDOW + 1)];
             stalled = iterations >= STALL_WINDOW && measures.primal > 0.5 * window_start;
+            let least_infeasible = stalled && converged_except_feasibility(measures, tolerance);
+            if least_infeasible && measures.primal <= NEAR_FEASIBLE {
+                status = QpStatus::Optimal;
+                break;
+            }
             if measures.primal > tolerance
-                && (infeasibility_certified(qp, layout, ws)
-                    || stalled && converged_except_feasibility(measures, tolerance))
+                && (infeasibility_certified(qp, layout, ws) || least_infeasible)
             {
                 status = QpStatus::Infeasible;
                 break;
@@ -400,8 +421,17 @@ impl SparseQp {
             iterations += 1;
             previous = Some(measures);
             ws.backup.copy_from(&ws.x);
-            if iterate(qp, layout, ws, system, shift, measures.mu).is_err() {
-                status = breakdown_status(previous, stalled, tolerance);
+            if iterate(
+                qp,
+                layout,
+                ws,
+                system,
+                measures.mu,
+                measures.primal <= tolerance && measures.dual <= tolerance,
+            )
+            .is_err()
+            {
+                status = breakdown_status(previous, stalled, tolerance, NEAR_FEASIBLE);
                 break;
             }
         }
@@ -470,11 +500,11 @@ fn initial_point(qp: &QpProblem<'_>, layout: &Layout, ws: &mut Workspace) {
 }
 
 /// Computes the residuals into the workspace and returns the relative measures.
-fn residuals(qp: &QpProblem<'_>, layout: &Layout, ws: &mut Workspace, shift: f64) -> Measures {
+fn residuals(qp: &QpProblem<'_>, layout: &Layout, ws: &mut Workspace) -> Measures {
     let x = &ws.x;
     hessian_times(&qp.h, &x.d, &mut ws.hd, &mut ws.tmp);
-    for (hd, d) in ws.hd.iter_mut().zip(&x.d) {
-        *hd += shift * d;
+    for ((hd, d), added) in ws.hd.iter_mut().zip(&x.d).zip(&ws.added) {
+        *hd += added * d;
     }
     a_transpose_times(qp.a, &x.y, &mut ws.aty);
     a_times(qp.a, &x.d, &mut ws.ad);

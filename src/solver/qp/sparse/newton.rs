@@ -27,6 +27,7 @@
 
 use nalgebra::DMatrix;
 
+use super::convexification::{Convexification, negative_diagonal_flip};
 use super::layout::{Layout, RowKind};
 use super::operators::dot;
 use crate::solver::kkt::{Inertia, KktError, KktSolver, Regularization};
@@ -400,10 +401,11 @@ impl NewtonSystem {
         norm
     }
 
-    /// Finds the convexification shift δ_c ≥ `floor` (see the module header): trials `floor`
-    /// (absolute, usually 0), then `first_shift` relative to `max(1, maxⱼ|Hⱼⱼ|)` (or `floor`
-    /// when larger) growing by `growth`. `scratch_n` and `scratch_m` are length-n and length-m
-    /// buffers. `None` when no shift up to 1e20 works.
+    /// Finds the convexification (see the module header): trials `floor` (absolute, usually 0)
+    /// on H alone; then, when H has negative diagonal entries, the same shift with them flipped
+    /// (`convexification.rs`); then `first_shift` relative to `max(1, maxⱼ|Hⱼⱼ|)` (or `floor`
+    /// when larger) growing by `growth`, with the flip. `scratch_n` and `scratch_m` are
+    /// length-n and length-m buffers. `None` when no shift up to 1e20 works.
     #[allow(clippy::too_many_arguments)]
     pub fn convexify(
         &mut self,
@@ -414,9 +416,9 @@ impl NewtonSystem {
         growth: f64,
         scratch_n: &mut [f64],
         scratch_m: &mut [f64],
-    ) -> Result<Option<f64>, KktError> {
+    ) -> Result<Option<Convexification>, KktError> {
         if let QpHessian::LowRank { delta, w, m } = qp.h {
-            return Ok(Some(low_rank_shift(delta, w, m)));
+            return Ok(Some(Convexification::uniform(low_rank_shift(delta, w, m))));
         }
         for (i, slot) in scratch_m.iter_mut().enumerate() {
             *slot = if layout.row[i] == RowKind::Equality {
@@ -428,9 +430,12 @@ impl NewtonSystem {
         let diag_scale = (0..self.n)
             .map(|j| self.diagonal_of_h(qp, j).abs())
             .fold(1.0f64, f64::max);
-        let mut shift = floor.max(0.0);
-        while shift <= 1e20 * diag_scale {
-            scratch_n.fill(shift);
+        let mut trial = Convexification::uniform(floor.max(0.0));
+        let mut flip_tried = false;
+        while trial.shift <= 1e20 * diag_scale {
+            for (j, slot) in scratch_n.iter_mut().enumerate() {
+                *slot = trial.added(j);
+            }
             self.assemble(
                 qp,
                 layout,
@@ -440,12 +445,22 @@ impl NewtonSystem {
             );
             let inertia = self.factor_with(qp, layout, true)?;
             if inertia.is_quasi_definite_like(self.n, self.m) {
-                return Ok(Some(shift));
+                return Ok(Some(trial));
             }
-            shift = if shift == 0.0 {
+            if !flip_tried {
+                flip_tried = true;
+                trial.flip = negative_diagonal_flip(
+                    (0..self.n).map(|j| self.diagonal_of_h(qp, j)),
+                    &layout.fixed,
+                );
+                if !trial.flip.is_empty() {
+                    continue;
+                }
+            }
+            trial.shift = if trial.shift == 0.0 {
                 first_shift * diag_scale
             } else {
-                (growth * shift).max(first_shift * diag_scale)
+                (growth * trial.shift).max(first_shift * diag_scale)
             };
         }
         Ok(None)

@@ -5,6 +5,13 @@
 //!     centring:   σ = (μ_aff / μ)³
 //!     corrector:  target σμ − Δt_aff ∘ Δz_aff          → Δ, α = 0.995 min(1, α_max) (1 without pairs)
 //! ```
+//! Safeguard: Mehrotra's heuristic has no convergence guarantee, and on a degenerate QP its
+//! corrector can cycle (a truss member's tension and compression parts, one at its bound in
+//! turn: the complementarity rose and fell with period 4 for 200 iterations while the primal and
+//! dual residuals stayed at 1e-15). When, at a primal and dual feasible iterate, the corrector
+//! step would raise the average complementarity μ, the step is recomputed as a plain centred Newton step (σ = ½, no
+//! second-order term), whose complementarity decreases to first order.
+//!
 //! Both solves reuse one factorization of the Newton matrix (`newton.rs`); primal and dual
 //! variables take the common step α. Slacks t of the bounds are recomputed from d and s
 //! (t = d − dl, …), so the bound equations hold exactly at every iterate.
@@ -18,20 +25,25 @@ use crate::solver::qp::QpProblem;
 /// Fraction of the distance to the boundary taken by a step.
 const STEP_TO_BOUNDARY: f64 = 0.995;
 
-/// One predictor–corrector iteration.
+/// Centring parameter σ of the safeguarded step (module header).
+const SAFEGUARD_CENTRING: f64 = 0.5;
+
+/// One predictor–corrector iteration; `feasible` when the primal and dual residuals are within
+/// the tolerance (the safeguard of the module header applies only then: away from
+/// feasibility μ may rightly grow, and infeasibility certificates need those steps).
 pub(super) fn iterate(
     qp: &QpProblem<'_>,
     layout: &Layout,
     ws: &mut Workspace,
     system: &mut NewtonSystem,
-    shift: f64,
     mu: f64,
+    feasible: bool,
 ) -> Result<(), KktError> {
     let (n, m) = (qp.g.len(), qp.a.nrows());
     // Barrier Hessian terms.
     for j in 0..n {
         let x = &ws.x;
-        let mut sigma = shift;
+        let mut sigma = ws.added[j];
         if layout.var_lower[j] {
             sigma += x.zl[j] / (x.d[j] - qp.dl[j]);
         }
@@ -81,7 +93,17 @@ pub(super) fn iterate(
         // Corrector: centring plus the second-order term of the predictor.
         complementarity_targets(qp, layout, ws, sigma * mu, true);
         direction(qp, layout, ws, system)?;
-        STEP_TO_BOUNDARY * max_step(qp, layout, &ws.x, &ws.dir).min(1.0)
+        let alpha = STEP_TO_BOUNDARY * max_step(qp, layout, &ws.x, &ws.dir).min(1.0);
+        let pairs = layout.pairs as f64;
+        if feasible && complementarity_after(qp, layout, &ws.x, &ws.dir, alpha) / pairs > mu {
+            // Mehrotra's corrector raised the complementarity: a centred step without the
+            // second-order term instead (see the module header).
+            complementarity_targets(qp, layout, ws, SAFEGUARD_CENTRING * mu, false);
+            direction(qp, layout, ws, system)?;
+            STEP_TO_BOUNDARY * max_step(qp, layout, &ws.x, &ws.dir).min(1.0)
+        } else {
+            alpha
+        }
     };
     let (x, dir) = (&mut ws.x, &ws.dir);
     for (a, b) in [

@@ -6,6 +6,7 @@ use nalgebra_sparse::{CooMatrix, CscMatrix, CsrMatrix};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use super::convexification::Convexification;
 use super::{SparseQp, operators};
 use crate::solver::qp::{self, QpHessian, QpMethod, QpProblem, QpSolution, QpStatus, WarmStart};
 
@@ -135,7 +136,7 @@ fn random_qp(rng: &mut ChaCha8Rng, n: usize, m: usize) -> Data {
 }
 
 /// Checks the KKT conditions with the shared sign convention to `tol` (absolute).
-fn assert_kkt(qp: &QpProblem<'_>, shift: f64, sol: &QpSolution, tol: f64) {
+fn assert_kkt(qp: &QpProblem<'_>, added: &Convexification, sol: &QpSolution, tol: f64) {
     let (n, m) = (qp.g.len(), qp.a.nrows());
     let mut hd = vec![0.0; n];
     let mut tmp = vec![0.0; 64];
@@ -145,7 +146,7 @@ fn assert_kkt(qp: &QpProblem<'_>, shift: f64, sol: &QpSolution, tol: f64) {
     let mut ad = vec![0.0; m];
     operators::a_times(qp.a, &sol.d, &mut ad);
     for j in 0..n {
-        let stat = hd[j] + shift * sol.d[j] + qp.g[j] + aty[j] + sol.z[j];
+        let stat = hd[j] + added.added(j) * sol.d[j] + qp.g[j] + aty[j] + sol.z[j];
         assert!(stat.abs() <= tol, "stationarity {j}: {stat:e}");
         let (d, z) = (sol.d[j], sol.z[j]);
         assert!(d >= qp.dl[j] - tol && d <= qp.du[j] + tol, "bound {j}");
@@ -207,13 +208,13 @@ fn random_sparse_convex_qps_satisfy_kkt() {
             let data = random_qp(&mut rng, n, m);
             let (sol, info) = solver.solve(&data.problem(), 1e-11);
             assert_eq!(sol.status, QpStatus::Optimal, "n={n} m={m} {info:?}");
-            assert_eq!(info.convexification, 0.0);
+            assert!(info.convexification.is_zero(), "{info:?}");
             assert!(
                 sol.iterations < 60,
                 "n={n} m={m}: {} iterations",
                 sol.iterations
             );
-            assert_kkt(&data.problem(), 0.0, &sol, 1e-8);
+            assert_kkt(&data.problem(), &Convexification::default(), &sol, 1e-8);
         }
     }
 }
@@ -231,7 +232,7 @@ fn symbolic_analysis_is_reused_for_the_same_pattern() {
     let (sol, second) = solver.solve(&data.problem(), 1e-10);
     assert!(second.reused_symbolic);
     assert_eq!(sol.status, QpStatus::Optimal);
-    assert_kkt(&data.problem(), 0.0, &sol, 1e-8);
+    assert_kkt(&data.problem(), &Convexification::default(), &sol, 1e-8);
 }
 
 #[test]
@@ -251,12 +252,14 @@ fn an_equality_qp_steps_with_the_factors_of_its_inertia_test() {
     solver.first_shift = 1.0;
     let (sol, info) = solver.solve(&data.problem(), 1e-10);
     assert_eq!(sol.status, QpStatus::Optimal);
-    assert!(info.convexification > 0.0, "{info:?}");
+    // H's negative diagonal entry flipped (no uniform shift needed).
+    assert_eq!(info.convexification.flip, vec![0.0, 2.0, 0.0], "{info:?}");
+    assert_eq!(info.convexification.shift, 0.0, "{info:?}");
     // Trials 0 and 1: nothing more for the step.
     assert_eq!(info.factorizations, 2, "{info:?}");
-    assert_kkt(&data.problem(), info.convexification, &sol, 1e-8);
+    assert_kkt(&data.problem(), &info.convexification, &sol, 1e-8);
     // The same QP again with a shift known to suffice (no inertia test): one factorization.
-    solver.fixed_shift = Some(info.convexification);
+    solver.fixed_convexification = Some(info.convexification.clone());
     let (again, info) = solver.solve(&data.problem(), 1e-10);
     assert_eq!(info.factorizations, 1, "{info:?}");
     for (a, b) in again.d.iter().zip(&sol.d) {
@@ -297,10 +300,10 @@ fn dense_sparse_and_low_rank_hessians_agree() {
         ..data.problem()
     };
     let (low_rank_sol, info) = SparseQp::new().solve(&low_rank_problem, 1e-11);
-    assert_eq!(info.convexification, 0.0);
+    assert!(info.convexification.is_zero(), "{info:?}");
     for sol in [&sparse_sol, &dense_sol, &low_rank_sol] {
         assert_eq!(sol.status, QpStatus::Optimal);
-        assert_kkt(&data.problem(), 0.0, sol, 1e-8);
+        assert_kkt(&data.problem(), &Convexification::default(), sol, 1e-8);
     }
     for j in 0..n {
         assert!((sparse_sol.d[j] - dense_sol.d[j]).abs() < 1e-8);
@@ -423,7 +426,7 @@ fn a_feasible_qp_with_a_huge_multiplier_is_not_called_infeasible() {
     );
     let sol = super::solve(&data.problem(), 1e-12);
     assert_eq!(sol.status, QpStatus::Optimal);
-    assert_kkt(&data.problem(), 0.0, &sol, 1e-8);
+    assert_kkt(&data.problem(), &Convexification::default(), &sol, 1e-8);
 }
 
 #[test]
@@ -453,20 +456,33 @@ fn indefinite_hessian_is_convexified_only_when_needed() {
     );
     let (sol, info) = SparseQp::new().solve(&data.problem(), 1e-10);
     assert_eq!(sol.status, QpStatus::Optimal);
-    assert_eq!(info.convexification, 0.0);
+    assert!(info.convexification.is_zero(), "{info:?}");
     assert!((sol.d[0] - 1.0).abs() < 1e-8 && (sol.d[1] - 0.5).abs() < 1e-8);
-    assert_kkt(&data.problem(), 0.0, &sol, 1e-8);
+    assert_kkt(&data.problem(), &Convexification::default(), &sol, 1e-8);
 
-    // Without the equality (only bounds), H + δI must be positive semidefinite: δ ≥ 1 (the
-    // shifts tried are 0, 1e-4, 1e-3, …, so the first acceptable one is exactly 1).
+    // Without the equality (only bounds), H must be convex: its negative diagonal entry is
+    // flipped, H + diag(0, 2) = I, and no uniform shift is needed.
     let data = small_qp(h, vec![-1.0, 0.1], &[], vec![-1.0; 2], vec![1.0; 2]);
     let (sol, info) = SparseQp::new().solve(&data.problem(), 1e-10);
     assert_eq!(sol.status, QpStatus::Optimal);
+    assert_eq!(info.convexification.flip, vec![0.0, 2.0], "{info:?}");
+    assert_eq!(info.convexification.shift, 0.0, "{info:?}");
+    assert!((sol.d[1] + 0.1).abs() < 1e-8, "{sol:?}");
+    assert_kkt(&data.problem(), &info.convexification, &sol, 1e-8);
+
+    // Negative curvature off the diagonal (H = [0 1; 1 0], eigenvalues ±1) has nothing to
+    // flip: H + δI must be positive semidefinite, δ ≥ 1 (the shifts tried are 0, 1e-4, 1e-3,
+    // …, so the first acceptable one is exactly 1).
+    let h = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 1.0, 0.0]);
+    let data = small_qp(h, vec![-1.0, 0.1], &[], vec![-1.0; 2], vec![1.0; 2]);
+    let (sol, info) = SparseQp::new().solve(&data.problem(), 1e-10);
+    assert_eq!(sol.status, QpStatus::Optimal);
+    assert!(info.convexification.flip.is_empty(), "{info:?}");
     assert!(
-        info.convexification >= 1.0 && info.convexification < 20.0,
+        info.convexification.shift >= 1.0 && info.convexification.shift < 20.0,
         "{info:?}"
     );
-    assert_kkt(&data.problem(), info.convexification, &sol, 1e-8);
+    assert_kkt(&data.problem(), &info.convexification, &sol, 1e-8);
 
     // A low-rank H = δI − W M Wᵀ with a negative eigenvalue gets the closed-form shift.
     let w = DMatrix::from_column_slice(3, 1, &[1.0, 1.0, 0.0]);
@@ -488,9 +504,9 @@ fn indefinite_hessian_is_convexified_only_when_needed() {
     };
     let (sol, info) = SparseQp::new().solve(&qp, 1e-10);
     // Eigenvalues of 0.5 I − w wᵀ: 0.5 − 2 = −1.5 → shift just above 1.5.
-    assert!((info.convexification - 1.5).abs() < 1e-6, "{info:?}");
+    assert!((info.convexification.shift - 1.5).abs() < 1e-6, "{info:?}");
     assert_eq!(sol.status, QpStatus::Optimal);
-    assert_kkt(&qp, info.convexification, &sol, 1e-8);
+    assert_kkt(&qp, &info.convexification, &sol, 1e-8);
 }
 
 #[test]
@@ -671,7 +687,7 @@ fn empty_problems_are_handled() {
     );
     let sol = super::solve(&fixed.problem(), 1e-10);
     assert_eq!(sol.status, QpStatus::Optimal);
-    assert_kkt(&fixed.problem(), 0.0, &sol, 1e-9);
+    assert_kkt(&fixed.problem(), &Convexification::default(), &sol, 1e-9);
 }
 
 #[test]
