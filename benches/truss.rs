@@ -77,8 +77,13 @@ fn layout(c: &mut Criterion) {
         let model = problem.model();
         c.bench_function(&format!("truss layout LP {name}"), |b| {
             b.iter(|| {
-                start::layout_start(&model.structure, &model.settings, model.full.as_ref())
-                    .expect("solves")
+                start::layout_start(
+                    &model.structure,
+                    &model.settings,
+                    model.full.as_ref(),
+                    &optimize::solver::Interrupt::new(),
+                )
+                .expect("solves")
             })
         });
     }

@@ -260,6 +260,72 @@ fn cmc_problem_file_starts_from_a_shipped_glb() {
     );
 }
 
+/// Every file under `dir` (recursively) by its path relative to `dir`, with its bytes.
+fn snapshot(dir: &Path) -> std::collections::BTreeMap<PathBuf, Vec<u8>> {
+    let mut files = std::collections::BTreeMap::new();
+    for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            for (inner, bytes) in snapshot(&path) {
+                files.insert(Path::new(&entry.file_name()).join(inner), bytes);
+            }
+        } else {
+            files.insert(entry.file_name().into(), std::fs::read(&path).unwrap());
+        }
+    }
+    files
+}
+
+#[test]
+fn a_write_failing_at_any_step_over_an_older_run_leaves_that_run_whole() {
+    let scratch = Scratch::new("write-failure");
+    let out_dir = scratch.0.join("run");
+    let out = out_dir.to_str().unwrap();
+    solved("truss", SHIPPED, &out_dir, &[]);
+    let old = snapshot(&out_dir);
+    // A different run (stopped after 2 iterations) fails at each of its file writes in turn,
+    // then at the move of its complete folder into place.
+    let args = [
+        "truss",
+        SHIPPED,
+        "-q",
+        "--threads",
+        "1",
+        "--max-iter",
+        "2",
+        "-o",
+        out,
+    ];
+    for step in 0..=old.len() {
+        let failed = Command::new(env!("CARGO_BIN_EXE_optimize"))
+            .args(args)
+            .env("OPTIMIZE_FAIL_WRITE_AFTER", step.to_string())
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&failed.stderr);
+        assert_eq!(failed.status.code(), Some(1), "step {step}: {stderr}");
+        assert!(stderr.contains("injected"), "step {step}: {stderr}");
+        assert!(
+            snapshot(&out_dir) == old,
+            "step {step}: the older run changed"
+        );
+        let leftovers: Vec<_> = std::fs::read_dir(&scratch.0).unwrap().flatten().collect();
+        assert_eq!(leftovers.len(), 1, "step {step}: temporaries left");
+    }
+    // Without the failure the new run replaces the old one as a whole.
+    let new = optimize(&args);
+    assert_eq!(new.status.code(), Some(3));
+    let written = snapshot(&out_dir);
+    assert_eq!(
+        written.keys().collect::<Vec<_>>(),
+        old.keys().collect::<Vec<_>>()
+    );
+    assert_eq!(read_result(&out_dir)["status"], "IterationLimit");
+    let summary = Path::new("result.json");
+    assert_ne!(written[summary], old[summary]);
+}
+
 #[test]
 fn check_after_a_solve_leaves_the_solved_run_intact() {
     let scratch = Scratch::new("check-after-solve");
@@ -637,28 +703,17 @@ fn an_output_folder_that_cannot_be_written_exits_1() {
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
+/// Runs the binary with `args` from the crate root, sends it SIGINT (what Ctrl-C sends) after
+/// `delay`, and returns its output and how long it took to exit after the signal.
 #[cfg(unix)]
-#[test]
-fn ctrl_c_writes_the_best_point_so_far_and_exits_130() {
-    // Eight pogo trials take a minute and more; SIGINT (what Ctrl-C sends) stops them at their
-    // next poll.
-    let scratch = Scratch::new("interrupt");
-    let out_dir = scratch.0.join("run");
+fn interrupted_after(args: &[&str], delay: std::time::Duration) -> (Output, std::time::Duration) {
     let child = Command::new(env!("CARGO_BIN_EXE_optimize"))
-        .args([
-            "gait",
-            "problems/gait/pogo_crouch.toml",
-            "-q",
-            "--threads",
-            "1",
-            "-o",
-            out_dir.to_str().unwrap(),
-        ])
+        .args(args)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .stderr(std::process::Stdio::piped())
         .spawn()
         .expect("the binary runs");
-    std::thread::sleep(std::time::Duration::from_millis(1500));
+    std::thread::sleep(delay);
     let kill = Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status()
@@ -666,16 +721,58 @@ fn ctrl_c_writes_the_best_point_so_far_and_exits_130() {
     assert!(kill.success());
     let started = std::time::Instant::now();
     let out = child.wait_with_output().unwrap();
+    (out, started.elapsed())
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_writes_the_best_point_so_far_and_exits_130() {
+    // Eight pogo trials take a minute and more; SIGINT stops them at their next poll.
+    let scratch = Scratch::new("interrupt");
+    let out_dir = scratch.0.join("run");
+    let args = [
+        "gait",
+        "problems/gait/pogo_crouch.toml",
+        "-q",
+        "--threads",
+        "1",
+        "-o",
+    ];
+    let args = [&args[..], &[out_dir.to_str().unwrap()]].concat();
+    let (out, took) = interrupted_after(&args, std::time::Duration::from_millis(1500));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(130), "{stderr}");
-    assert!(
-        started.elapsed().as_secs_f64() < 10.0,
-        "stopped after {:?}",
-        started.elapsed()
-    );
+    assert!(took.as_secs_f64() < 10.0, "stopped after {took:?}");
     let summary = read_result(&out_dir);
     assert_eq!(summary["status"], "Interrupted", "{summary}");
     assert!(out_dir.join("model.glb").is_file());
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_inside_a_long_rollout_of_a_check_exits_130_at_once() {
+    // Tasks at 25 s with dt = 5e-4 s: 50,000 RK4 steps per rollout, and `--check` takes half a
+    // minute; SIGINT after 1.5 s lands inside a rollout, which polls every few steps.
+    let scratch = Scratch::new("interrupt-rollout");
+    let out_dir = scratch.0.join("run");
+    let mut args = vec!["gait", "problems/gait/pogo_crouch.toml", "--check", "-q"];
+    args.extend(["--threads", "1", "--set", "controls.horizon=25"]);
+    let tasks = [
+        "task.0.time=25",
+        "task.1.time=25",
+        "task.2.time=25",
+        "task.3.time=25",
+    ];
+    for task in &tasks {
+        args.extend(["--set", task]);
+    }
+    args.extend(["-o", out_dir.to_str().unwrap()]);
+    let (out, took) = interrupted_after(&args, std::time::Duration::from_millis(1500));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(took.as_secs_f64() < 3.0, "stopped after {took:?}");
+    let summary = read_result(&out_dir.join("check"));
+    assert_eq!(summary["status"], "Interrupted", "{summary}");
 }
 
 #[test]

@@ -349,16 +349,38 @@ impl Drop for Scratch {
 }
 
 /// What a fuzz run saw: counts by outcome, a few errors per misplaced outcome, and the accepted
-/// mutation classes (what was done to which key) with their counts.
+/// mutation classes (what was done to which key) with their counts and the changed lines of
+/// the first accepted mutant of the class.
 #[derive(Default)]
 struct Tally {
     counts: BTreeMap<Outcome, usize>,
     misplaced: BTreeMap<Outcome, Vec<String>>,
-    accepted: BTreeMap<String, usize>,
+    accepted: BTreeMap<String, (usize, String)>,
+}
+
+/// The lines of `mutant` that `original` does not hold, joined by " | ": what a mutation wrote.
+fn changed_lines(original: &str, mutant: &str) -> String {
+    let before: std::collections::BTreeSet<&str> = original.lines().collect();
+    let changed: Vec<&str> = (mutant.lines())
+        .filter(|l| !before.contains(l))
+        .map(str::trim)
+        .collect();
+    if changed.is_empty() {
+        "(lines removed or repeated only)".into()
+    } else {
+        changed.join(" | ")
+    }
 }
 
 impl Tally {
-    fn add(&mut self, outcome: Outcome, seed_file: &Path, class: &str, error: String) {
+    fn add(
+        &mut self,
+        outcome: Outcome,
+        seed_file: &Path,
+        class: &str,
+        error: String,
+        sample: &str,
+    ) {
         *self.counts.entry(outcome).or_insert(0) += 1;
         let name = seed_file.file_name().unwrap().to_string_lossy();
         match outcome {
@@ -372,7 +394,9 @@ impl Tally {
             }
             Outcome::AcceptedEvaluated | Outcome::AcceptedEvaluationFailed => {
                 for one in class.split(" + ") {
-                    *self.accepted.entry(format!("{name}: {one}")).or_insert(0) += 1;
+                    let entry = (self.accepted.entry(format!("{name}: {one}")))
+                        .or_insert_with(|| (0, sample.to_string()));
+                    entry.0 += 1;
                 }
             }
             _ => {}
@@ -434,13 +458,14 @@ fn fuzz(kind: &str, seed: u64, count: usize, only: &[&str]) -> Tally {
             "{kind} mutant {k} of {} took {took:?}:\n{text}",
             files[which].display()
         );
-        tally.add(outcome, &files[which], &class, error);
+        let sample = changed_lines(&texts[which], &text);
+        tally.add(outcome, &files[which], &class, error, &sample);
     }
     tally
 }
 
 /// Prints the counts by outcome, the misplaced errors' samples and, with `accepted`, every
-/// accepted mutation class with its count.
+/// accepted mutation class with its count and a sample of the lines it wrote.
 fn report(kind: &str, tally: &Tally, accepted: bool) {
     let total: usize = tally.counts.values().sum();
     let parts: Vec<String> = (tally.counts.iter())
@@ -453,8 +478,8 @@ fn report(kind: &str, tally: &Tally, accepted: bool) {
         }
     }
     if accepted {
-        for (class, n) in &tally.accepted {
-            println!("  accepted {n:>4}  {class}");
+        for (class, (n, sample)) in &tally.accepted {
+            println!("  accepted {n:>4}  {class}  e.g. {sample}");
         }
     }
 }

@@ -163,7 +163,12 @@ fn sweep(name: &str, file: &dyn Fn(f64) -> String, exact_mass: f64, sizes: &[f64
         let model = problem.model();
         let wall = Instant::now();
         let before = cpu_seconds(&wall);
-        let layout = start::layout_start(&model.structure, &model.settings, model.full.as_ref());
+        let layout = start::layout_start(
+            &model.structure,
+            &model.settings,
+            model.full.as_ref(),
+            &optimize::solver::Interrupt::new(),
+        );
         let cpu = cpu_seconds(&wall) - before;
         match layout {
             Ok(l) => println!(

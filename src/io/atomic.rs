@@ -8,6 +8,9 @@
 //! the old folder is removed; its `check/` subfolder (the last `--check` report) is carried
 //! over. A target that exists and holds anything else than a run is refused rather than
 //! replaced, so `-o` never deletes unrelated files.
+//!
+//! Tests of the whole binary inject a write failure through the environment variable
+//! [`FAIL_WRITE_AFTER`]; it is unset in normal use.
 
 use std::fs;
 use std::io::Write;
@@ -22,6 +25,23 @@ pub const CHECK_FOLDER: &str = "check";
 
 /// The file that marks a folder as a complete run (written last).
 pub const SUMMARY: &str = "result.json";
+
+/// Environment variable injecting a write failure (for tests): with `N` set, writing a run's
+/// folder fails after its first N files, or, N being at least the number of files, when the
+/// complete new folder is moved into place after the old run was moved aside.
+pub const FAIL_WRITE_AFTER: &str = "OPTIMIZE_FAIL_WRITE_AFTER";
+
+/// The injected failure of step `step` of a write (file `step` of the staging, or the move
+/// into place as step `files`), if [`FAIL_WRITE_AFTER`] asks for it.
+fn injected_failure(step: usize, files: usize) -> std::io::Result<()> {
+    let after = std::env::var(FAIL_WRITE_AFTER).ok();
+    match after.and_then(|n| n.parse::<usize>().ok()) {
+        Some(n) if n.min(files) == step => Err(std::io::Error::other(format!(
+            "write failure injected by {FAIL_WRITE_AFTER}"
+        ))),
+        _ => Ok(()),
+    }
+}
 
 fn io_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
     move |source| Error::Io {
@@ -80,7 +100,8 @@ pub fn write_run(dir: &Path, artifacts: &[Artifact]) -> Result<Vec<PathBuf>, Err
         fs::create_dir_all(parent).map_err(io_error(parent))?;
     }
     let staging = sibling(dir, "new");
-    let staged = stage(&staging, artifacts).and_then(|()| replace(dir, &staging));
+    let files = artifacts.len();
+    let staged = stage(&staging, artifacts).and_then(|()| replace(dir, &staging, files));
     if staged.is_err() {
         let _ = fs::remove_dir_all(&staging);
     }
@@ -91,21 +112,24 @@ pub fn write_run(dir: &Path, artifacts: &[Artifact]) -> Result<Vec<PathBuf>, Err
 /// Writes every artifact into the new folder `staging`.
 fn stage(staging: &Path, artifacts: &[Artifact]) -> Result<(), Error> {
     fs::create_dir(staging).map_err(io_error(staging))?;
-    for a in artifacts {
+    for (k, a) in artifacts.iter().enumerate() {
         let path = staging.join(&a.name);
+        injected_failure(k, artifacts.len()).map_err(io_error(&path))?;
         create_synced(&path, &a.bytes).map_err(io_error(&path))?;
     }
     Ok(())
 }
 
-/// Moves the complete folder `staging` to `dir`, carrying over the old folder's `check/`.
-fn replace(dir: &Path, staging: &Path) -> Result<(), Error> {
+/// Moves the complete folder `staging` (of `files` files) to `dir`, carrying over the old
+/// folder's `check/`.
+fn replace(dir: &Path, staging: &Path, files: usize) -> Result<(), Error> {
     if fs::symlink_metadata(dir).is_err() {
         return fs::rename(staging, dir).map_err(io_error(dir));
     }
     let old = sibling(dir, "old");
     fs::rename(dir, &old).map_err(io_error(dir))?;
-    if let Err(e) = fs::rename(staging, dir) {
+    let moved = injected_failure(files, files).and_then(|()| fs::rename(staging, dir));
+    if let Err(e) = moved {
         let _ = fs::rename(&old, dir);
         return Err(io_error(dir)(e));
     }

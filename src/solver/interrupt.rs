@@ -4,7 +4,10 @@
 //! Polled by: the SQP solver between iterations ([`crate::solver::Options::interrupt`]) and at
 //! every evaluation of its problem (wrapped in [`Interruptible`]), so a line search or an
 //! assembly stops at its next evaluation; derivative checks, start searches and feasibility
-//! phases through the same wrapper; gait rollouts every [`STEPS_BETWEEN_POLLS`] RK4 steps.
+//! phases through the same wrapper; gait rollouts every [`STEPS_BETWEEN_POLLS`] RK4 steps;
+//! QP solves (`qp::WarmStart::interruptible`) before every interior-point iteration, that is
+//! between two factorizations of the KKT matrix (one factorization is not interrupted), and
+//! the truss layout LPs before every simplex pivot and interior-point iteration.
 //! An interrupted evaluation returns [`EvalError::Fatal`] with the message [`INTERRUPTED`];
 //! the solver then ends with status `Interrupted` at its last accepted point.
 //! A poll is one relaxed atomic load.

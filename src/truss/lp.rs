@@ -27,10 +27,16 @@
 //! primal optimum, so the pair stays certified. The QP multipliers λ of `A x = b` follow `c + Aᵀλ + z = 0` with z ≤ 0 at
 //! x = 0, so the LP duals are y = −λ (`Aᵀy = c + z ≤ c`). Both solvers report the same
 //! residuals recomputed from the input, so their results are certified the same way.
+//!
+//! Interrupt: both poll the run's flag ([`Interrupt`]), the simplex before every pivot (one
+//! pivot is O(m·(m + n)) flops, the poll one relaxed atomic load), the interior-point method
+//! before every iteration; a raised flag ends the LP with [`LpError::Interrupted`] and no
+//! solution (an interrupted crossover keeps the interior-point solution).
 
 use nalgebra::DMatrix;
 use nalgebra_sparse::{CscMatrix, CsrMatrix};
 
+use crate::solver::Interrupt;
 use crate::solver::qp::{QpHessian, QpProblem, QpStatus, sparse};
 
 /// Why an LP has no optimal solution.
@@ -49,6 +55,9 @@ pub enum LpError {
     /// numerical failure).
     #[error("the interior-point method did not converge")]
     IterationLimit,
+    /// The run's interrupt flag was raised.
+    #[error("the linear program was interrupted")]
+    Interrupted,
 }
 
 /// An optimal primal–dual pair.
@@ -137,9 +146,13 @@ impl Tableau {
         allowed: usize,
         pivots: &mut usize,
         limit: usize,
+        interrupt: &Interrupt,
     ) -> Result<(), LpError> {
         let mut degenerate = 0;
         loop {
+            if interrupt.is_raised() {
+                return Err(LpError::Interrupted);
+            }
             let candidates = (0..allowed).filter(|&j| self.t[(self.m, j)] < -self.tol);
             let entering = if degenerate > DEGENERATE_RUN {
                 candidates.min()
@@ -188,10 +201,15 @@ impl Tableau {
     }
 }
 
-/// Solves `min cᵀx s.t. A x = b, x ≥ 0` (module header).
-pub fn solve(a: &DMatrix<f64>, b: &[f64], c: &[f64]) -> Result<LpSolution, LpError> {
+/// Solves `min cᵀx s.t. A x = b, x ≥ 0` (module header), stopping when `interrupt` is raised.
+pub fn solve(
+    a: &DMatrix<f64>,
+    b: &[f64],
+    c: &[f64],
+    interrupt: &Interrupt,
+) -> Result<LpSolution, LpError> {
     let (m, n) = a.shape();
-    solve_limited(a, b, c, 50 * (m + n) + 1000)
+    solve_limited(a, b, c, 50 * (m + n) + 1000, interrupt)
 }
 
 /// [`solve`] with at most `limit` pivots (`LpError::PivotLimit` beyond).
@@ -200,6 +218,7 @@ fn solve_limited(
     b: &[f64],
     c: &[f64],
     limit: usize,
+    interrupt: &Interrupt,
 ) -> Result<LpSolution, LpError> {
     let (m, n) = a.shape();
     assert_eq!(b.len(), m);
@@ -239,7 +258,7 @@ fn solve_limited(
         tol: 1e-10 * scale,
     };
     let mut pivots = 0;
-    tab.optimize(n, &mut pivots, limit)?;
+    tab.optimize(n, &mut pivots, limit, interrupt)?;
     tab.refactor();
     let infeasibility = -tab.t[(m, cols)];
     if infeasibility > 1e-9 * scale * (1.0 + b.iter().map(|v| v.abs()).sum::<f64>()) {
@@ -248,6 +267,9 @@ fn solve_limited(
     // Drive artificials out of the basis on the largest entry of their row. A row without a
     // usable entry is redundant: it is cleared so that no later pivot can move its artificial.
     for r in 0..m {
+        if interrupt.is_raised() {
+            return Err(LpError::Interrupted);
+        }
         if tab.basis[r] < n {
             continue;
         }
@@ -268,7 +290,7 @@ fn solve_limited(
     tab.costs = (0..cols).map(|j| if j < n { c[j] } else { 0.0 }).collect();
     tab.refactor();
     tab.tol = 1e-9 * c.iter().map(|v| v.abs()).fold(0.0, f64::max);
-    tab.optimize(n, &mut pivots, limit)?;
+    tab.optimize(n, &mut pivots, limit, interrupt)?;
     tab.refactor();
     let mut x = vec![0.0; n];
     for r in 0..m {
@@ -313,12 +335,13 @@ const CROSSOVER_PIVOTS: usize = 2;
 /// `to_vertex`, a crossover to a vertex (module header). Components of x below zero by rounding
 /// are set to zero. Without the crossover x is the interior-point limit on the optimal face
 /// (the duals are the same either way); the crossover's dense simplex dominates the time on
-/// LPs of thousands of columns.
+/// LPs of thousands of columns. Stops when `interrupt` is raised (module header).
 pub fn solve_sparse(
     a: &CsrMatrix<f64>,
     b: &[f64],
     c: &[f64],
     to_vertex: bool,
+    interrupt: &Interrupt,
 ) -> Result<LpSolution, LpError> {
     let (m, n) = (a.nrows(), a.ncols());
     assert_eq!(b.len(), m);
@@ -335,17 +358,21 @@ pub fn solve_sparse(
         bl: b,
         bu: b,
     };
-    let sol = sparse::solve(&problem, INTERIOR_TOLERANCE);
+    let mut solver = sparse::SparseQp::new();
+    solver.interrupt = interrupt.clone();
+    let (sol, _) = solver.solve(&problem, INTERIOR_TOLERANCE);
     match sol.status {
         QpStatus::Optimal => {}
         QpStatus::Infeasible => return Err(LpError::Infeasible),
         QpStatus::Unbounded => return Err(LpError::Unbounded),
         QpStatus::IterationLimit | QpStatus::Numerical => return Err(LpError::IterationLimit),
+        QpStatus::Interrupted => return Err(LpError::Interrupted),
     }
     let mut x: Vec<f64> = sol.d.iter().map(|v| v.max(0.0)).collect();
     let y: Vec<f64> = sol.lambda.iter().map(|l| -l).collect();
     let mut objective: f64 = x.iter().zip(c).map(|(x, c)| x * c).sum();
-    if let Some((vertex, value)) = to_vertex.then(|| crossover(a, b, c, &x)).flatten()
+    let vertex = to_vertex.then(|| crossover(a, b, c, &x, interrupt));
+    if let Some((vertex, value)) = vertex.flatten()
         && value <= objective + CROSSOVER_GAP * objective.abs().max(f64::MIN_POSITIVE)
     {
         x = vertex;
@@ -374,7 +401,13 @@ pub fn solve_sparse(
 /// The vertex of the LP restricted to the support of `x` and the rows it touches, scattered to
 /// full length, and its objective (module header); None when that LP fails or a row it leaves
 /// out has a nonzero right-hand side.
-fn crossover(a: &CsrMatrix<f64>, b: &[f64], c: &[f64], x: &[f64]) -> Option<(Vec<f64>, f64)> {
+fn crossover(
+    a: &CsrMatrix<f64>,
+    b: &[f64],
+    c: &[f64],
+    x: &[f64],
+    interrupt: &Interrupt,
+) -> Option<(Vec<f64>, f64)> {
     let largest = x.iter().copied().fold(0.0, f64::max);
     let mut column = vec![usize::MAX; x.len()];
     let mut support = Vec::new();
@@ -405,7 +438,7 @@ fn crossover(a: &CsrMatrix<f64>, b: &[f64], c: &[f64], x: &[f64]) -> Option<(Vec
     let sub_b: Vec<f64> = rows.iter().map(|&r| b[r]).collect();
     let sub_c: Vec<f64> = support.iter().map(|&j| c[j]).collect();
     let limit = CROSSOVER_PIVOTS * (rows.len() + support.len()) + 100;
-    let vertex = solve_limited(&dense, &sub_b, &sub_c, limit).ok()?;
+    let vertex = solve_limited(&dense, &sub_b, &sub_c, limit, interrupt).ok()?;
     let mut full = vec![0.0; x.len()];
     for (k, &j) in support.iter().enumerate() {
         full[j] = vertex.x[k];
@@ -423,7 +456,7 @@ mod tests {
         let a = DMatrix::from_row_slice(2, 4, &[1.0, 1.0, 1.0, 0.0, 1.0, 3.0, 0.0, 1.0]);
         let b = [4.0, 6.0];
         let c = [-1.0, -2.0, 0.0, 0.0];
-        let s = solve(&a, &b, &c).unwrap();
+        let s = solve(&a, &b, &c, &Interrupt::new()).unwrap();
         assert!((s.objective + 5.0).abs() < 1e-12);
         assert!((s.x[0] - 3.0).abs() < 1e-12 && (s.x[1] - 1.0).abs() < 1e-12);
         let dual: f64 = s.y.iter().zip(&b).map(|(y, b)| y * b).sum();
@@ -441,8 +474,8 @@ mod tests {
             DMatrix::from_row_slice(2, 5, &[1.0, 1.0, 1.0, 0.0, 1.0, 1.0, 3.0, 0.0, 1.0, 1.0]);
         let a = CsrMatrix::from(&dense);
         let (b, c) = ([4.0, 6.0], [-1.0, -2.0, 0.0, 0.0, -1.0]);
-        let s = solve_sparse(&a, &b, &c, true).unwrap();
-        let reference = solve(&dense, &b, &c).unwrap();
+        let s = solve_sparse(&a, &b, &c, true, &Interrupt::new()).unwrap();
+        let reference = solve(&dense, &b, &c, &Interrupt::new()).unwrap();
         assert!((s.objective - reference.objective).abs() < 1e-9);
         assert!((s.x[0] + s.x[4] - 3.0).abs() < 1e-9 && (s.x[1] - 1.0).abs() < 1e-9);
         assert!(s.x[0].min(s.x[4]) == 0.0, "not a vertex: {:?}", s.x);
@@ -452,7 +485,7 @@ mod tests {
         // x1 + x2 = −1 has no x ≥ 0.
         let a = CsrMatrix::from(&DMatrix::from_row_slice(1, 2, &[1.0, 1.0]));
         assert_eq!(
-            solve_sparse(&a, &[-1.0], &[1.0, 1.0], true),
+            solve_sparse(&a, &[-1.0], &[1.0, 1.0], true, &Interrupt::new()),
             Err(LpError::Infeasible)
         );
     }
@@ -461,15 +494,37 @@ mod tests {
     fn negative_right_hand_sides_redundant_rows_and_failures() {
         // −x1 − x2 = −2 (twice: redundant), min x1 + 2x2 → x = (2, 0), f = 2.
         let a = DMatrix::from_row_slice(2, 2, &[-1.0, -1.0, -1.0, -1.0]);
-        let s = solve(&a, &[-2.0, -2.0], &[1.0, 2.0]).unwrap();
+        let s = solve(&a, &[-2.0, -2.0], &[1.0, 2.0], &Interrupt::new()).unwrap();
         assert!((s.objective - 2.0).abs() < 1e-12);
         let dual: f64 = s.y.iter().map(|y| -2.0 * y).sum();
         assert!((dual - 2.0).abs() < 1e-12);
         // x1 + x2 = −1 has no x ≥ 0.
         let a = DMatrix::from_row_slice(1, 2, &[1.0, 1.0]);
-        assert_eq!(solve(&a, &[-1.0], &[1.0, 1.0]), Err(LpError::Infeasible));
+        assert_eq!(
+            solve(&a, &[-1.0], &[1.0, 1.0], &Interrupt::new()),
+            Err(LpError::Infeasible)
+        );
         // min −x1 s.t. x1 − x2 = 0 is unbounded.
         let a = DMatrix::from_row_slice(1, 2, &[1.0, -1.0]);
-        assert_eq!(solve(&a, &[0.0], &[-1.0, 0.0]), Err(LpError::Unbounded));
+        assert_eq!(
+            solve(&a, &[0.0], &[-1.0, 0.0], &Interrupt::new()),
+            Err(LpError::Unbounded)
+        );
+    }
+
+    #[test]
+    fn a_raised_interrupt_stops_both_solvers() {
+        // The LP of the test above that both solvers solve: min x1 + 2x2, x1 + x2 = 2.
+        let a = DMatrix::from_row_slice(1, 2, &[1.0, 1.0]);
+        let (b, c) = ([2.0], [1.0, 2.0]);
+        let raised = Interrupt::new();
+        raised.raise();
+        assert_eq!(solve(&a, &b, &c, &raised), Err(LpError::Interrupted));
+        let sparse = CsrMatrix::from(&a);
+        for to_vertex in [true, false] {
+            let result = solve_sparse(&sparse, &b, &c, to_vertex, &raised);
+            assert_eq!(result, Err(LpError::Interrupted));
+            assert!(solve_sparse(&sparse, &b, &c, to_vertex, &Interrupt::new()).is_ok());
+        }
     }
 }

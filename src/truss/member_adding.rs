@@ -38,6 +38,7 @@ use super::lp::LpError;
 use super::mass::gravity;
 use super::model::{Beam, Structure, Vec3};
 use super::plastic::{self, LpMethod, PlasticLayout};
+use crate::solver::Interrupt;
 
 /// Violation v above which a member is added (relative to its cost).
 pub const ADD_TOLERANCE: f64 = 1e-6;
@@ -104,6 +105,7 @@ pub fn solve(
     price: &dyn Fn(f64) -> MemberPrice,
     growth: Option<&Growth>,
     method: LpMethod,
+    interrupt: &Interrupt,
 ) -> Result<Layouts, LpError> {
     let cases = structure.joints.first().map_or(0, |j| j.loads.len());
     let mut current = structure.clone();
@@ -118,11 +120,14 @@ pub fn solve(
         let weights: Option<Vec<(f64, f64)>> = prices.iter().map(|p| p.weight).collect();
         let solved = (0..cases)
             .map(|c| {
-                plastic::layout_with_costs(&current, c, axes, &costs, weights.as_deref(), method)
+                let weights = weights.as_deref();
+                plastic::layout_with_costs(&current, c, axes, &costs, weights, method, interrupt)
             })
             .collect::<Result<Vec<_>, _>>();
         let layouts = match (solved, previous) {
             (Ok(layouts), _) => layouts,
+            // An interrupted LP ends the layout at once.
+            (Err(LpError::Interrupted), _) => return Err(LpError::Interrupted),
             // Adding columns keeps the LP feasible: a failure is the interior-point method's
             // on the larger LP; the smaller one's solution stands, uncertified.
             (Err(_), Some(previous)) => return Ok(previous),
@@ -295,7 +300,15 @@ mod tests {
     fn member_adding_reaches_the_full_ground_structure_optimum_with_a_certificate() {
         let (nx, ny) = (7, 5);
         let full = cantilever(nx, ny, nx * ny);
-        let reference = solve(&full, 2, &unit_price, None, LpMethod::Simplex).unwrap();
+        let reference = solve(
+            &full,
+            2,
+            &unit_price,
+            None,
+            LpMethod::Simplex,
+            &Interrupt::new(),
+        )
+        .unwrap();
         let sparse = cantilever(nx, ny, 4);
         let admits = |b: Beam| {
             let [a, c] = b.ends;
@@ -315,6 +328,7 @@ mod tests {
             &unit_price,
             Some(&growth),
             LpMethod::InteriorPoint,
+            &Interrupt::new(),
         )
         .unwrap();
         let (optimum, volume) = (reference.cases[0].volume, grown.cases[0].volume);

@@ -45,8 +45,8 @@ use serde_json::json;
 use crate::application::{Application, CheckCase};
 use crate::error::{Error, InputError};
 use crate::outcome::{Artifact, Headline, Kind, Outcome, ResultSummary, RunOptions};
-use crate::solver::Nlp;
 use crate::solver::derivatives::CheckOptions;
+use crate::solver::{Interrupt, Nlp};
 use crate::spec::{Key, Source};
 
 use build::Model;
@@ -144,12 +144,13 @@ impl Problem {
 
     /// The NLP the first solve starts from. With the `layout` start: the layout LP's forces on
     /// the ground structure without its idle beams ([`start::layout_start`]); should that LP have
-    /// no solution, the random start on the whole ground structure. Also returns a description
-    /// of the start for result.json.
+    /// no solution or be interrupted (`interrupt` raised), the random start on the whole ground
+    /// structure. Also returns a description of the start for result.json.
     pub fn staged_nlp(
         &self,
         model: &Model,
         seed: u64,
+        interrupt: &Interrupt,
     ) -> Result<(TrussNlp, serde_json::Value, Option<LpReport>), InputError> {
         if self.spec.start_forces != StartForces::Layout {
             let method = match self.spec.start_forces {
@@ -158,7 +159,8 @@ impl Problem {
             };
             return Ok((self.nlp(model, seed)?, json!({ "method": method }), None));
         }
-        let layout = start::layout_start(&model.structure, &model.settings, model.full.as_ref())
+        let full = model.full.as_ref();
+        let layout = start::layout_start(&model.structure, &model.settings, full, interrupt)
             .map_err(|e| e.to_string())
             .and_then(|layout| {
                 let report = json!({
@@ -263,7 +265,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             json!({ "method": "result", "file": previous.path }),
             None,
         ),
-        None => problem.staged_nlp(&model, seed)?,
+        None => problem.staged_nlp(&model, seed, &opts.interrupt)?,
     };
     let start = quality::Point::start(&nlp)
         .ok()

@@ -25,6 +25,7 @@ use super::lp::{self, LpError};
 use super::mass::gravity;
 use super::model::{Structure, Vec3};
 use super::nlp::balance_basis;
+use crate::solver::Interrupt;
 
 /// The LP optimum on a fixed ground structure.
 #[derive(Debug, Clone, PartialEq)]
@@ -72,12 +73,21 @@ pub fn layout(
         })
         .collect();
     let axes = if planar { 2 } else { 3 };
-    layout_with_costs(structure, case, axes, &costs, None, LpMethod::Simplex)
+    let interrupt = Interrupt::new();
+    layout_with_costs(
+        structure,
+        case,
+        axes,
+        &costs,
+        None,
+        LpMethod::Simplex,
+        &interrupt,
+    )
 }
 
 /// The layout LP with general per-beam costs: `costs[j] = (cost per newton of tension, cost per
 /// newton of compression)` of beam j (any unit; `volume` is in that unit times N), balance in
-/// the first `axes` coordinate directions, solved by `method`.
+/// the first `axes` coordinate directions, solved by `method` until `interrupt` is raised.
 ///
 /// `self_weight[j] = (kg per newton of tension, kg per newton of compression)` of beam j, if
 /// given: the beam's weight `g·(w_T·t_j + w_C·c_j)` is lumped half on each end, as in the NLP's
@@ -89,6 +99,7 @@ pub fn layout_with_costs(
     costs: &[(f64, f64)],
     self_weight: Option<&[(f64, f64)]>,
     method: LpMethod,
+    interrupt: &Interrupt,
 ) -> Result<PlasticLayout, LpError> {
     let beams = structure.beams.len();
     let mut rows: Vec<(usize, nalgebra::Vector3<f64>)> = Vec::new();
@@ -130,9 +141,13 @@ pub fn layout_with_costs(
         .map(|(i, r)| -r.dot(&structure.joints[*i].loads[case]))
         .collect();
     let s = match method {
-        LpMethod::Simplex => lp::solve(&DMatrix::from(&a), &b, &cost)?,
-        LpMethod::InteriorPoint => lp::solve_sparse(&CsrMatrix::from(&a), &b, &cost, true)?,
-        LpMethod::InteriorFace => lp::solve_sparse(&CsrMatrix::from(&a), &b, &cost, false)?,
+        LpMethod::Simplex => lp::solve(&DMatrix::from(&a), &b, &cost, interrupt)?,
+        LpMethod::InteriorPoint => {
+            lp::solve_sparse(&CsrMatrix::from(&a), &b, &cost, true, interrupt)?
+        }
+        LpMethod::InteriorFace => {
+            lp::solve_sparse(&CsrMatrix::from(&a), &b, &cost, false, interrupt)?
+        }
     };
     let forces = (0..beams).map(|j| s.x[j] - s.x[beams + j]).collect();
     let dual_volume = s.y.iter().zip(&b).map(|(y, b)| y * b).sum();
@@ -221,7 +236,16 @@ mod tests {
             beams: vec![Beam::new(0, 1)],
         };
         let method = LpMethod::Simplex;
-        let sol = layout_with_costs(&s, 0, 2, &[(1.0, 1.0)], Some(&[(w, w)]), method).unwrap();
+        let sol = layout_with_costs(
+            &s,
+            0,
+            2,
+            &[(1.0, 1.0)],
+            Some(&[(w, w)]),
+            method,
+            &Interrupt::new(),
+        )
+        .unwrap();
         let t = p / (1.0 - 0.5 * crate::truss::mass::STANDARD_GRAVITY * w);
         assert!(
             (sol.forces[0] + t).abs() < 1e-9 * t,
@@ -230,7 +254,8 @@ mod tests {
             t
         );
         assert!((sol.volume - t).abs() < 1e-9 * t);
-        let light = layout_with_costs(&s, 0, 2, &[(1.0, 1.0)], None, method).unwrap();
+        let light =
+            layout_with_costs(&s, 0, 2, &[(1.0, 1.0)], None, method, &Interrupt::new()).unwrap();
         assert!((light.forces[0] + p).abs() < 1e-9 * p);
     }
 
@@ -315,8 +340,19 @@ mod tests {
         let costs: Vec<(f64, f64)> = (0..s.beams.len())
             .map(|j| (s.length(j) / 2.0, s.length(j)))
             .collect();
-        let simplex = layout_with_costs(&s, 0, 2, &costs, None, LpMethod::Simplex).unwrap();
-        let interior = layout_with_costs(&s, 0, 2, &costs, None, LpMethod::InteriorPoint).unwrap();
+        let simplex =
+            layout_with_costs(&s, 0, 2, &costs, None, LpMethod::Simplex, &Interrupt::new())
+                .unwrap();
+        let interior = layout_with_costs(
+            &s,
+            0,
+            2,
+            &costs,
+            None,
+            LpMethod::InteriorPoint,
+            &Interrupt::new(),
+        )
+        .unwrap();
         let gap = (interior.volume - simplex.volume).abs() / simplex.volume;
         assert!(gap < 1e-6, "{} vs {}", interior.volume, simplex.volume);
         assert!(interior.primal_residual < 1e-9, "{interior:?}");

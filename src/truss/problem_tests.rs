@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use super::{Problem, load};
 use crate::outcome::RunOptions;
-use crate::solver::Nlp;
 use crate::solver::derivatives::check_derivatives;
+use crate::solver::{Interrupt, Nlp};
 
 /// Every seed example shipped in problems/truss/.
 pub const EXAMPLES: [&str; 12] = [
@@ -268,7 +268,7 @@ fn the_layout_start_keeps_the_mirror_images_of_kept_joints() {
     // mirror symmetric. Its layout start must keep every free joint's images so that the
     // symmetry rows can be built (else the run falls back to the random start).
     let p = problem("eiffel_tower");
-    let (nlp, report, _) = p.staged_nlp(p.model(), 0).unwrap();
+    let (nlp, report, _) = p.staged_nlp(p.model(), 0, &Interrupt::new()).unwrap();
     assert_eq!(report["method"], "layout", "{report}");
     let joints = &nlp.structure().joints;
     let symmetry = &p.model().settings.symmetry;
@@ -313,7 +313,9 @@ fn with_linear_mass_the_layout_start_balances_self_weight() {
     let mut settings = p.model().settings.clone();
     settings.mass = super::mass::MassModel::linear(2.5e8, 2.5e8, 7850.0);
     assert!(settings.self_weight);
-    let start = super::start::layout_start(&p.model().structure, &settings, None).unwrap();
+    let start =
+        super::start::layout_start(&p.model().structure, &settings, None, &Interrupt::new())
+            .unwrap();
     let nlp = super::nlp::TrussNlp::with_parts(
         start.structure,
         settings.clone(),
@@ -327,7 +329,9 @@ fn with_linear_mass_the_layout_start_balances_self_weight() {
     assert!(residual < 1e-8, "relative residual {residual:e}");
     // Without self-weight in the LP the same start is off by the beams' weight.
     settings.self_weight = false;
-    let light = super::start::layout_start(&p.model().structure, &settings, None).unwrap();
+    let light =
+        super::start::layout_start(&p.model().structure, &settings, None, &Interrupt::new())
+            .unwrap();
     settings.self_weight = true;
     let nlp =
         super::nlp::TrussNlp::with_parts(light.structure, settings, light.forces, light.parts)
@@ -406,4 +410,30 @@ fn a_far_away_joint_does_not_make_distinct_joints_coincide() {
     let e = load_text(&close).unwrap_err();
     assert!(e.message.contains("same position"), "{e}");
     assert!(e.message.contains(" m)"), "{e}");
+}
+
+#[test]
+fn ctrl_c_inside_the_layout_lp_stops_it_within_a_second() {
+    // The cooling tower's layout LP (member adding over a ground structure of thousands of
+    // members, interior point and crossover) takes seconds; the flag is raised inside it.
+    let p = problem("cooling_tower");
+    let model = p.model();
+    let interrupt = Interrupt::new();
+    let raised_at = std::sync::Mutex::new(None);
+    let result = std::thread::scope(|scope| {
+        scope.spawn(|| {
+            std::thread::sleep(std::time::Duration::from_millis(500));
+            *raised_at.lock().unwrap() = Some(std::time::Instant::now());
+            interrupt.raise();
+        });
+        let full = model.full.as_ref();
+        super::start::layout_start(&model.structure, &model.settings, full, &interrupt)
+    });
+    let latency = raised_at.lock().unwrap().map(|t| t.elapsed());
+    assert_eq!(result.err(), Some(super::lp::LpError::Interrupted));
+    let latency = latency.expect("the flag was raised while the LP ran");
+    assert!(
+        latency.as_secs_f64() < 1.0,
+        "stopped {latency:?} after the flag"
+    );
 }

@@ -9,7 +9,7 @@ use super::nlp::TrussNlp;
 use super::plastic;
 use super::start;
 use crate::solver::qp::QpMethod;
-use crate::solver::{Nlp, Options};
+use crate::solver::{Interrupt, Nlp, Options};
 
 /// The half-wheel ground structure of plastic.rs's LP test (simple supports at (±1, 0), P = 1 N
 /// down at the origin, nodes on a grid of step `h` in y ≥ 0, all pairs connected).
@@ -90,7 +90,7 @@ fn linear_sizing_equals_the_plastic_lp_and_geometry_improves_on_it() {
         lp.volume
     );
     // Geometry from the staged start: the layout LP's members with their LP forces and signs.
-    let staged = start::layout_start(&s, &linear_settings(true), None).unwrap();
+    let staged = start::layout_start(&s, &linear_settings(true), None, &Interrupt::new()).unwrap();
     assert!((staged.lp.cost[0] - lp.volume).abs() <= 1e-6 * lp.volume);
     let geometry = TrussNlp::with_parts(
         staged.structure,
@@ -117,7 +117,7 @@ fn linear_sizing_equals_the_plastic_lp_and_geometry_improves_on_it() {
 #[test]
 fn design_from_a_solve_reports_consistent_figures() {
     let s = half_wheel(0.5);
-    let staged = start::layout_start(&s, &linear_settings(true), None).unwrap();
+    let staged = start::layout_start(&s, &linear_settings(true), None, &Interrupt::new()).unwrap();
     let nlp = TrussNlp::with_parts(
         staged.structure,
         linear_settings(true),

@@ -71,6 +71,7 @@ use super::member_adding::{self, Growth, MemberPrice};
 use super::model::{Beam, Mirror, Objective, Obstacle, Settings, Structure};
 use super::nlp::ForceParts;
 use super::plastic::LpMethod;
+use crate::solver::Interrupt;
 
 /// Beams carrying at most this fraction of the largest |λ| in every case are idle.
 pub const IDLE_FRACTION: f64 = 1e-6;
@@ -150,25 +151,30 @@ pub fn mass_per_newton(length: f64, settings: &Settings, force_scale: f64) -> (f
 
 /// Stage 1 on `structure` (module header); with `full`, the LP is over every admissible pair of
 /// joints by member adding, starting from the structure's beams. Fails only if no subset
-/// tried can carry the loads.
+/// tried can carry the loads, or with [`LpError::Interrupted`] at once when `interrupt` is
+/// raised.
 pub fn layout_start(
     structure: &Structure,
     settings: &Settings,
     full: Option<&FullConnectivity>,
+    interrupt: &Interrupt,
 ) -> Result<LayoutStart, LpError> {
     let clear: Vec<bool> = (structure.beams.iter())
         .map(|b| clears_spheres(structure, b, &settings.obstacles))
         .collect();
     let lp = |usable: &[bool], self_weight| {
         let grow = full.map(|f| (f, usable == clear.as_slice()));
-        solve_on(structure, settings, usable, self_weight, grow)
+        solve_on(structure, settings, usable, self_weight, grow, interrupt)
     };
+    let retry = |e: LpError| e != LpError::Interrupted;
     let attempt = |self_weight: bool| match lp(&clear, self_weight) {
-        Err(_) if clear.iter().any(|&c| !c) => lp(&vec![true; structure.beams.len()], self_weight),
+        Err(e) if retry(e) && clear.iter().any(|&c| !c) => {
+            lp(&vec![true; structure.beams.len()], self_weight)
+        }
         result => result,
     };
     match attempt(settings.self_weight) {
-        Err(_) if settings.self_weight => attempt(false),
+        Err(e) if retry(e) && settings.self_weight => attempt(false),
         result => result,
     }
 }
@@ -198,10 +204,11 @@ fn solve_on(
     usable: &[bool],
     self_weight: bool,
     grow: Option<(&FullConnectivity, bool)>,
+    interrupt: &Interrupt,
 ) -> Result<LayoutStart, LpError> {
     let mut usable = usable.to_vec();
     let (mut ground, mut forces, mut lp) =
-        lp_forces(structure, settings, &usable, self_weight, grow)?;
+        lp_forces(structure, settings, &usable, self_weight, grow, interrupt)?;
     for _ in 0..RUN_PASSES {
         usable.resize(ground.beams.len(), true);
         let Some((merged, _)) = merge_tension_runs(&ground, forces.clone(), settings.max_length)
@@ -210,7 +217,7 @@ fn solve_on(
         };
         usable.resize(merged.beams.len(), true);
         let (added, solves) = (lp.members_added, lp.solves);
-        (ground, forces, lp) = lp_forces(&merged, settings, &usable, self_weight, grow)?;
+        (ground, forces, lp) = lp_forces(&merged, settings, &usable, self_weight, grow, interrupt)?;
         lp.members_added += added;
         lp.solves += solves;
     }
@@ -225,6 +232,7 @@ fn lp_forces(
     usable: &[bool],
     self_weight: bool,
     grow: Option<(&FullConnectivity, bool)>,
+    interrupt: &Interrupt,
 ) -> Result<(Structure, Vec<Vec<f64>>, LpReport), LpError> {
     let force_scale = (structure.joints.iter())
         .flat_map(|j| j.loads.iter())
@@ -278,7 +286,7 @@ fn lp_forces(
         Some(_) => LpMethod::InteriorFace,
         None => LpMethod::InteriorPoint,
     };
-    let layouts = member_adding::solve(&sub, axes, &price, growth.as_ref(), method)?;
+    let layouts = member_adding::solve(&sub, axes, &price, growth.as_ref(), method, interrupt)?;
     let mut ground = structure.clone();
     let mut index: std::collections::HashMap<Beam, usize> = (ground.beams.iter().enumerate())
         .map(|(j, b)| (*b, j))

@@ -68,6 +68,9 @@ pub enum QpStatus {
     IterationLimit,
     /// Factorization or other numerical failure.
     Numerical,
+    /// The run's interrupt flag was raised ([`crate::solver::interrupt`]); the step is the
+    /// last iterate reached, not a solution.
+    Interrupted,
 }
 
 /// The QP solution. Multipliers follow `Hd + g + Aᵀλ + z = 0`, λᵢ ≤ 0 at an active lower row

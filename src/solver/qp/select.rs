@@ -17,6 +17,10 @@
 //! Cholesky factorization exists, with δ growing geometrically from `1e-8·(1+max|Hᵢᵢ|)`; a
 //! `LowRank` Hessian `δI − W M Wᵀ` is formed densely.
 //!
+//! A raised interrupt flag ([`WarmStart::interruptible`]) ends a solve with
+//! [`QpStatus::Interrupted`]: at once on the dense path (polled before each dense solve), within
+//! one interior-point iteration on the sparse one.
+//!
 //! The sparse method returns an interior solution: multipliers of inactive inequalities are
 //! O(μ) rather than exactly 0, and the step is accurate to the relative tolerance passed
 //! down, which the SQP sets two orders tighter than its own.
@@ -30,6 +34,7 @@ use serde::{Deserialize, Serialize};
 use super::dense::{self, ConstraintId};
 use super::sparse::{Convexification, SparseQp};
 use super::{QpHessian, QpProblem, QpSolution, QpStatus};
+use crate::solver::Interrupt;
 
 /// Variables above which [`QpMethod::Auto`] takes the sparse method.
 pub const DENSE_LIMIT: usize = 2000;
@@ -87,6 +92,8 @@ pub struct WarmStart {
     repeat_shift: bool,
     /// Smallest shift of the sparse solves (absolute; see [`WarmStart::set_shift_floor`]).
     shift_floor: f64,
+    /// The run's interrupt flag, polled by every solve (module header).
+    interrupt: Interrupt,
 }
 
 impl fmt::Debug for WarmStart {
@@ -106,6 +113,12 @@ impl WarmStart {
             method,
             ..WarmStart::default()
         }
+    }
+
+    /// The same warm start, its solves polling `interrupt` (module header).
+    pub fn interruptible(mut self, interrupt: Interrupt) -> Self {
+        self.interrupt = interrupt;
+        self
     }
 
     /// Forgets the working set (for a QP of a different shape). The sparse solver's symbolic
@@ -166,8 +179,12 @@ pub struct Snapshot {
 /// Solves `problem`; `tolerance` is the relative KKT tolerance of the sparse method.
 pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSolution {
     let n = problem.g.len();
+    if warm.interrupt.is_raised() {
+        return interrupted(problem);
+    }
     if warm.method.is_sparse(n) {
         let solver = warm.sparse.get_or_insert_with(|| Box::new(SparseQp::new()));
+        solver.interrupt = warm.interrupt.clone();
         (solver.first_shift, solver.shift_growth) = if warm.repeat_shift && warm.shift_memory > 0.0
         {
             // Trial 0 fails again (same H and A), the remembered shift succeeds.
@@ -206,6 +223,7 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
                 };
                 let mut fresh = SparseQp::new();
                 fresh.first_shift = SHIFT_FIRST;
+                fresh.interrupt = warm.interrupt.clone();
                 let (retried, info) = fresh.solve(&retry, tolerance);
                 solution = retried;
                 warm.convexification = Convexification {
@@ -229,6 +247,9 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
     let mut shift = 0.0;
     let base = 1e-8 * (1.0 + (0..n).map(|i| h[(i, i)].abs()).fold(0.0, f64::max));
     loop {
+        if warm.interrupt.is_raised() {
+            return interrupted(problem);
+        }
         let mut shifted = h.clone();
         for i in 0..n {
             shifted[(i, i)] += shift;
@@ -240,6 +261,18 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
         }
         warm.working_set = result.working_set;
         return result.solution;
+    }
+}
+
+/// The zero step of an interrupted solve of `problem`.
+fn interrupted(problem: &QpProblem) -> QpSolution {
+    let (n, m) = (problem.g.len(), problem.a.nrows());
+    QpSolution {
+        status: QpStatus::Interrupted,
+        d: vec![0.0; n],
+        lambda: vec![0.0; m],
+        z: vec![0.0; n],
+        iterations: 0,
     }
 }
 

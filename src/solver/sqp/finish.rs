@@ -36,6 +36,9 @@ impl Sqp<'_> {
         if kkt.primal <= ctol && kkt.optimality <= tol {
             return Some(Next::Finish(Status::Optimal));
         }
+        if step.qp.status == QpStatus::Interrupted {
+            return Some(Next::Finish(Status::Interrupted));
+        }
         let infeasible = step.infeasible_stationary
             || (step.qp.status != QpStatus::Optimal
                 && self.stalled_status(kkt, &state.point, jac) == Status::Infeasible);

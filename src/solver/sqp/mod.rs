@@ -128,7 +128,7 @@ enum Next {
 /// Solves `nlp` from its starting point (see the module documentation for the method).
 /// With [`Options::interrupt`] every evaluation polls the flag too
 /// ([`super::interrupt`]): a raised flag ends the solve with status `Interrupted` at the last
-/// accepted point, within one evaluation.
+/// accepted point, within one evaluation or one interior-point iteration of a QP.
 pub fn solve(nlp: &dyn Nlp, options: &Options) -> Solution {
     let Some(flag) = &options.interrupt else {
         return solve_unguarded(nlp, options);
@@ -176,6 +176,9 @@ fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
     };
     let jac_shape = (ev.jac_rows.clone(), ev.jac_cols.clone());
     let m = ev.dims.m;
+    // Every QP polls the flag too: a long factorization sequence stops within one iteration.
+    let interrupt = (options.interrupt.clone()).map_or_else(Interrupt::new, Interrupt::from);
+    let warm = || WarmStart::new(qp_method).interruptible(interrupt.clone());
     let mut sqp = Sqp {
         lambda: vec![0.0; ev.dims.m],
         ev,
@@ -186,9 +189,9 @@ fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
         live: RefCell::new(log::LiveLog::on(&options.log, options.verbosity)),
         model,
         rho: vec![0.0; m],
-        warm: WarmStart::new(qp_method),
-        elastic_warm: WarmStart::new(qp_method),
-        feasibility_warm: RefCell::new(WarmStart::new(qp_method)),
+        warm: warm(),
+        elastic_warm: warm(),
+        feasibility_warm: RefCell::new(warm()),
         qp_method,
         jac_shape,
         radius: f64::INFINITY,

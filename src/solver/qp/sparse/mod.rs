@@ -49,6 +49,10 @@
 //! needs 10–30 iterations whatever the previous working set was. On `Infeasible` the returned
 //! d is the last iterate (not a least-infeasible point): an elastic QP must be solved instead.
 //! On `Numerical` and `IterationLimit` the last finite iterate is returned.
+//!
+//! Interrupt: [`SparseQp::interrupt`] is polled before the convexification and before each
+//! iteration, so a raised flag ends the solve with [`QpStatus::Interrupted`] (the last iterate)
+//! within one iteration: one factorization of the Newton matrix and its refined solves.
 
 mod certificates;
 mod convexification;
@@ -69,6 +73,7 @@ use operators::{a_times, a_transpose_times, dot, hessian_times, inf_norm};
 use step::iterate;
 
 use super::{QpHessian, QpProblem, QpSolution, QpStatus};
+use crate::solver::Interrupt;
 
 /// Iterations over which a primal residual that fails to halve counts as stalled.
 const STALL_WINDOW: usize = 5;
@@ -149,6 +154,8 @@ pub struct SparseQp {
     /// Smallest shift δ_c tried (absolute, default 0): an SQP damps its steps with it when
     /// the exact Hessian's Newton steps were much longer than its line search could accept.
     pub min_shift: f64,
+    /// The run's interrupt flag (module header); a fresh solver's is never raised.
+    pub interrupt: Interrupt,
     system: Option<NewtonSystem>,
     layout: Layout,
     ws: Workspace,
@@ -276,6 +283,7 @@ impl SparseQp {
             shift_growth: DEFAULT_SHIFT_GROWTH,
             fixed_convexification: None,
             min_shift: 0.0,
+            interrupt: Interrupt::new(),
             system: None,
             layout: Layout::default(),
             ws: Workspace::default(),
@@ -295,6 +303,9 @@ impl SparseQp {
         };
         if !dimensions_agree(qp) {
             return (fail(QpStatus::Numerical), info);
+        }
+        if self.interrupt.is_raised() {
+            return (fail(QpStatus::Interrupted), info);
         }
         if self.layout.classify(qp).is_err() {
             return (fail(QpStatus::Infeasible), info);
@@ -401,6 +412,10 @@ impl SparseQp {
                 break;
             }
             if iterations == self.max_iterations {
+                break;
+            }
+            if self.interrupt.is_raised() {
+                status = QpStatus::Interrupted;
                 break;
             }
             iterations += 1;

@@ -8,7 +8,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::convexification::Convexification;
 use super::{SparseQp, operators};
-use crate::solver::qp::{QpHessian, QpProblem, QpSolution, QpStatus};
+use crate::solver::qp::{self, QpHessian, QpMethod, QpProblem, QpSolution, QpStatus, WarmStart};
 
 const INF: f64 = f64::INFINITY;
 
@@ -704,4 +704,31 @@ fn bounds_beyond_1e20_count_as_infinite() {
     assert_eq!(sol.status, QpStatus::Optimal);
     assert!((sol.d[0] - 1.0).abs() < 1e-9);
     assert!(sol.z[0].abs() < 1e-12 && sol.lambda[0].abs() < 1e-12);
+}
+
+#[test]
+fn a_raised_interrupt_ends_the_solve_before_any_iteration() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let data = random_qp(&mut rng, 100, 60);
+    let mut solver = SparseQp::new();
+    solver.interrupt.raise();
+    let (sol, info) = solver.solve(&data.problem(), 1e-10);
+    assert_eq!(sol.status, QpStatus::Interrupted);
+    assert_eq!((sol.iterations, info.factorizations), (0, 0));
+    // The same solver, flag lowered (a fresh one), solves it.
+    solver.interrupt = crate::solver::Interrupt::new();
+    let (sol, _) = solver.solve(&data.problem(), 1e-10);
+    assert_eq!(sol.status, QpStatus::Optimal);
+    // Through the SQP's entry point, on both paths.
+    for method in [QpMethod::Dense, QpMethod::Sparse] {
+        let interrupt = crate::solver::Interrupt::new();
+        let mut warm = WarmStart::new(method).interruptible(interrupt.clone());
+        assert_eq!(
+            qp::solve(&data.problem(), &mut warm, 1e-10).status,
+            QpStatus::Optimal
+        );
+        interrupt.raise();
+        let sol = qp::solve(&data.problem(), &mut warm, 1e-10);
+        assert_eq!((sol.status, sol.iterations), (QpStatus::Interrupted, 0));
+    }
 }
