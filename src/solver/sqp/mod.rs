@@ -101,6 +101,8 @@ struct Sqp<'a> {
     /// Penalty weights of the merit function, one per row.
     rho: Vec<f64>,
     lambda: Vec<f64>,
+    /// ‖λ‖∞ of the last QP's multipliers (see [`MULTIPLIER_JUMP`]).
+    last_qp_multipliers: f64,
     warm: WarmStart,
     elastic_warm: WarmStart,
     /// For the least-violation subproblems (their own shape, so their own sparse analysis).
@@ -181,6 +183,7 @@ fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
     let warm = || WarmStart::new(qp_method).interruptible(interrupt.clone());
     let mut sqp = Sqp {
         lambda: vec![0.0; ev.dims.m],
+        last_qp_multipliers: 0.0,
         ev,
         options,
         tuning: &options.tuning,
@@ -304,7 +307,10 @@ impl Sqp<'_> {
             let dhd = descent.dhd - self.model.augmentation_curvature(jac, d);
             self.damp_exact_steps(alpha, dhd, d);
         }
-        if self.model.is_quasi_newton() || !multipliers_jumped(&self.lambda, &step.qp.lambda) {
+        let qp_size = largest(&step.qp.lambda);
+        let jumped = qp_size > MULTIPLIER_JUMP * self.last_qp_multipliers.max(1.0);
+        self.last_qp_multipliers = qp_size;
+        if self.model.is_quasi_newton() || !jumped {
             self.lambda = step.qp.lambda.clone();
         }
         let updated = self.update_model(&state.point, &next);
@@ -347,17 +353,17 @@ impl Sqp<'_> {
     }
 }
 
-/// Largest jump of the QP multipliers (max-norm) that the exact Hessian follows.
+/// Largest jump of the QP multipliers (max-norm, against max(1, ‖λ‖∞) of the previous QP's)
+/// that the exact Hessian follows at once. Such multipliers come from a nearly inconsistent
+/// linearization (truss balance rows of a joint whose members all went idle reached 1e11 and fell
+/// back at the next step): weighting the constraint curvature by them makes the next Hessian need
+/// a shift of 1e7–1e13, and the steps freeze. The exact Hessian then keeps its multipliers for
+/// that iteration; a jump the next QP confirms is followed one iteration late. The step, the merit
+/// weights and the termination tests use the QP's multipliers in any case, and so do quasi-Newton
+/// updates (their Lagrangian gradient differences need the multipliers of the step).
 const MULTIPLIER_JUMP: f64 = 1e3;
 
-/// Whether the QP's multipliers exceed [`MULTIPLIER_JUMP`]·max(1, ‖λ‖∞) of the current ones.
-/// Such multipliers come from a nearly inconsistent linearization (truss balance rows of a
-/// joint whose members all went idle reached 1e11): weighting the constraint curvature by them
-/// makes the next Hessian need a shift of 1e7–1e13, and the steps freeze. The exact Hessian
-/// then keeps the current multipliers; the step, the merit weights and the termination tests
-/// still use the QP's. (Quasi-Newton updates use the QP's in any case: their Lagrangian gradient
-/// differences need the multipliers of the step.)
-fn multipliers_jumped(current: &[f64], qp: &[f64]) -> bool {
-    let largest = |v: &[f64]| v.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
-    largest(qp) > MULTIPLIER_JUMP * largest(current).max(1.0)
+/// ‖v‖∞.
+fn largest(v: &[f64]) -> f64 {
+    v.iter().fold(0.0_f64, |a, b| a.max(b.abs()))
 }
