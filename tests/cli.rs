@@ -362,7 +362,9 @@ fn a_run_reports_its_answer_in_the_users_unit() {
     );
     let value = headline["value"].as_f64().unwrap();
     assert!((value / mass - 1.0).abs() < 1e-9, "{value} vs {mass}");
-    assert!(stdout.contains(&format!("mass {value:.6e} kg")), "{stdout}");
+    // Seven significant digits in plain notation (the shipped bridge weighs thousands of kg).
+    assert!((1e3..1e4).contains(&value), "{value}");
+    assert!(stdout.contains(&format!("mass {value:.3} kg")), "{stdout}");
     // The log opens with the problem's size and closes with the statistics block.
     let first = stderr.lines().next().unwrap();
     assert!(
