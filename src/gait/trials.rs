@@ -1113,6 +1113,23 @@ mod tests {
         assert_eq!(r.status, TrialStatus::Success, "{:?}", r.end);
     }
 
+    /// The shipped high pogo jump (both ends 1.0 m up at t = 1 s, twice pogo_jump's), trial 7
+    /// at the default seed from random knots and its global phase: a Success at dt and dt/4.
+    #[test]
+    fn the_high_pogo_jump_solves_from_a_random_start() {
+        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("problems/gait/pogo_jump_high.toml");
+        let p = crate::gait::load(&path).unwrap();
+        assert!(p.constraints.iter().all(|c| c.lower >= 1.0));
+        let options = Options {
+            verbosity: 0,
+            ..p.solver.clone()
+        };
+        let r = &run_trials(&p, 0, Some(7), &options)[0];
+        assert_eq!(r.status, TrialStatus::Success, "{:?} {:?}", r.end, r.fine);
+        assert!(r.fine.as_ref().unwrap().max() <= p.trials.tolerance);
+    }
+
     /// Meeting the tolerance beats not meeting it; then lower cost, else lower violation sum.
     #[test]
     fn improvement_prefers_feasible_then_cheap_then_less_violated() {
