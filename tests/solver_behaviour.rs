@@ -662,3 +662,59 @@ fn a_tuning_constant_varied_through_the_options_takes_effect() {
         free.iterations
     );
 }
+
+/// A constraint whose natural multiplier is large: min x₁ on the circle 1e-4·(x₁² + x₂²) = 1e-4
+/// (its gradient, 2e-4 at the start, is too small for the solver's scaling to touch), so
+/// λ* = 5e3. The exact Hessian refuses a QP's multipliers that jump by more than 1e3× from the
+/// previous ones; before the first QP the reference is the least-squares estimate at the start
+/// (5e3·|x₁|/‖x‖² = 800 from x = (−0.64, 1.8948), ‖x‖ = 2), not 1, so the first QP's
+/// multiplier (800·(3‖x‖² − 1)/(2‖x‖²) = 1,100) is followed at once: the second Hessian
+/// evaluation uses it, not the start's estimate.
+#[test]
+fn large_natural_multipliers_are_followed_from_the_first_qp() {
+    use std::sync::Mutex;
+    let seen: Arc<Mutex<Vec<f64>>> = Arc::new(Mutex::new(Vec::new()));
+    let record = Arc::clone(&seen);
+    let circle = Small {
+        x0: vec![-0.64, 1.894835],
+        xl: vec![-INF; 2],
+        xu: vec![INF; 2],
+        cl: vec![1e-4],
+        cu: vec![1e-4],
+        values: Box::new(|x, c| {
+            c[0] = 1e-4 * (x[0] * x[0] + x[1] * x[1]);
+            Ok(x[0])
+        }),
+        derivatives: Box::new(|x, g, j| {
+            g.copy_from_slice(&[1.0, 0.0]);
+            j.copy_from_slice(&[2e-4 * x[0], 2e-4 * x[1]]);
+        }),
+        hessian: Some(Box::new(move |_x, _sigma, lambda, h| {
+            record.lock().unwrap().push(lambda[0]);
+            h.copy_from_slice(&[2e-4 * lambda[0], 0.0, 2e-4 * lambda[0]]);
+        })),
+    };
+    let s = solve(
+        &circle,
+        &Options {
+            hessian: HessianMode::Exact,
+            ..quiet()
+        },
+    );
+    let seen = seen.lock().unwrap();
+    println!(
+        "{:?}, {} iterations, Hessian multipliers {seen:?}",
+        s.status, s.iterations
+    );
+    assert_eq!(s.status, Status::Optimal);
+    assert!((s.x[0] + 1.0).abs() < 1e-6 && s.x[1].abs() < 1e-5);
+    assert!(
+        (seen[0] - 800.0).abs() < 1.0,
+        "start multipliers {}",
+        seen[0]
+    );
+    assert!(
+        seen.len() >= 2 && (seen[1] - 1100.0).abs() < 1.0,
+        "{seen:?}"
+    );
+}

@@ -101,7 +101,8 @@ struct Sqp<'a> {
     /// Penalty weights of the merit function, one per row.
     rho: Vec<f64>,
     lambda: Vec<f64>,
-    /// ‖λ‖∞ of the last QP's multipliers (see [`MULTIPLIER_JUMP`]).
+    /// ‖λ‖∞ of the last QP's multipliers, or of the initial least-squares multipliers before
+    /// the first QP (see [`MULTIPLIER_JUMP`]).
     last_qp_multipliers: f64,
     warm: WarmStart,
     elastic_warm: WarmStart,
@@ -353,17 +354,21 @@ impl Sqp<'_> {
     }
 }
 
-/// Largest jump of the QP multipliers (max-norm, against max(1, ‖λ‖∞) of the previous QP's)
-/// that the exact Hessian follows at once. Such multipliers come from a nearly inconsistent
-/// linearization (truss balance rows of a joint whose members all went idle reached 1e11 and fell
-/// back at the next step): weighting the constraint curvature by them makes the next Hessian need
-/// a shift of 1e7–1e13, and the steps freeze. The exact Hessian then keeps its multipliers for
-/// that iteration; a jump the next QP confirms is followed one iteration late. The step, the merit
-/// weights and the termination tests use the QP's multipliers in any case, and so do quasi-Newton
-/// updates (their Lagrangian gradient differences need the multipliers of the step).
+/// Largest jump of the QP multipliers (max-norm, against max(1, ‖λ‖∞) of the previous QP's, or
+/// for the first QP of the initial least-squares estimate) that the exact Hessian follows at
+/// once. Such multipliers come from a nearly inconsistent linearization (truss balance rows of a
+/// joint whose members all went idle reached 1e11 and fell back at the next step): weighting the
+/// constraint curvature by them makes the next Hessian need a shift of 1e7–1e13, and the steps
+/// freeze. The exact Hessian then keeps its multipliers for that iteration; a jump the next QP
+/// confirms is followed one iteration late. Against 1 instead of the estimate, every solve whose
+/// multipliers are naturally above 1e3 refused its first QP's (through_deck_cantilever's rounds
+/// then took other paths: 5,442 iterations to IterationLimit instead of 1,317 to Optimal). The
+/// step, the merit weights and the termination tests use the QP's multipliers in any case, and
+/// so do quasi-Newton updates (their Lagrangian gradient differences need the multipliers of the
+/// step).
 const MULTIPLIER_JUMP: f64 = 1e3;
 
 /// ‖v‖∞.
-fn largest(v: &[f64]) -> f64 {
+pub(super) fn largest(v: &[f64]) -> f64 {
     v.iter().fold(0.0_f64, |a, b| a.max(b.abs()))
 }

@@ -186,6 +186,8 @@ impl Sqp<'_> {
                 cl: &self.ev.cl,
                 cu: &self.ev.cu,
             });
+            // The first QP's multipliers are judged against these (see `MULTIPLIER_JUMP`).
+            self.last_qp_multipliers = super::largest(&self.lambda);
         }
         if let Err(e) = self.update_exact(&point) {
             let status = self.eval_status(&e);
