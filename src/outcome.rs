@@ -167,14 +167,27 @@ impl Headline {
         Headline::new(&unit.name, value, &unit.unit)
     }
 
-    /// "mass 9.673e3 kg".
+    /// "mass 9673.430 kg": seven significant digits, in plain notation from 0.01 to 1e7 and
+    /// in scientific notation outside (`area 1.184597e-3 m²`).
     pub fn text(&self) -> String {
-        let value = format!("{:.6e}", self.value);
+        let value = readable(self.value);
         if self.unit.is_empty() {
             format!("{} {value}", self.name)
         } else {
             format!("{} {value} {}", self.name, self.unit)
         }
+    }
+}
+
+/// `value` to seven significant digits: plain from 0.01 to 1e7 (and 0), scientific outside.
+fn readable(value: f64) -> String {
+    let magnitude = value.abs().log10().floor();
+    if value == 0.0 {
+        "0".into()
+    } else if value.is_finite() && (-2.0..7.0).contains(&magnitude) {
+        format!("{value:.*}", (6.0 - magnitude) as usize)
+    } else {
+        format!("{value:.6e}")
     }
 }
 
@@ -314,5 +327,23 @@ impl Outcome {
             (Some(Status::EvaluationError), None) => 1,
             _ => 3,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Headline;
+
+    #[test]
+    fn headlines_read_as_plain_numbers_in_the_working_range() {
+        let text = |v: f64, unit: &str| Headline::new("x", v, unit).text();
+        assert_eq!(text(9673.43012, "kg"), "x 9673.430 kg");
+        assert_eq!(text(961.70536, "kg"), "x 961.7054 kg");
+        assert_eq!(text(0.0123456789, ""), "x 0.01234568");
+        assert_eq!(text(1.1845968e-3, "m²"), "x 1.184597e-3 m²");
+        assert_eq!(text(2.5e7, "N²·s"), "x 2.500000e7 N²·s");
+        assert_eq!(text(-31.5, "N²·s"), "x -31.50000 N²·s");
+        assert_eq!(text(0.0, "kg"), "x 0 kg");
+        assert_eq!(text(f64::NAN, "kg"), "x NaN kg");
     }
 }

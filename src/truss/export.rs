@@ -78,7 +78,8 @@ pub fn beams_csv(design: &Design) -> String {
 /// SVG preview: `caption` on top, the elevation (x right, y up) above the plan (x right, z
 /// down), both at one scale in px/m chosen so the x extent fills the width (each view's height
 /// follows its own extent, so a long bridge is not squeezed into a square), then a legend and
-/// a scale bar. Beam width grows with √mass; colours give the force state.
+/// a scale bar. A structure with every joint at one z (a planar problem) has the elevation only:
+/// its plan would be a line. Beam width grows with √mass; colours give the force state.
 pub fn preview_svg(design: &Design, caption: &str) -> String {
     const WIDTH: f64 = 960.0;
     const MARGIN: f64 = 30.0;
@@ -91,6 +92,7 @@ pub fn preview_svg(design: &Design, caption: &str) -> String {
         lo = lo.inf(&j.position);
         hi = hi.sup(&j.position);
     }
+    let flat = hi.z - lo.z <= 1e-9 * (hi.x - lo.x).max(hi.y - lo.y);
     let extent = (hi - lo).map(|e| e.max(1e-9));
     let scale = ((WIDTH - 2.0 * MARGIN) / extent.x)
         .min(MAX_VIEW / extent.y)
@@ -98,7 +100,11 @@ pub fn preview_svg(design: &Design, caption: &str) -> String {
     let view_height = |e: f64| (e * scale).max(MIN_VIEW) + 2.0 * MARGIN;
     let elevation_top = 40.0;
     let plan_top = elevation_top + view_height(extent.y);
-    let legend_top = plan_top + view_height(extent.z);
+    let legend_top = if flat {
+        plan_top
+    } else {
+        plan_top + view_height(extent.z)
+    };
     let height = legend_top + 50.0;
     // Screen coordinates of a point in the elevation (x, y) or plan (x, z) view.
     let to_screen = |p: &Vec3, plan: bool| -> (f64, f64) {
@@ -123,14 +129,20 @@ pub fn preview_svg(design: &Design, caption: &str) -> String {
         svg,
         "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n\
          <text x=\"10\" y=\"22\" font-size=\"15\">{}</text>\n\
-         <text x=\"10\" y=\"{:.1}\" font-size=\"12\" fill=\"#555\">elevation (x right, y up)</text>\n\
-         <text x=\"10\" y=\"{:.1}\" font-size=\"12\" fill=\"#555\">plan (x right, z down)</text>\n\
-         <line x1=\"0\" y1=\"{plan_top:.1}\" x2=\"{WIDTH}\" y2=\"{plan_top:.1}\" stroke=\"#ccc\"/>",
+         <text x=\"10\" y=\"{:.1}\" font-size=\"12\" fill=\"#555\">elevation (x right, y up)</text>",
         escape(caption),
         elevation_top + 14.0,
-        plan_top + 14.0,
     );
-    for plan in [false, true] {
+    if !flat {
+        let _ = writeln!(
+            svg,
+            "<text x=\"10\" y=\"{:.1}\" font-size=\"12\" fill=\"#555\">plan (x right, z down)</text>\n\
+             <line x1=\"0\" y1=\"{plan_top:.1}\" x2=\"{WIDTH}\" y2=\"{plan_top:.1}\" stroke=\"#ccc\"/>",
+            plan_top + 14.0,
+        );
+    }
+    let views: &[bool] = if flat { &[false] } else { &[false, true] };
+    for &plan in views {
         let _ = writeln!(svg, "<g>");
         for (j, beam) in design.structure.beams.iter().enumerate() {
             let (x1, y1) = to_screen(&joints[beam.ends[0]].position, plan);
@@ -412,9 +424,16 @@ mod tests {
         assert!(lines[3].ends_with(",idle"));
     }
 
+    /// The test design with its free joint lifted out of the others' plane.
+    fn spatial_design() -> Design {
+        let mut d = design();
+        d.structure.joints[2].position.z = 1.5;
+        d
+    }
+
     #[test]
     fn svg_draws_every_beam_in_both_views() {
-        let svg = preview_svg(&design(), "bridge: mass 9 kg <test>");
+        let svg = preview_svg(&spatial_design(), "bridge: mass 9 kg <test>");
         assert!(svg.starts_with("<svg"));
         assert!(svg.trim_end().ends_with("</svg>"));
         // 3 beams in 2 views, the views' divider, 3 legend lines.
@@ -422,8 +441,19 @@ mod tests {
         // The anchor in 2 views and in the legend; the load likewise.
         assert_eq!(svg.matches("<polygon").count(), 2 + 1);
         assert_eq!(svg.matches("#2a9d3a").count(), 2 + 1);
+        assert!(svg.contains("plan (x right, z down)"));
         assert!(svg.contains("bridge: mass 9 kg &lt;test&gt;"));
         assert!(svg.contains("width ∝ √mass") && svg.contains(" m</text>"));
+    }
+
+    #[test]
+    fn a_planar_structure_is_drawn_in_elevation_only() {
+        // Every joint of the test design is at z = 0.5.
+        let svg = preview_svg(&design(), "");
+        assert!(!svg.contains("plan (x right"), "{svg}");
+        // 3 beams in one view and 3 legend lines, no divider; the anchor once and in the legend.
+        assert_eq!(svg.matches("<line x1=").count(), 3 + 3);
+        assert_eq!(svg.matches("<polygon").count(), 1 + 1);
     }
 
     #[test]
