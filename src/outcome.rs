@@ -170,7 +170,7 @@ impl Headline {
     /// "mass 9673.430 kg": seven significant digits, in plain notation from 0.01 to 1e7 and
     /// in scientific notation outside (`area 1.184597e-3 m²`).
     pub fn text(&self) -> String {
-        let value = readable(self.value);
+        let value = readable(self.value, 7);
         if self.unit.is_empty() {
             format!("{} {value}", self.name)
         } else {
@@ -179,15 +179,19 @@ impl Headline {
     }
 }
 
-/// `value` to seven significant digits: plain from 0.01 to 1e7 (and 0), scientific outside.
-fn readable(value: f64) -> String {
+/// `value` to `digits` significant digits (at least 1) for people: plain from 0.01 to 1e7 (and
+/// 0), scientific outside (`readable(961.70536, 7)` = "961.7054", `readable(1.1846e-3, 4)` =
+/// "1.185e-3").
+pub fn readable(value: f64, digits: usize) -> String {
+    let digits = digits.max(1);
     let magnitude = value.abs().log10().floor();
     if value == 0.0 {
         "0".into()
     } else if value.is_finite() && (-2.0..7.0).contains(&magnitude) {
-        format!("{value:.*}", (6.0 - magnitude) as usize)
+        let decimals = (digits as f64 - 1.0 - magnitude).max(0.0) as usize;
+        format!("{value:.decimals$}")
     } else {
-        format!("{value:.6e}")
+        format!("{value:.*e}", digits - 1)
     }
 }
 
@@ -345,5 +349,7 @@ mod tests {
         assert_eq!(text(-31.5, "N²·s"), "x -31.50000 N²·s");
         assert_eq!(text(0.0, "kg"), "x 0 kg");
         assert_eq!(text(f64::NAN, "kg"), "x NaN kg");
+        assert_eq!(super::readable(98_856.0, 3), "98856");
+        assert_eq!(super::readable(988.56, 4), "988.6");
     }
 }

@@ -364,10 +364,11 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     if !coarse_stages.is_empty() {
         summary.timings.insert("coarse".into(), coarse_seconds);
     }
+    let area = figures::figures(&mesh, &nlp.surface_curvatures(&solution.x), nlp.volumes());
     let caption = format!(
-        "{}: area {:.6e} m², {}",
+        "{}: {}, {}",
         problem.name,
-        figures::figures(&mesh, &nlp.surface_curvatures(&solution.x), nlp.volumes()).total_area,
+        Headline::new("area", area.total_area, "m²").text(),
         solution.status.sentence()
     );
     let export_started = Instant::now();

@@ -319,6 +319,11 @@ pub fn filmstrip(problem: &Problem, strip: &Sampled, motion: &Sampled, caption: 
         );
     }
     svg.text([left + 0.01, top - 0.03], 12.0, caption);
+    let scale = format!(
+        "grid {:.0} cm; ground at y = {g:.2} m; frames side by side, each at its own time",
+        GRID * 100.0
+    );
+    svg.text([left + 0.01, top - 0.03 - 0.4 * GRID], 9.0, &scale);
     svg.finish()
 }
 
@@ -328,8 +333,7 @@ pub fn trajectory_csv(problem: &Problem, motion: &Sampled) -> Artifact {
     let mut header = vec!["t_s".to_string()];
     header.extend((0..model.nq).map(|i| format!("q{i}")));
     header.extend((0..model.nv).map(|i| format!("v{i}")));
-    for (i, l) in model.links.iter().enumerate() {
-        let _ = i;
+    for l in &model.links {
         header.push(format!("{}_x_m", l.name));
         header.push(format!("{}_y_m", l.name));
     }
@@ -480,6 +484,7 @@ mod tests {
         let svg = filmstrip(&p, &strip, &motion, "pogo_crouch: caption");
         assert_eq!(svg.matches("t = ").count(), 5, "frames at 0, 0.25, …, 1 s");
         assert!(svg.contains("pogo_crouch: caption"));
+        assert!(svg.contains("grid 10 cm; ground at y = 0.00 m"), "{svg}");
         let forces = forces_csv(&p, &motion);
         let text = String::from_utf8(forces.bytes).unwrap();
         assert_eq!(text.lines().count(), 1 + 31);

@@ -24,6 +24,13 @@
 //! its own end point (whatever stopped it, but a time limit or an interrupt): a fresh
 //! quasi-Newton model often brings such a point back onto the rows at the lower effort.
 //!
+//! Feasibility rescue: when those solves end short of the tolerance on their own (not on a
+//! budget or an interrupt) and the file has no `feasibility_first`, the feasibility phase runs
+//! from the point the solves started at; if it reaches its target, the effort solves run
+//! again from its end point, which is kept unless a later point is better. The ℓ1 merit's
+//! penalty weight grows without bound where the rollout is violently nonlinear, while the
+//! phase's damping (a trust region) still makes progress there.
+//!
 //! Shaping rows (`[[task]] shaping = true`) guide the trial's first solves
 //! ([`crate::gait::shaping`]): one shaped solve with the task's rows, or with `[trials]
 //! shaping_stages` staged feasibility solves. The solves above start from their end point, and
@@ -343,7 +350,8 @@ pub fn solve_trial(
     if !problem.shaping.is_empty() {
         (nlp, shaped_candidate) = shaping_phase(problem, f, options, &mut kept);
     }
-    let solution = effort_solves(
+    let solves_start = nlp.hand_made_start().to_vec();
+    let mut solution = effort_solves(
         problem,
         f,
         nlp,
@@ -352,7 +360,55 @@ pub fn solve_trial(
         &mut kept,
         &clock,
     );
+    if needs_rescue(problem, &kept, &solution) {
+        solution = rescue(problem, f, trial, &solves_start, options, &mut kept, &clock)
+            .unwrap_or(solution);
+    }
     finish(problem, f, trial, start, kept, solution, &clock)
+}
+
+/// Whether a trial's effort solves ended short of the tolerance on their own (a stationary
+/// point of the violation: Infeasible, Stalled, …), not on a budget or an interrupt, without
+/// a feasibility phase before them: then the feasibility phase gets its turn ([`rescue`]).
+fn needs_rescue(problem: &Problem, kept: &Kept, solution: &Solution) -> bool {
+    let short = kept
+        .end
+        .as_ref()
+        .is_none_or(|a| a.max() > problem.trials.tolerance);
+    let budget = matches!(
+        solution.status,
+        Status::IterationLimit | Status::TimeLimit | Status::Interrupted
+    );
+    short && !budget && !problem.trials.feasibility_first && !problem.interrupt.is_raised()
+}
+
+/// The feasibility rescue: the SQP's ℓ1 merit can stall far from the rows (its penalty weight
+/// grows without bound where the rollout is violently nonlinear) where Levenberg–Marquardt on
+/// the violations alone, a trust region, still reaches them (docs/notes/gait.md, pogo_jump
+/// trial 6). The feasibility phase runs from `from`, the point the effort solves started at,
+/// and when it reaches its target the effort solves run again from its end point, which is
+/// kept unless a later point is better. `None` when the phase stopped short (the kept point
+/// stays, and the last solve's solution with it).
+fn rescue(
+    problem: &Problem,
+    f: &Formulation<'_>,
+    trial: usize,
+    from: &[f64],
+    options: &Options,
+    kept: &mut Kept,
+    clock: &Instant,
+) -> Option<Solution> {
+    if options.verbosity >= 1 {
+        options.log.line(&format!(
+            "trial {trial}: the solves stopped short of the rows; feasibility phase from their start"
+        ));
+    }
+    let phase = feasibility_phase(problem, f, &f.starting_at(from), options, kept);
+    if !phase.reached {
+        return None;
+    }
+    let nlp = f.starting_at(&kept.x);
+    Some(effort_solves(problem, f, nlp, options, true, kept, clock))
 }
 
 /// The feasibility phase (module header) from `nlp`'s start: the key-time continuation
@@ -467,13 +523,14 @@ fn shaping_phase<'p>(
 /// restarts from the kept point while they are productive, and one polish of a cheaper point
 /// short of the tolerance. Each end point replaces the kept one when it `improves` it (the
 /// first solve's always, unless a phase before it left a candidate), and its iteration log
-/// is appended to the trial's. Returns the last solve's solution.
+/// is appended to the trial's. With `kept_candidate` (a phase before them left the kept point)
+/// the first solve's end point must improve on it too. Returns the last solve's solution.
 fn effort_solves<'p>(
     problem: &Problem,
     f: &Formulation<'p>,
     mut nlp: Formulation<'p>,
     options: &Options,
-    shaped_candidate: bool,
+    kept_candidate: bool,
     kept: &mut Kept,
     clock: &Instant,
 ) -> Solution {
@@ -493,7 +550,7 @@ fn effort_solves<'p>(
         let end_solved = assess(f, &x_solved);
         // Without a feasibility phase the first solve's end point is the trial's result even
         // if it is worse than the start (classified Unimproved); later points must improve.
-        let first = attempt == 0 && !problem.trials.feasibility_first && !shaped_candidate;
+        let first = attempt == 0 && !problem.trials.feasibility_first && !kept_candidate;
         // A solve that ends short of the tolerance at a lower effort than a kept point that
         // meets it is re-solved once from its own end point (a fresh quasi-Newton model often
         // brings such a point back onto the rows); the kept point stays unless beaten.
@@ -1013,6 +1070,64 @@ mod tests {
         let start = r.start.as_ref().unwrap();
         assert!(start.max() > 10.0 * p.trials.tolerance, "{}", start.max());
         assert_eq!(r.status, TrialStatus::Success, "{:?}", r.end);
+    }
+
+    /// The short pogo jump raised to 0.6 m from random knots (trial 4 at seed 8): the effort
+    /// solves alone (first solve and restarts) stop Infeasible short of the rows; the
+    /// feasibility rescue then reaches them and the trial ends a Success.
+    #[test]
+    fn feasibility_rescue_solves_what_the_effort_solves_leave_infeasible() {
+        let mut p = golden("pogo_jump_short");
+        for c in &mut p.constraints {
+            c.lower = 0.6;
+        }
+        p.starts.kind = StartKind::Random;
+        p.trials.count = 4;
+        let options = Options {
+            max_iterations: 100,
+            verbosity: 0,
+            ..Options::default()
+        };
+        let f = Formulation::new(&p);
+        let x0 = starts(&p, &f, 8)[3].x.clone();
+        let mut kept = Kept {
+            x: x0.clone(),
+            end: assess(&f, &x0),
+            iterations: 0,
+            evaluations: Evaluations::default(),
+            log: Vec::new(),
+        };
+        let alone = effort_solves(
+            &p,
+            &f,
+            f.starting_at(&x0),
+            &options,
+            false,
+            &mut kept,
+            &Instant::now(),
+        );
+        let short = kept.end.as_ref().unwrap().max();
+        assert!(short > 10.0 * p.trials.tolerance, "{short}");
+        assert!(needs_rescue(&p, &kept, &alone), "{:?}", alone.status);
+        let r = solve_trial(&p, &f, 4, &x0, &options);
+        assert_eq!(r.status, TrialStatus::Success, "{:?}", r.end);
+    }
+
+    /// The shipped high pogo jump (both ends 1.0 m up at t = 1 s, twice pogo_jump's), trial 7
+    /// at the default seed from random knots and its global phase: a Success at dt and dt/4.
+    #[test]
+    fn the_high_pogo_jump_solves_from_a_random_start() {
+        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("problems/gait/pogo_jump_high.toml");
+        let p = crate::gait::load(&path).unwrap();
+        assert!(p.constraints.iter().all(|c| c.lower >= 1.0));
+        let options = Options {
+            verbosity: 0,
+            ..p.solver.clone()
+        };
+        let r = &run_trials(&p, 0, Some(7), &options)[0];
+        assert_eq!(r.status, TrialStatus::Success, "{:?} {:?}", r.end, r.fine);
+        assert!(r.fine.as_ref().unwrap().max() <= p.trials.tolerance);
     }
 
     /// Meeting the tolerance beats not meeting it; then lower cost, else lower violation sum.

@@ -11,6 +11,7 @@ use std::fmt::Write;
 
 use super::result::solve_numbers;
 use super::svg::escape;
+use crate::outcome::readable;
 use crate::solver::IterationRecord;
 
 /// Smallest value a log panel shows; zeros and smaller values are drawn here.
@@ -93,7 +94,7 @@ impl Axis {
             Axis::Linear { lo, hi } => (0..=4)
                 .map(|k| {
                     let v = lo + (hi - lo) * k as f64 / 4.0;
-                    (v, format!("{v:.4e}"))
+                    (v, readable(v, 5))
                 })
                 .collect(),
         }
@@ -210,7 +211,12 @@ pub fn convergence_svg(problem: &str, objective: &str, log: &[IterationRecord]) 
                 r##"<line x1="{x:.1}" y1="{TOP:.1}" x2="{x:.1}" y2="{bottom:.1}" stroke="#555" stroke-dasharray="4 3"/>"##
             );
         }
-        if !log[i].stage.is_empty() {
+        // The label is written where it fits before the next boundary (about 6 px a letter at
+        // 10 px); the dashed line still marks a solve too short to name.
+        let next = (i + 1..log.len()).find(|&j| solves[j] != solves[j - 1]);
+        let room = next.map_or(LEFT + plot_width, x_of) - x;
+        let fits = 6.0 * log[i].stage.chars().count() as f64 + 6.0 <= room;
+        if !log[i].stage.is_empty() && fits {
             let _ = writeln!(
                 s,
                 r##"<text x="{:.1}" y="{:.1}" font-size="10" fill="#555">{}</text>"##,
@@ -279,6 +285,12 @@ mod tests {
         assert_eq!(svg.matches("<polyline").count(), 6);
         assert_eq!(svg.matches("stroke-dasharray").count(), 1);
         assert!(svg.contains(">round 1<") && svg.contains(">round 2<"));
+        // A last solve of one record among many has no room for its name.
+        let mut long: Vec<IterationRecord> = (0..60).map(|k| rec("round 1", k, 1.0, 0.0)).collect();
+        long.push(rec("round 2", 0, 1.0, 0.0));
+        let svg_long = convergence_svg("bridge", "mass [kg]", &long);
+        assert!(svg_long.contains(">round 1<") && !svg_long.contains(">round 2<"));
+        assert_eq!(svg_long.matches("stroke-dasharray").count(), 1);
         assert!(svg.contains("mass [kg] (linear)"));
         assert!(svg.contains("5 records, 2 solves"));
         assert_eq!(svg, convergence_svg("bridge", "mass [kg]", &log));
