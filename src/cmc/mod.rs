@@ -17,6 +17,7 @@
 
 pub mod area;
 pub mod catenoid;
+pub mod cluster;
 pub mod curvature;
 pub mod curvature_hessian;
 pub mod evolver;
@@ -30,6 +31,7 @@ pub mod multilevel;
 pub mod nlp;
 pub mod octahedron;
 pub mod orientation;
+pub mod polygon_complex;
 pub mod preview;
 pub mod refinement;
 pub mod remesh;
@@ -718,6 +720,18 @@ mod tests {
         .unwrap_err();
         assert_eq!(e.position, Some((5, 1)), "{e}");
         assert!(e.message.contains("counter-clockwise"), "{e}");
+        let bubble = |name: &str, x: f64| {
+            format!("[[shape.bubble]]\nname = \"{name}\"\ncentre = [{x}, 0.0, 0.0]\nvolume = 1.0\n")
+        };
+        let cluster = "[shape]\ntype = \"cluster\"\n".to_string();
+        let e = load_text(&(cluster.clone() + &bubble("a", 0.0) + &bubble("a", 1.0))).unwrap_err();
+        assert_eq!(e.position, Some((8, 1)), "{e}");
+        assert!(e.message.contains("distinct"), "{e}");
+        let e = load_text(&(cluster.clone() + &bubble("a", 0.0) + &bubble("b", 0.0))).unwrap_err();
+        assert_eq!(e.position, Some((9, 1)), "{e}");
+        let inside = bubble("big", 0.0) + &bubble("small", 0.1).replace("1.0\n", "1e-4\n");
+        let e = load_text(&(cluster + &inside)).unwrap_err();
+        assert!(e.message.contains("`small` gets no cell"), "{e}");
     }
 
     #[test]

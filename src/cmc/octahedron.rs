@@ -22,11 +22,11 @@
 //! resolutions the junction lines would have to cross many rows of triangles during the solve;
 //! the problem files therefore start from resolution 1 and refine ([`super::multilevel`]).
 
-use std::collections::BTreeMap;
-
-use super::area::area_vector;
 use super::generators::{Shape, add_path, add_triangle_patch};
 use super::mesh::{Mesh, MeshBuilder, MeshError, Point};
+use super::polygon_complex::{
+    Polygon, clip, distinct_corners, fan_mesh, plane_square, smooth_within_walls,
+};
 use super::remesh::equiangulate;
 
 /// Film topologies on the octahedral frame.
@@ -70,22 +70,6 @@ pub fn window_weights(topology: OctahedronTopology) -> Option<[f64; 8]> {
     }
 }
 
-/// Keeps the part of the convex polygon `poly` where `a·x ≤ b` (Sutherland–Hodgman).
-fn clip(poly: &[Point], a: &Point, b: f64) -> Vec<Point> {
-    let mut out = Vec::with_capacity(poly.len() + 1);
-    for (i, p) in poly.iter().enumerate() {
-        let q = &poly[(i + 1) % poly.len()];
-        let (fp, fq) = (a.dot(p) - b, a.dot(q) - b);
-        if fp <= 0.0 {
-            out.push(*p);
-        }
-        if fp * fq < 0.0 {
-            out.push(p + (q - p) * (fp / (fp - fq)));
-        }
-    }
-    out
-}
-
 /// The walls of the weighted window partition of the octahedron with vertices at
 /// ±`half_diagonal` on the axes (m): `(f, g, polygon)` for every pair of windows whose wall
 /// has positive area, corners in order.
@@ -103,47 +87,20 @@ pub fn partition_walls(half_diagonal: f64, weights: &[f64; 8]) -> Vec<(usize, us
     for (f, &weight_f) in weights.iter().enumerate() {
         for g in (f + 1)..8 {
             let (a, b) = le(f, g);
-            let norm = a.norm();
-            let n = a / norm;
-            let origin = n * (b / norm);
-            let u = n.cross(&Point::new(1.0, 0.3, 0.1)).normalize();
-            let v = n.cross(&u);
-            let r = 4.0 * half_diagonal;
-            let mut poly: Vec<Point> = [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)]
-                .iter()
-                .map(|&(p, q)| origin + r * (p * u + q * v))
-                .collect();
+            let mut poly = plane_square(&a, b, &Point::zeros(), 4.0 * half_diagonal);
             for h in (0..8).filter(|&h| h != f && h != g) {
                 let (a, b) = le(f, h);
                 poly = clip(&poly, &a, b);
             }
             // Inside the frame: φ_f ≥ 0.
             poly = clip(&poly, &(weight_f * window_normal(f)), weight_f * c);
-            let mut corners: Vec<Point> = Vec::new();
-            for p in poly {
-                if corners.last().is_none_or(|q| (p - q).norm() > tolerance) {
-                    corners.push(p);
-                }
-            }
-            while corners.len() > 1 && (corners[0] - corners[corners.len() - 1]).norm() <= tolerance
-            {
-                corners.pop();
-            }
-            if corners.len() >= 3 && polygon_area(&corners) > 1e-6 * half_diagonal.powi(2) {
+            let min_area = 1e-6 * half_diagonal.powi(2);
+            if let Some(corners) = distinct_corners(poly, tolerance, min_area) {
                 walls.push((f, g, corners));
             }
         }
     }
     walls
-}
-
-/// Area of a planar polygon (m²).
-fn polygon_area(corners: &[Point]) -> f64 {
-    let mut sum = Point::zeros();
-    for i in 1..corners.len() - 1 {
-        sum += (corners[i] - corners[0]).cross(&(corners[i + 1] - corners[0]));
-    }
-    0.5 * sum.norm()
 }
 
 /// A wire octahedron with edges of length `edge` (m, centred at the origin, vertices on the
@@ -217,89 +174,27 @@ pub fn partition_film(edge: f64, weights: &[f64; 8], levels: usize) -> Result<Sh
 /// Rounds of smoothing and flipping applied to a partition start.
 const START_SMOOTHING_ROUNDS: usize = 30;
 
-/// One Gauss–Seidel sweep of Laplacian smoothing over the free vertices inside a wall (closed
-/// disk stars, hence all in one plane): each moves to its ring's centroid unless that would turn
-/// one of its triangles over. Wires, junction lines and the area are unchanged.
-fn smooth_within_walls(mesh: &mut Mesh) -> Result<(), MeshError> {
-    let mut pos = mesh.positions().to_vec();
-    for v in 0..mesh.vertex_count() {
-        if mesh.flags()[v].fixed || !mesh.is_interior_manifold(v) {
-            continue;
-        }
-        let ring = mesh.neighbours(v);
-        let target = ring.iter().map(|&w| pos[w]).sum::<Point>() / ring.len() as f64;
-        let keeps_orientation = mesh.vertex_triangles(v).iter().all(|&t| {
-            let tri = mesh.triangles()[t];
-            let corners = |at: Point| tri.map(|u| if u == v { at } else { pos[u] });
-            let before = area_vector(&corners(pos[v]));
-            let after = area_vector(&corners(target));
-            after.dot(&before) > 0.05 * before.norm_squared()
-        });
-        if keeps_orientation {
-            pos[v] = target;
-        }
-    }
-    mesh.set_positions(pos)
-}
-
 /// The partition's walls, each meshed as a fan of triangle patches around its centroid.
 fn partition_fans(edge: f64, weights: &[f64; 8], levels: usize) -> Result<Mesh, MeshError> {
-    let n = levels.max(1);
     let half = edge / 2f64.sqrt();
-    let walls = partition_walls(half, weights);
-    let mut b = MeshBuilder::new();
-    let films = b.surface("films");
+    let polygons: Vec<Polygon> = partition_walls(half, weights)
+        .into_iter()
+        .map(|(_, _, corners)| Polygon {
+            surface: 0,
+            up: None,
+            corners,
+        })
+        .collect();
     let tolerance = 1e-7 * half;
     let is_frame_vertex =
         |p: &Point| (p.abs().max() - half).abs() < tolerance && p.norm() > 0.9 * half;
-    // Shared corners by position.
-    let mut corner_ids: Vec<(Point, usize)> = Vec::new();
-    let mut corner = |b: &mut MeshBuilder, p: Point| {
-        if let Some(&(_, id)) = corner_ids.iter().find(|(q, _)| (p - q).norm() < tolerance) {
-            return id;
-        }
-        let id = if is_frame_vertex(&p) {
-            b.fixed(p)
-        } else {
-            b.vertex(p)
-        };
-        corner_ids.push((p, id));
-        id
-    };
-    let polygons: Vec<Vec<usize>> = walls
-        .iter()
-        .map(|(_, _, poly)| poly.iter().map(|&p| corner(&mut b, p)).collect())
-        .collect();
-    // Shared edge paths: wires (both ends frame vertices) fixed.
-    let mut paths: BTreeMap<(usize, usize), Vec<usize>> = BTreeMap::new();
-    for poly in &polygons {
-        for i in 0..poly.len() {
-            let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
-            let key = (p.min(q), p.max(q));
-            if let std::collections::btree_map::Entry::Vacant(slot) = paths.entry(key) {
-                let wire = b.flags_mut(key.0).fixed && b.flags_mut(key.1).fixed;
-                slot.insert(add_path(&mut b, key, n, wire));
-            }
-        }
-    }
-    for poly in &polygons {
-        let centroid = poly.iter().map(|&v| b.position(v)).sum::<Point>() / poly.len() as f64;
-        let centre = b.vertex(centroid);
-        let spokes: Vec<Vec<usize>> = poly
-            .iter()
-            .map(|&v| add_path(&mut b, (centre, v), n, false))
-            .collect();
-        for i in 0..poly.len() {
-            let j = (i + 1) % poly.len();
-            let (p, q) = (poly[i], poly[j]);
-            let mut base = paths[&(p.min(q), p.max(q))].clone();
-            if base[0] != p {
-                base.reverse();
-            }
-            add_triangle_patch(&mut b, films, &spokes[i], &spokes[j], &base);
-        }
-    }
-    b.build()
+    fan_mesh(
+        &["films".into()],
+        &polygons,
+        levels,
+        tolerance,
+        is_frame_vertex,
+    )
 }
 
 #[cfg(test)]
@@ -307,6 +202,7 @@ mod tests {
     use super::*;
     use crate::cmc::area::total_area;
     use crate::cmc::figures::quality;
+    use crate::cmc::polygon_complex::polygon_area;
 
     const STABLE: [OctahedronTopology; 5] = [
         OctahedronTopology::Tetrahedral,

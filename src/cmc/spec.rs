@@ -7,7 +7,7 @@
 //! [shape]
 //! type = "double_bubble"        # sphere | double_bubble | triple_bubble | cube_frame |
 //! volumes = [1.0e-6, 2.0e-6]    # octahedron_frame | catenoid | u_wires | tents | cells |
-//!                               # obj | gltf
+//!                               # cluster | obj | gltf
 //! [quality]
 //! tangential_weight = 0.01      # w of the tangential regularization (cmc::nlp), ≥ 0
 //! flip_rounds = 1               # edge-flip + re-solve rounds after the first solve (cmc::remesh)
@@ -28,13 +28,15 @@
 //! Resolution: icosphere subdivision level (sphere), 12·resolution segments per ring (catenoid),
 //! rings per cap (double bubble), rows per
 //! half-meridian (triple bubble), segments per wire (frames, U wires), rings from centre to rim
-//! (tents, cells); ignored for OBJ and glTF imports.
+//! (tents, cells), segments per polygon edge of the start complex (cluster); ignored for OBJ and
+//! glTF imports.
 
 use std::path::Path;
 
 use serde::Deserialize;
 
 use super::catenoid;
+use super::cluster::{self, Bubble};
 use super::generators::{self, CellSpec, Pole, Shape, TentSpec};
 use super::mesh::Point;
 use super::nlp::{Chord, Formulation};
@@ -51,6 +53,8 @@ pub const MAX_RESOLUTION: usize = 64;
 /// Most start-mesh faces a problem may ask for, estimated before the mesh is built
 /// ([`ShapeSpec::face_estimate`]).
 pub const MAX_FACES: usize = 500_000;
+/// Most bubbles of a cluster.
+pub const MAX_BUBBLES: usize = 32;
 /// Most corners of a regular polygon (`sides`).
 pub const MAX_SIDES: usize = 1_000;
 
@@ -245,6 +249,11 @@ pub enum ShapeSpec {
         /// The membranes.
         tent: Vec<TentToml>,
     },
+    /// Free bubbles sharing walls, placed by their centres (`cmc::cluster`).
+    Cluster {
+        /// The bubbles.
+        bubble: Vec<BubbleToml>,
+    },
     /// Pneumatic cells on the ground.
     Cells {
         /// The cells.
@@ -323,6 +332,19 @@ pub struct PoleToml {
     pub cap: f64,
 }
 
+/// `[[shape.bubble]]` of a cluster.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BubbleToml {
+    /// Name of the bubble's volume and outer skin.
+    pub name: String,
+    /// Where the bubble sits, m.
+    #[serde(deserialize_with = "crate::spec::arrays::exact")]
+    pub centre: [f64; 3],
+    /// Its volume, m³.
+    pub volume: f64,
+}
+
 /// `[[shape.tent]]`.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -395,6 +417,7 @@ impl ShapeSpec {
                     (1.0 + t.pole.len() as f64 + ring_poles) * quad_aspect(&corners)
                 })
                 .sum(),
+            ShapeSpec::Cluster { bubble } => 3.0 * bubble.len() as f64,
             ShapeSpec::Cells { cell } => cell
                 .iter()
                 .map(|c| {
@@ -422,6 +445,7 @@ impl ShapeSpec {
             ShapeSpec::UWires { .. } => 16,
             ShapeSpec::RingTent { .. } => 4,
             ShapeSpec::Tents { .. } | ShapeSpec::Cells { .. } => 10,
+            ShapeSpec::Cluster { .. } => 4,
             ShapeSpec::Obj { .. } | ShapeSpec::Gltf { .. } => 1,
         }
     }
@@ -628,6 +652,7 @@ impl CmcSpec {
             }
             ShapeSpec::Tents { tent } => self.validate_tents(tent)?,
             ShapeSpec::Cells { cell } => self.validate_cells(cell)?,
+            ShapeSpec::Cluster { bubble } => self.validate_cluster(bubble)?,
             ShapeSpec::Obj { volume, .. } | ShapeSpec::Gltf { volume, .. } => {
                 for (i, v) in volume.iter().enumerate() {
                     let at = shape_entry("volume", i, "volume");
@@ -678,6 +703,33 @@ impl CmcSpec {
                     ));
                 }
             }
+        }
+        Ok(())
+    }
+
+    /// `[[shape.bubble]]`: one to [`MAX_BUBBLES`], distinct names, finite centres (m) at
+    /// distinct places, positive volumes (m³).
+    fn validate_cluster(&self, bubble: &[BubbleToml]) -> Result<(), InputError> {
+        if bubble.is_empty() || bubble.len() > MAX_BUBBLES {
+            return Err(self.err(
+                &shape("bubble"),
+                format!("a cluster needs 1 to {MAX_BUBBLES} `[[shape.bubble]]` entries"),
+            ));
+        }
+        for (i, b) in bubble.iter().enumerate() {
+            let at = |k: &'static str| shape_entry("bubble", i, k);
+            if b.name.is_empty() || bubble[..i].iter().any(|o| o.name == b.name) {
+                return Err(self.err(&at("name"), "bubble names must be distinct and non-empty"));
+            }
+            if !b.centre.iter().all(|x| x.is_finite())
+                || bubble[..i].iter().any(|o| o.centre == b.centre)
+            {
+                return Err(self.err(
+                    &at("centre"),
+                    "a bubble's centre must be finite and differ from the others'",
+                ));
+            }
+            self.source.positive(&at("volume"), b.volume)?;
         }
         Ok(())
     }
@@ -805,6 +857,17 @@ impl CmcSpec {
             ShapeSpec::Tents { tent } => {
                 let specs: Vec<TentSpec> = tent.iter().map(tent_spec).collect();
                 generators::tents(&specs, resolution).map_err(|e| at_shape(&e))?
+            }
+            ShapeSpec::Cluster { bubble } => {
+                let bubbles: Vec<Bubble> = bubble
+                    .iter()
+                    .map(|b| Bubble {
+                        name: b.name.clone(),
+                        centre: Point::from(b.centre),
+                        volume: b.volume,
+                    })
+                    .collect();
+                cluster::cluster(&bubbles, resolution).map_err(|e| at_shape(&e))?
             }
             ShapeSpec::Cells { cell } => {
                 let specs: Vec<CellSpec> = cell.iter().map(cell_spec).collect();

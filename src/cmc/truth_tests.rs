@@ -351,3 +351,100 @@ fn triple_bubble_junction_angles_converge_to_120_degrees() {
     assert!(deviations[1] < deviations[0] / 1.5, "{deviations:?}");
     assert!(deviations[1] < 1.5, "{deviations:?}");
 }
+
+/// A cluster file of bubbles `(name, centre in cm, volume in cm³)` at `resolution`, solved
+/// from one segment per polygon edge (`coarse_resolution = 1`) with w = 1, as the shipped
+/// tetrahedral cluster.
+fn cluster_text(bubbles: &[(&str, [f64; 3], f64)], resolution: usize) -> String {
+    let mut text = format!("resolution = {resolution}\n[shape]\ntype = \"cluster\"\n");
+    for (name, c, v) in bubbles {
+        text += &format!(
+            "[[shape.bubble]]\nname = \"{name}\"\ncentre = [{:e}, {:e}, {:e}]\nvolume = {:e}\n",
+            c[0] * 1e-2,
+            c[1] * 1e-2,
+            c[2] * 1e-2,
+            v * 1e-6
+        );
+    }
+    text + "[quality]\ncoarse_resolution = 1\ntangential_weight = 1.0\n"
+}
+
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "slow without optimizations: run with --release"
+)]
+fn a_two_bubble_cluster_is_the_standard_double_bubble() {
+    // Bubbles of 1 and 2 cm³ placed 1 cm apart: the power-diagram start (a flat wall, flat
+    // skins on a polytope) solves to the standard double bubble, 11.854293128 cm². Measured
+    // at resolution 4 (3,680 triangles): 11.860412 cm², +0.052 %, within the discretization
+    // error of the double bubble's own generator (+0.104 % at 3,042 triangles, docs/notes).
+    let text = cluster_text(
+        &[
+            ("small", [-0.5, 0.0, 0.0], 1.0),
+            ("large", [0.5, 0.0, 0.0], 2.0),
+        ],
+        4,
+    );
+    let outcome = solve(&from_text(&text, "two_bubble_cluster"));
+    let exact = 11.854293128e-4;
+    let relative = area(&outcome) / exact - 1.0;
+    assert!(
+        relative > 0.0 && relative < 1e-3,
+        "area {} (+{relative:e})",
+        area(&outcome)
+    );
+    let (deviation, fit, count) = sphere_fit_junction_deviation(&solved_mesh(&outcome));
+    assert!(count >= 20, "{count} junction vertices");
+    assert!(fit < 0.02, "films off their spheres by {fit}");
+    assert!(deviation < 2.0, "junction angles off 120° by {deviation}°");
+}
+
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "slow without optimizations: run with --release"
+)]
+fn the_tetrahedral_cluster_meets_plateaus_laws() {
+    // problems/cmc/tetrahedral_cluster.toml (four 1 cm³ bubbles) at resolutions 2 and 4 (the
+    // shipped one): every film of the standard tetrahedral cluster is spherical or flat, so the
+    // sphere-fit angles apply (vertices where more than three films meet left out). Plateau's
+    // 120° is approached under refinement, the four bubbles stay alike (the symmetry the
+    // start's icosahedral polytope does not have), and the area falls towards its limit.
+    // Measured: largest deviation 1.30° at 2 and 0.39° at 4, fits within 4.1e-3 and 1.8e-3 of
+    // the size, areas 16.936870 and 16.906582 cm².
+    let path =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("problems/cmc/tetrahedral_cluster.toml");
+    let mut deviations = Vec::new();
+    let mut areas = Vec::new();
+    for level in [2, 4] {
+        let outcome = solve(&load(&path).unwrap().with_resolution(level));
+        let mesh = solved_mesh(&outcome);
+        let (deviation, fit, count) = sphere_fit_junction_deviation(&mesh);
+        assert!(
+            count >= 12 * level,
+            "level {level}: {count} junction vertices"
+        );
+        assert!(
+            fit < 0.02,
+            "level {level}: films off their spheres by {fit}"
+        );
+        let skins: Vec<f64> = outcome.summary.figures["surfaces"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|s| s["name"].as_str().unwrap().len() == 1)
+            .map(|s| s["area"].as_f64().unwrap())
+            .collect();
+        assert_eq!(skins.len(), 4);
+        let (lo, hi) = skins
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(l, h), a| (l.min(*a), h.max(*a)));
+        assert!(hi / lo - 1.0 < 1e-3, "level {level}: skins {skins:?}");
+        deviations.push(deviation);
+        areas.push(area(&outcome));
+    }
+    assert!(deviations[1] < deviations[0] / 1.5, "{deviations:?}");
+    assert!(deviations[1] < 1.0, "{deviations:?}");
+    assert!(areas[1] < areas[0], "{areas:?}");
+}
