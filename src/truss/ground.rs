@@ -19,8 +19,9 @@
 //!   shorter beams),
 //! - if both ends are fixed, the segment does not enter an obstacle (no variable could fix it).
 //!
-//! Crossing beams (such as the two diagonals of a square) are allowed: beams are not joined where
-//! they cross. The topology rounds can remove the weaker of two crossing beams
+//! Crossing beams (such as the two diagonals of a square) are allowed in the ground structure:
+//! beams are not joined where they cross. The topology rounds join crossing beams of a solved
+//! design by a joint (`rounds.split_crossings`) or remove the weaker
 //! (`rounds.remove_crossings`). User-listed extra beams are added as given.
 //!
 //! With symmetry planes the beam set is closed under the mirrors ([`mirror_closure`]): the

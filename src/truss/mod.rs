@@ -55,7 +55,7 @@ use nlp::{SetupError, TrussNlp};
 use quality::Quality;
 use spec::{StartForces, TrussSpec};
 use start::LpReport;
-use topology::RoundSettings;
+use topology::{Crossings, RoundSettings};
 
 /// A loaded, validated truss problem.
 #[derive(Debug, Clone)]
@@ -205,7 +205,13 @@ impl Problem {
             min_length: self.spec.min_length,
             merge_tolerance: self.spec.rounds.merge_tolerance,
             prune: self.spec.rounds.prune,
-            remove_crossings: self.spec.rounds.remove_crossings,
+            crossings: if self.spec.rounds.remove_crossings {
+                Crossings::Remove
+            } else if self.spec.rounds.split_crossings {
+                Crossings::Split
+            } else {
+                Crossings::Keep
+            },
             max_length: self.spec.max_length,
             merge: true,
         }

@@ -26,7 +26,7 @@
 //! [connect] neighbours = 8, extra = [["a", "b"]], forbidden = [["a", "b"]], full = false
 //! [[symmetry]] point, normal       [[obstacle]] kind = "half_space" | "sphere"
 //! [[load_case]] name, factor (on the joints' own loads), loads = [{ joint, force, mass }]
-//! [rounds] count, prune, remove_crossings, merge_tolerance
+//! [rounds] count, prune, split_crossings, remove_crossings, merge_tolerance
 //! [solver] (shared, see crate::solver::Options)
 //! ```
 
@@ -477,7 +477,10 @@ pub struct RoundsSpec {
     /// zero-force members).
     #[serde(default = "default_prune")]
     pub prune: f64,
-    /// Remove the weaker of two crossing beams.
+    /// Join two crossing beams by a new free joint at the crossing (default false).
+    #[serde(default)]
+    pub split_crossings: bool,
+    /// Remove the weaker of two crossing beams instead (takes precedence over the split).
     #[serde(default)]
     pub remove_crossings: bool,
     /// Beams shorter than l_min·(1 + merge_tolerance) have their joints merged (default 1e-3).
@@ -490,6 +493,7 @@ impl Default for RoundsSpec {
         RoundsSpec {
             count: None,
             prune: default_prune(),
+            split_crossings: false,
             remove_crossings: false,
             merge_tolerance: default_merge_tolerance(),
         }

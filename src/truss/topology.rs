@@ -9,8 +9,14 @@
 //!    sum of theirs (the same resultant on both joints, so balance is kept);
 //! 2. prune (optional): beams whose largest |λ| over the cases is below `prune` times the largest
 //!    in the structure are dropped (the seed keeps them to leave topology options open);
-//! 3. crossings (optional): of two beams that cross (segments closer than 1e-9 of the structure
-//!    size, meeting inside both, sharing no joint) the one with the smaller peak |λ| is dropped;
+//! 3. crossings (optional): two beams cross when their segments come closer than 1e-9 of the
+//!    structure size inside both and they share no joint. With `split_crossings` a new free
+//!    joint at the crossing joins them: each beam becomes two carrying its force, so the joint
+//!    balances and the mass is unchanged for tension and `linear` mass (for Euler compression
+//!    each half buckles at half the length: the design gets lighter, a brace it had for free).
+//!    The next round then moves the joint like any other. A crossing whose pieces would be
+//!    shorter than l_min·(1 + merge_tolerance) is left (the merge of step 1 would undo it).
+//!    With `remove_crossings` the one with the smaller peak |λ| is dropped instead;
 //! 4. dangling: free joints left with at most one beam are removed with that beam (such a beam
 //!    carries no force in balance), repeatedly; and tension runs: a free joint left with exactly
 //!    two beams, both in tension in every case and collinear within [`RUN_ANGLE`], is removed
@@ -34,7 +40,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use super::geometry::segment_segment_distance;
-use super::model::{Beam, Joint, Structure, Vec3};
+use super::model::{Beam, Joint, JointKind, Structure, Vec3};
 
 /// Settings of a round.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -45,12 +51,23 @@ pub struct RoundSettings {
     pub merge_tolerance: f64,
     /// Prune fraction (0 keeps every beam).
     pub prune: f64,
-    /// Remove crossings.
-    pub remove_crossings: bool,
+    /// What happens to crossing beams.
+    pub crossings: Crossings,
     /// l_max, m (a tension run is not merged into a longer beam).
     pub max_length: Option<f64>,
     /// Whether joints may be merged (step 1) and tension runs joined (step 4).
     pub merge: bool,
+}
+
+/// What a clean-up does with two beams that cross (module header, step 3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Crossings {
+    /// Leave them.
+    Keep,
+    /// Join them by a free joint at the crossing.
+    Split,
+    /// Drop the one with the smaller peak force.
+    Remove,
 }
 
 /// Largest angle (rad) between the two members of a tension run that is merged (module header,
@@ -70,6 +87,8 @@ pub struct RoundReport {
     pub pruned_beams: usize,
     /// Beams removed at crossings.
     pub crossings_removed: usize,
+    /// Crossings joined by a new joint.
+    pub crossings_split: usize,
     /// Dangling free joints removed.
     pub dangling_joints: usize,
     /// Free joints on straight tension runs merged away.
@@ -87,6 +106,7 @@ impl RoundReport {
         self.merged_joints == 0
             && self.pruned_beams == 0
             && self.crossings_removed == 0
+            && self.crossings_split == 0
             && self.dangling_joints == 0
             && self.tension_runs == 0
     }
@@ -157,12 +177,22 @@ pub fn clean(
         prune(&mut beams, settings.prune);
         report.pruned_beams = before - beams.len();
     }
-    if settings.remove_crossings {
-        let before = beams.len();
-        beams = remove_crossings(&joints, beams);
-        report.crossings_removed = before - beams.len();
+    match settings.crossings {
+        Crossings::Keep => {}
+        Crossings::Remove => {
+            let before = beams.len();
+            beams = remove_crossings(&joints, beams);
+            report.crossings_removed = before - beams.len();
+        }
+        Crossings::Split => {
+            report.crossings_split =
+                split_crossings(&mut joints, &mut beams, settings, forces.len());
+        }
     }
-    let mut alive: Vec<bool> = (0..joints.len()).map(|i| roots[i] == i).collect();
+    // Joints added at crossings (after the merged ones) are alive.
+    let mut alive: Vec<bool> = (0..joints.len())
+        .map(|i| roots.get(i).is_none_or(|&r| r == i))
+        .collect();
     remove_dangling(&joints, &mut alive, &mut beams, settings, &mut report);
     let (out, start) = renumber(&joints, &alive, beams, forces.len());
     report.joints_after = out.joints.len();
@@ -232,16 +262,89 @@ fn prune(beams: &mut BeamForces, prune: f64) {
     beams.retain(|(_, f)| peak(f) >= prune * top);
 }
 
-/// Step 3: drops the weaker beam of each crossing pair, strongest beams first (beams cross
-/// when their segments meet inside both, within 1e-9 of the joints' bounding-box diagonal).
-fn remove_crossings(joints: &[Joint], beams: BeamForces) -> BeamForces {
+/// Distance below which two segments meet: 1e-9 of the joints' bounding-box diagonal (m).
+fn crossing_tolerance(joints: &[Joint]) -> f64 {
     let mut lo = Vec3::repeat(f64::INFINITY);
     let mut hi = Vec3::repeat(f64::NEG_INFINITY);
     for j in joints {
         lo = lo.inf(&j.position);
         hi = hi.sup(&j.position);
     }
-    let tol = 1e-9 * (hi - lo).norm();
+    1e-9 * (hi - lo).norm()
+}
+
+/// Where beams p–q and r–s cross (module header, step 3): the midpoint of their closest
+/// points and the fractions along each, or `None`.
+fn crossing(
+    joints: &[Joint],
+    [a, b]: [usize; 2],
+    [c, d]: [usize; 2],
+    tol: f64,
+) -> Option<(Vec3, f64, f64)> {
+    if a == c || a == d || b == c || b == d {
+        return None;
+    }
+    let (p, q, r, s) = (
+        &joints[a].position,
+        &joints[b].position,
+        &joints[c].position,
+        &joints[d].position,
+    );
+    let (dist, u, v) = segment_segment_distance(p, q, r, s);
+    let inside = u > 0.0 && u < 1.0 && v > 0.0 && v < 1.0;
+    (dist <= tol && inside).then(|| ((p + (q - p) * u + r + (s - r) * v) * 0.5, u, v))
+}
+
+/// Step 3 with `split_crossings`: joins crossing beams by a new free joint at each crossing (appended to
+/// `joints`, no loads in any of `cases`), each beam replaced by two carrying its forces; the
+/// first crossing in beam order is split until none is left (a beam crossing k others is
+/// split k times). Returns the number of joints added.
+fn split_crossings(
+    joints: &mut Vec<Joint>,
+    beams: &mut BeamForces,
+    settings: &RoundSettings,
+    cases: usize,
+) -> usize {
+    let tol = crossing_tolerance(joints);
+    let shortest = settings.min_length * (1.0 + settings.merge_tolerance);
+    let long_enough = |u: f64, joints: &[Joint], [a, b]: [usize; 2]| {
+        let length = (joints[b].position - joints[a].position).norm();
+        u * length > shortest && (1.0 - u) * length > shortest
+    };
+    let mut added = 0;
+    loop {
+        let found = (0..beams.len()).find_map(|i| {
+            (i + 1..beams.len()).find_map(|k| {
+                let (e, f) = (beams[i].0.ends, beams[k].0.ends);
+                let (point, u, v) = crossing(joints, e, f, tol)?;
+                (long_enough(u, joints, e) && long_enough(v, joints, f)).then_some((i, k, point))
+            })
+        });
+        let Some((i, k, point)) = found else {
+            return added;
+        };
+        let n = joints.len();
+        joints.push(Joint {
+            position: point,
+            kind: JointKind::Free,
+            name: None,
+            loads: vec![Vec3::zeros(); cases],
+        });
+        added += 1;
+        // Replace k first (the larger index), then i.
+        for j in [k, i] {
+            let (beam, force) = beams.remove(j);
+            let [p, q] = beam.ends;
+            beams.push((Beam::new(p, n), force.clone()));
+            beams.push((Beam::new(n, q), force));
+        }
+    }
+}
+
+/// Step 3 with `remove_crossings`: drops the weaker beam of each crossing pair, strongest
+/// beams first.
+fn remove_crossings(joints: &[Joint], beams: BeamForces) -> BeamForces {
+    let tol = crossing_tolerance(joints);
     let mut order: Vec<usize> = (0..beams.len()).collect();
     order.sort_by(|&a, &b| {
         peak(&beams[b].1)
@@ -251,19 +354,9 @@ fn remove_crossings(joints: &[Joint], beams: BeamForces) -> BeamForces {
     let mut kept: Vec<usize> = Vec::new();
     for &k in &order {
         let [a, b] = beams[k].0.ends;
-        let crosses = kept.iter().any(|&q| {
-            let [c, d] = beams[q].0.ends;
-            if a == c || a == d || b == c || b == d {
-                return false;
-            }
-            let (dist, s, t) = segment_segment_distance(
-                &joints[a].position,
-                &joints[b].position,
-                &joints[c].position,
-                &joints[d].position,
-            );
-            dist <= tol && s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0
-        });
+        let crosses = kept
+            .iter()
+            .any(|&q| crossing(joints, [a, b], beams[q].0.ends, tol).is_some());
         if !crosses {
             kept.push(k);
         }
@@ -402,7 +495,7 @@ mod tests {
             min_length: 0.1,
             merge_tolerance: 1e-3,
             prune: 0.0,
-            remove_crossings: false,
+            crossings: Crossings::Keep,
             max_length: None,
             merge: true,
         }
@@ -470,16 +563,15 @@ mod tests {
         assert_eq!(out.joints[1].position, Vec3::new(0.1, 0.0, 0.0));
     }
 
-    #[test]
-    fn pruning_crossings_and_dangling_joints() {
-        // A square with both diagonals, plus a free joint hanging on one beam.
-        let s = Structure {
+    /// A 2 m square: anchors 0 (0, 0) and 1 (2, 0), load 2 (2, 2), free joint 3 (0, 2); beams
+    /// 0–2 and 1–3 (the diagonals), then 1–2, 2–3, 0–3.
+    fn square_with_diagonals() -> Structure {
+        Structure {
             joints: vec![
                 joint(0.0, 0.0, JointKind::Anchor(Support::Pinned)),
                 joint(2.0, 0.0, JointKind::Anchor(Support::Pinned)),
                 joint(2.0, 2.0, JointKind::Load),
                 joint(0.0, 2.0, JointKind::Free),
-                joint(5.0, 5.0, JointKind::Free),
             ],
             beams: vec![
                 Beam::new(0, 2),
@@ -487,12 +579,19 @@ mod tests {
                 Beam::new(1, 2),
                 Beam::new(2, 3),
                 Beam::new(0, 3),
-                Beam::new(2, 4),
             ],
-        };
+        }
+    }
+
+    #[test]
+    fn pruning_crossings_and_dangling_joints() {
+        // A square with both diagonals, plus a free joint hanging on one beam.
+        let mut s = square_with_diagonals();
+        s.joints.push(joint(5.0, 5.0, JointKind::Free));
+        s.beams.push(Beam::new(2, 4));
         let forces = vec![vec![10.0, -2.0, 8.0, 1e-9, 3.0, 1e-6]];
         let mut set = settings();
-        set.remove_crossings = true;
+        set.crossings = Crossings::Remove;
         let (out, _, report) = clean(&s, &positions(&s), &forces, &set);
         assert_eq!(report.crossings_removed, 1);
         assert_eq!(report.dangling_joints, 1);
@@ -501,13 +600,51 @@ mod tests {
             !out.beams.contains(&Beam::new(1, 3)),
             "weaker diagonal dropped"
         );
-        set.remove_crossings = false;
+        set.crossings = Crossings::Keep;
         set.prune = 1e-3;
         let (out, start, report) = clean(&s, &positions(&s), &forces, &set);
         assert_eq!(report.pruned_beams, 2);
         assert_eq!(report.dangling_joints, 1);
         assert_eq!(out.beams.len(), 4);
         assert!(start.iter().all(|f| f.abs() >= 1e-2));
+    }
+
+    #[test]
+    fn crossing_beams_are_joined_by_a_joint_carrying_both_forces() {
+        // The diagonals (forces 10 and −2 N) meet at (1, 1).
+        let s = square_with_diagonals();
+        let forces = vec![vec![10.0, -2.0, 8.0, 1.0, 3.0]];
+        let length = |s: &Structure| -> f64 {
+            let p = positions(s);
+            s.beams
+                .iter()
+                .map(|b| (p[b.ends[1]] - p[b.ends[0]]).norm())
+                .sum()
+        };
+        let mut set = settings();
+        set.crossings = Crossings::Split;
+        let (out, start, report) = clean(&s, &positions(&s), &forces, &set);
+        assert_eq!(report.crossings_split, 1);
+        assert!(!report.changes_nothing());
+        assert_eq!(out.joints.len(), 5);
+        assert_eq!(out.beams.len(), 7);
+        let centre = out.joints[4].position;
+        assert!(out.joints[4].is_free() && (centre - Vec3::new(1.0, 1.0, 0.0)).norm() < 1e-12);
+        // Each half carries its diagonal's force: the new joint balances, the length is kept.
+        let at = |a: usize, b: usize| {
+            start[out
+                .beams
+                .iter()
+                .position(|x| *x == Beam::new(a, b))
+                .unwrap()]
+        };
+        assert_eq!((at(0, 4), at(2, 4)), (10.0, 10.0));
+        assert_eq!((at(1, 4), at(3, 4)), (-2.0, -2.0));
+        assert!((length(&out) - length(&s)).abs() < 1e-12);
+        // Pieces shorter than l_min stay crossed.
+        set.min_length = 1.5;
+        let (_, _, report) = clean(&s, &positions(&s), &forces, &set);
+        assert_eq!(report.crossings_split, 0);
     }
 
     /// Pinned anchors 0 at (0, 0) and 1 at (4, 0), then free joints at `free` (x, y).
