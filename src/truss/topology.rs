@@ -273,8 +273,9 @@ fn crossing_tolerance(joints: &[Joint]) -> f64 {
     1e-9 * (hi - lo).norm()
 }
 
-/// Where beams p–q and r–s cross (module header, step 3): the midpoint of their closest
-/// points and the fractions along each, or `None`.
+/// Where the beams with ends `[a, b]` and `[c, d]` cross (module header, step 3): the
+/// midpoint of their closest points and the fractions along each, or `None` (also when they
+/// share a joint).
 fn crossing(
     joints: &[Joint],
     [a, b]: [usize; 2],
