@@ -783,21 +783,7 @@ mod tests {
     }
 
     impl Nlp for OneWrongEntry<'_> {
-        fn dims(&self) -> Dims {
-            self.nlp.dims()
-        }
-        fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
-            self.nlp.bounds(xl, xu, cl, cu)
-        }
-        fn start(&self, x: &mut [f64]) {
-            self.nlp.start(x)
-        }
-        fn jacobian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
-            self.nlp.jacobian_structure(rows, cols)
-        }
-        fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
-            self.nlp.eval(x, f, c)
-        }
+        crate::solver::forward_nlp!(nlp; dims, bounds, start, jacobian_structure, eval);
         fn eval_derivatives(
             &self,
             x: &[f64],

@@ -15,7 +15,7 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use super::{Dims, EvalError, Nlp};
+use super::{EvalError, Nlp, forward_nlp};
 
 /// RK4 steps a rollout takes between two polls of the flag (one Luxo-leap step with dual
 /// numbers takes well under a millisecond, so a rollout notices a raised flag within
@@ -83,18 +83,7 @@ impl<'a> Interruptible<'a> {
 }
 
 impl Nlp for Interruptible<'_> {
-    fn dims(&self) -> Dims {
-        self.nlp.dims()
-    }
-    fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
-        self.nlp.bounds(xl, xu, cl, cu)
-    }
-    fn start(&self, x: &mut [f64]) {
-        self.nlp.start(x)
-    }
-    fn jacobian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
-        self.nlp.jacobian_structure(rows, cols)
-    }
+    forward_nlp!(nlp; dims, bounds, start, jacobian_structure, hessian_structure, constraint_name);
     fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
         self.interrupt.poll()?;
         self.nlp.eval(x, f, c)
@@ -108,9 +97,6 @@ impl Nlp for Interruptible<'_> {
         self.interrupt.poll()?;
         self.nlp.eval_derivatives(x, grad, jac)
     }
-    fn hessian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
-        self.nlp.hessian_structure(rows, cols)
-    }
     fn eval_hessian(
         &self,
         x: &[f64],
@@ -120,8 +106,5 @@ impl Nlp for Interruptible<'_> {
     ) -> Result<(), EvalError> {
         self.interrupt.poll()?;
         self.nlp.eval_hessian(x, sigma, lambda, values)
-    }
-    fn constraint_name(&self, row: usize) -> String {
-        self.nlp.constraint_name(row)
     }
 }

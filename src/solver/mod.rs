@@ -80,6 +80,7 @@ mod termination;
 mod tuning;
 
 pub use interrupt::{Interrupt, Interruptible};
+pub(crate) use nlp::forward_nlp;
 pub use nlp::{Bounds, Dims, EvalError, Nlp};
 pub use options::{Globalization, HessianMode, InvalidSetting, Options};
 pub use solution::{Evaluations, IterationRecord, Solution};

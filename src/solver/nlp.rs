@@ -110,3 +110,75 @@ pub trait Nlp: Sync {
         format!("c[{row}]")
     }
 }
+
+/// Passes the listed [`Nlp`] methods of a wrapper through to its field `$field` (a name or a
+/// tuple index), so a wrapper writes out only the methods it changes:
+/// `impl Nlp for Logged<'_> { forward_nlp!(inner; dims, bounds, start); fn eval(..) {..} }`.
+/// Methods neither listed nor written keep the trait's defaults.
+macro_rules! forward_nlp {
+    ($field:tt; $($method:ident),+ $(,)?) => {
+        $( $crate::solver::forward_nlp!(@ $field $method); )+
+    };
+    (@ $f:tt dims) => {
+        fn dims(&self) -> $crate::solver::Dims {
+            self.$f.dims()
+        }
+    };
+    (@ $f:tt bounds) => {
+        fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
+            self.$f.bounds(xl, xu, cl, cu)
+        }
+    };
+    (@ $f:tt start) => {
+        fn start(&self, x: &mut [f64]) {
+            self.$f.start(x)
+        }
+    };
+    (@ $f:tt jacobian_structure) => {
+        fn jacobian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
+            self.$f.jacobian_structure(rows, cols)
+        }
+    };
+    (@ $f:tt eval) => {
+        fn eval(
+            &self,
+            x: &[f64],
+            f: &mut f64,
+            c: &mut [f64],
+        ) -> Result<(), $crate::solver::EvalError> {
+            self.$f.eval(x, f, c)
+        }
+    };
+    (@ $f:tt eval_derivatives) => {
+        fn eval_derivatives(
+            &self,
+            x: &[f64],
+            grad: &mut [f64],
+            jac: &mut [f64],
+        ) -> Result<(), $crate::solver::EvalError> {
+            self.$f.eval_derivatives(x, grad, jac)
+        }
+    };
+    (@ $f:tt hessian_structure) => {
+        fn hessian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
+            self.$f.hessian_structure(rows, cols)
+        }
+    };
+    (@ $f:tt eval_hessian) => {
+        fn eval_hessian(
+            &self,
+            x: &[f64],
+            sigma: f64,
+            lambda: &[f64],
+            values: &mut [f64],
+        ) -> Result<(), $crate::solver::EvalError> {
+            self.$f.eval_hessian(x, sigma, lambda, values)
+        }
+    };
+    (@ $f:tt constraint_name) => {
+        fn constraint_name(&self, row: usize) -> String {
+            self.$f.constraint_name(row)
+        }
+    };
+}
+pub(crate) use forward_nlp;

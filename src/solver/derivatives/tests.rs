@@ -271,18 +271,7 @@ fn differences_at_active_bounds_step_inward() {
     // A model undefined outside the bounds still differentiates at the bounds.
     struct Guarded<'a>(&'a Small);
     impl Nlp for Guarded<'_> {
-        fn dims(&self) -> Dims {
-            self.0.dims()
-        }
-        fn bounds(&self, a: &mut [f64], b: &mut [f64], c: &mut [f64], d: &mut [f64]) {
-            self.0.bounds(a, b, c, d)
-        }
-        fn start(&self, x: &mut [f64]) {
-            self.0.start(x)
-        }
-        fn jacobian_structure(&self, r: &mut [usize], c: &mut [usize]) {
-            self.0.jacobian_structure(r, c)
-        }
+        crate::solver::forward_nlp!(0; dims, bounds, start, jacobian_structure);
         fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
             if !(0.0..=2.0).contains(&x[0]) || !(-1.0..=1.0).contains(&x[1]) {
                 return Err(EvalError::Domain(format!("outside the box at {x:?}")));

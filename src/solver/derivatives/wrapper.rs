@@ -16,7 +16,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use super::engine::FiniteDifferences;
 use super::interval::{DifferenceScheme, FiniteDifferenceOptions};
 use crate::solver::global::WithStart;
-use crate::solver::{Dims, EvalError, Nlp, Solution};
+use crate::solver::{Dims, EvalError, Nlp, Solution, forward_nlp};
 
 /// `inner` with finite-difference gradient and Jacobian (no exact Hessian: `hess_nnz = 0`).
 pub struct FiniteDifferenceNlp<'a> {
@@ -88,21 +88,7 @@ impl Nlp for FiniteDifferenceNlp<'_> {
         }
     }
 
-    fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
-        self.inner.bounds(xl, xu, cl, cu);
-    }
-
-    fn start(&self, x: &mut [f64]) {
-        self.inner.start(x);
-    }
-
-    fn jacobian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
-        self.inner.jacobian_structure(rows, cols);
-    }
-
-    fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
-        self.inner.eval(x, f, c)
-    }
+    forward_nlp!(inner; bounds, start, jacobian_structure, eval, constraint_name);
 
     fn eval_derivatives(
         &self,
@@ -115,10 +101,6 @@ impl Nlp for FiniteDifferenceNlp<'_> {
             .evaluate(self.inner, x, self.scheme(), grad, jac)?;
         self.evaluations.fetch_add(count, Ordering::Relaxed);
         Ok(())
-    }
-
-    fn constraint_name(&self, row: usize) -> String {
-        self.inner.constraint_name(row)
     }
 }
 

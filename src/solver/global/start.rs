@@ -7,7 +7,7 @@
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
-use crate::solver::{Dims, EvalError, Nlp};
+use crate::solver::{Nlp, forward_nlp};
 
 /// `inner` with its starting point replaced; everything else is passed through.
 pub struct WithStart<'a> {
@@ -24,43 +24,10 @@ impl<'a> WithStart<'a> {
 }
 
 impl Nlp for WithStart<'_> {
-    fn dims(&self) -> Dims {
-        self.inner.dims()
-    }
-    fn bounds(&self, xl: &mut [f64], xu: &mut [f64], cl: &mut [f64], cu: &mut [f64]) {
-        self.inner.bounds(xl, xu, cl, cu);
-    }
+    forward_nlp!(inner; dims, bounds, jacobian_structure, eval, eval_derivatives,
+        hessian_structure, eval_hessian, constraint_name);
     fn start(&self, x: &mut [f64]) {
         x.copy_from_slice(&self.x0);
-    }
-    fn jacobian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
-        self.inner.jacobian_structure(rows, cols);
-    }
-    fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
-        self.inner.eval(x, f, c)
-    }
-    fn eval_derivatives(
-        &self,
-        x: &[f64],
-        grad: &mut [f64],
-        jac: &mut [f64],
-    ) -> Result<(), EvalError> {
-        self.inner.eval_derivatives(x, grad, jac)
-    }
-    fn hessian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
-        self.inner.hessian_structure(rows, cols);
-    }
-    fn eval_hessian(
-        &self,
-        x: &[f64],
-        sigma: f64,
-        lambda: &[f64],
-        values: &mut [f64],
-    ) -> Result<(), EvalError> {
-        self.inner.eval_hessian(x, sigma, lambda, values)
-    }
-    fn constraint_name(&self, row: usize) -> String {
-        self.inner.constraint_name(row)
     }
 }
 
