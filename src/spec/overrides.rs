@@ -234,8 +234,19 @@ fn insert(
         ));
     }
     let line = format!("{} = {value}", rest.join("."));
+    let newline = if text.ends_with('\n') { "" } else { "\n" };
     let Some(span) = table_span else {
-        return Ok((0, 0, format!("{line}\n")));
+        // A root key at the top; a new table under its own header at the end (a dotted key
+        // at the top would define the table, and a later `--set` into it could not add a
+        // header for it).
+        return Ok(match rest.split_last() {
+            Some((last, tables)) if !tables.is_empty() => (
+                text.len(),
+                0,
+                format!("{newline}[{}]\n{last} = {value}\n", tables.join(".")),
+            ),
+            _ => (0, 0, format!("{line}\n")),
+        });
     };
     let opening = &text[span.clone()];
     if opening.starts_with('{') {
@@ -257,12 +268,19 @@ fn insert(
             walked.join(".")
         ));
     }
-    let newline = if text.ends_with('\n') { "" } else { "\n" };
-    Ok((
-        text.len(),
-        0,
-        format!("{newline}[{}]\n{line}\n", walked.join(".")),
-    ))
+    let header = format!("{newline}[{}]\n{line}\n", walked.join("."));
+    let dotted = format!("{}.{line}\n", walked.join("."));
+    // A table defined by dotted keys (`solver.qp = …` at the root) cannot take a header; a
+    // dotted key at the top of the file adds to it.
+    let parses = |at: usize, insert: &str| {
+        let mut edited = text.to_string();
+        edited.insert_str(at, insert);
+        DeTable::parse(&edited).is_ok()
+    };
+    if !parses(text.len(), &header) && parses(0, &dotted) {
+        return Ok((0, 0, dotted));
+    }
+    Ok((text.len(), 0, header))
 }
 
 impl Edited {
@@ -371,6 +389,24 @@ mod tests {
         assert_eq!(t["name"].as_str(), Some("b"));
         let t = parsed(&edit("g = [0, -9.81, 0]\n", &["g.1=-1.6", "g.1=-3.7"]).unwrap());
         assert_eq!(t["g"][1].as_float(), Some(-3.7));
+    }
+
+    #[test]
+    fn several_keys_join_a_table_the_file_lacks_or_defines_by_dotted_keys() {
+        let args = [
+            "solver.qp=sparse",
+            "solver.hessian=lbfgs",
+            "a.b.c=1",
+            "a.b.d=2",
+        ];
+        let t = parsed(&edit("name = \"a\"\n[[link]]\nm = 1\n", &args).unwrap());
+        assert_eq!(t["solver"]["qp"].as_str(), Some("sparse"));
+        assert_eq!(t["solver"]["hessian"].as_str(), Some("lbfgs"));
+        assert_eq!(t["a"]["b"]["d"].as_integer(), Some(2));
+        assert_eq!(t["link"][0]["m"].as_integer(), Some(1));
+        let t = parsed(&edit("solver.qp = \"dense\"\n[x]\n", &["solver.hessian=exact"]).unwrap());
+        assert_eq!(t["solver"]["qp"].as_str(), Some("dense"));
+        assert_eq!(t["solver"]["hessian"].as_str(), Some("exact"));
     }
 
     #[test]
