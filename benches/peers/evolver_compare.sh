@@ -13,6 +13,9 @@
 # time is user + system from /usr/bin/time, the best of the rounds. Prints facets, both areas
 # (cm²), their relative difference, both CPU times and the ratio optimize / Evolver.
 #
+# FORMULATION=normal (or area, curvature) sets optimize's top-level `formulation` for every
+# case (default: the file's own).
+#
 # QP=sparse (or dense) sets optimize's `[solver] qp` for every case (default: the file's own
 # setting, i.e. the solver's automatic choice: dense below 2000 variables).
 #
@@ -66,6 +69,9 @@ for c in "${cases[@]}"; do
         sed -i -e '/^\[quality\]/a flip_rounds = 0' -e '/^flip_rounds = [1-9]/d' "$work/$name.toml"
     else
         printf '\n[quality]\nflip_rounds = 0\n' >> "$work/$name.toml"
+    fi
+    if [ -n "${FORMULATION:-}" ]; then
+        sed -i -e '/^formulation = /d' -e "0,/^name = .*/s//&\nformulation = \"$FORMULATION\"/" "$work/$name.toml"
     fi
     if [ -n "${QP:-}" ]; then
         if grep -q '^\[solver\]' "$work/$name.toml"; then

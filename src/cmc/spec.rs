@@ -3,7 +3,7 @@
 //! ```toml
 //! name = "double_bubble"        # optional; defaults to the file stem
 //! resolution = 6                # optional refinement level (meaning per shape, see below)
-//! formulation = "area"          # area | curvature (per-vertex rows, seed eq. 5.4), cmc::nlp
+//! formulation = "area"          # area | normal (area in normal coordinates) | curvature (per-vertex rows, seed eq. 5.4), cmc::nlp
 //! [shape]
 //! type = "double_bubble"        # sphere | double_bubble | triple_bubble | cube_frame |
 //! volumes = [1.0e-6, 2.0e-6]    # octahedron_frame | catenoid | u_wires | tents | cells |

@@ -12,7 +12,7 @@
 use nalgebra::DVector;
 
 use super::{SLICING_TOLERANCE, Spectrum};
-use crate::solver::kkt::{KktError, KktSolver, Regularization};
+use crate::solver::kkt::{Equilibration, KktError, KktSolver, Regularization};
 
 /// The bordered matrix of the module header with its values at σ = 0.
 struct Bordered {
@@ -63,9 +63,11 @@ impl Bordered {
             let at = self.solver.diagonal_position(i);
             self.solver.values_mut()[at] -= sigma;
         }
+        // Successive counts differ by a diagonal shift only: the last scaling starts the next.
         let inertia = self.solver.factor(Regularization {
             primal: 0.0,
             dual: 1e-12,
+            equilibration: Equilibration::RuizFromLast,
             ..Regularization::default()
         })?;
         Ok(inertia.negative.saturating_sub(self.b))

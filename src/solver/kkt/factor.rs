@@ -5,7 +5,8 @@
 //!     S K S + diag(δ_p W_p, −δ_d W_d) = P L D Lᵀ Pᵀ,   W = diag(min(1, s_k²)),   inertia(K) = inertia(SKS) ≈ (#D>0, #D<0, #D=0)
 //! ```
 //! S = diag(s) > 0 by symmetric Ruiz equilibration: repeatedly `s_k ← s_k / √‖(SKS)_k,:‖∞`
-//! until every row norm lies within [`RUIZ_TOLERANCE`] of 1 or [`RUIZ_PASSES`] passes are done.
+//! until every row norm lies within [`RUIZ_TOLERANCE`] of 1 or [`RUIZ_PASSES`] passes are done,
+//! starting from S = I or, on request, from the previous factorization's S ([`Equilibration`]).
 //! Rows that are entirely zero keep s_k = 1. The weights W make the static regularization the
 //! smaller of δ relative to the equilibrated matrix and δ absolute in K itself.
 //! Dynamic regularization (as in Clarabel/QDLDL): a pivot with |d| ≤ `pivot_threshold` is
@@ -44,8 +45,8 @@ pub struct Regularization {
     pub pivot_threshold: f64,
     /// Magnitude given to a replaced pivot.
     pub pivot_replacement: f64,
-    /// Whether to equilibrate (S from Ruiz); false factors K itself (S = I).
-    pub equilibrate: bool,
+    /// How S is found.
+    pub equilibration: Equilibration,
 }
 
 impl Default for Regularization {
@@ -55,9 +56,24 @@ impl Default for Regularization {
             dual: 1e-9,
             pivot_threshold: 1e-13,
             pivot_replacement: 1e-7,
-            equilibrate: true,
+            equilibration: Equilibration::Ruiz,
         }
     }
+}
+
+/// How the equilibrating diagonal S is found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Equilibration {
+    /// S = I: K itself is factored.
+    Off,
+    /// Ruiz passes from S = I.
+    Ruiz,
+    /// Ruiz passes from the last successful factorization's S (from I the first time). For a
+    /// sequence of matrices whose scaling hardly changes, such as one matrix shifted along its
+    /// diagonal (a spectrum slice, inertia trials), the first sweep then usually finds the rows
+    /// balanced already; after a large change it can end at the pass limit less balanced than
+    /// a start from I would.
+    RuizFromLast,
 }
 
 /// Signs of the pivots of the last factorization.
@@ -95,15 +111,19 @@ impl KktSolver {
             return Ok(self.inertia);
         }
         self.factored = false;
+        // The scale of the last successful factorization starts the equilibration.
+        let warm = self.last.is_some();
         let mut last = self.last.take().unwrap_or_else(|| FactoredValues {
             regularization: reg,
             values: Vec::with_capacity(self.values.len()),
         });
-        if reg.equilibrate {
-            self.equilibrate();
-        } else {
-            self.scale.fill(1.0);
-            self.shifted.copy_from_slice(&self.values);
+        match reg.equilibration {
+            Equilibration::Off => {
+                self.scale.fill(1.0);
+                self.shifted.copy_from_slice(&self.values);
+            }
+            Equilibration::Ruiz => self.equilibrate(false),
+            Equilibration::RuizFromLast => self.equilibrate(warm),
         }
         for (k, &p) in self.diag_pos.iter().enumerate() {
             // min(relative, absolute): δ in the scaled matrix, but never more than δ in K.
@@ -183,10 +203,17 @@ impl KktSolver {
     }
 
     /// Computes the Ruiz scaling of `values` into `scale` and writes `S values S` into
-    /// `shifted` (uses `residual` as scratch).
-    fn equilibrate(&mut self) {
-        self.scale.fill(1.0);
-        self.shifted.copy_from_slice(&self.values);
+    /// `shifted` (uses `residual` as scratch), the passes starting from the S in `scale` when
+    /// `warm` (see [`Equilibration::RuizFromLast`]), from I otherwise.
+    fn equilibrate(&mut self, warm: bool) {
+        if !warm || !self.scale.iter().all(|s| s.is_finite() && *s > 0.0) {
+            self.scale.fill(1.0);
+        }
+        for c in 0..self.dim {
+            for p in self.col_ptr[c]..self.col_ptr[c + 1] {
+                self.shifted[p] = self.values[p] * self.scale[self.row_idx[p]] * self.scale[c];
+            }
+        }
         let norms = &mut self.residual;
         for _ in 0..RUIZ_PASSES {
             norms.fill(0.0);

@@ -40,7 +40,7 @@ use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
 };
 
-pub use factor::{Inertia, Regularization};
+pub use factor::{Equilibration, Inertia, Regularization};
 pub use solve::SolveReport;
 
 /// Why a KKT operation failed.

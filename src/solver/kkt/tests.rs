@@ -5,7 +5,7 @@ use rand::RngExt;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use super::{KktSolver, Regularization};
+use super::{Equilibration, KktSolver, Regularization};
 
 /// A random sparse quasi-definite matrix [H, Aᵀ; A, −D] with H ≻ 0 (diagonally dominant), D ≻ 0,
 /// as lower-triangle triplets plus its dense form.
@@ -293,4 +293,61 @@ fn badly_scaled_equality_kkt_is_solved_accurately() {
         .map(|(a, e)| (a - e).abs() / (1.0 + e.abs()))
         .fold(0.0f64, f64::max);
     assert!(err <= 1e-6, "relative error {err:e}");
+}
+
+/// Row ∞-norms of `S K S` with the solver's current values and scale.
+fn scaled_row_norms(kkt: &KktSolver) -> Vec<f64> {
+    let mut norms = vec![0.0f64; kkt.dim];
+    for c in 0..kkt.dim {
+        for p in kkt.col_ptr[c]..kkt.col_ptr[c + 1] {
+            let r = kkt.row_idx[p];
+            let v = (kkt.values[p] * kkt.scale[r] * kkt.scale[c]).abs();
+            norms[r] = norms[r].max(v);
+            norms[c] = norms[c].max(v);
+        }
+    }
+    norms
+}
+
+#[test]
+fn equilibration_from_the_last_scale_balances_shifted_matrices_and_solves_them() {
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let (n, m) = (120, 40);
+    let (rows, cols, vals, dense) = random_quasi_definite(&mut rng, n, m, 0.05);
+    let mut kkt = build(n, m, &rows, &cols, &vals);
+    let base = kkt.values().to_vec();
+    let warm = Regularization {
+        equilibration: Equilibration::RuizFromLast,
+        ..Regularization::default()
+    };
+    for sigma in [0.0, 0.5, 3.0, 30.0, 1.0] {
+        // The primal diagonal shifted by σ, as a spectrum slice or an inertia trial does.
+        kkt.values_mut().copy_from_slice(&base);
+        for k in 0..n {
+            let at = kkt.diagonal_position(k);
+            kkt.values_mut()[at] += sigma;
+        }
+        let inertia = kkt.factor(warm).unwrap();
+        assert_eq!((inertia.positive, inertia.negative), (n, m), "σ = {sigma}");
+        for norm in scaled_row_norms(&kkt) {
+            assert!((norm - 1.0).abs() <= 0.1, "σ = {sigma}: row norm {norm}");
+        }
+        let mut shifted = dense.clone();
+        for k in 0..n {
+            shifted[(k, k)] += sigma;
+        }
+        let b = DVector::from_fn(n + m, |_, _| rng.random_range(-1.0..1.0));
+        let expected = shifted.lu().solve(&b).unwrap();
+        let mut x = b.as_slice().to_vec();
+        kkt.solve_refined(&mut x, 5, 1e-14).unwrap();
+        let err = x
+            .iter()
+            .zip(expected.iter())
+            .map(|(a, e)| (a - e).abs())
+            .fold(0.0f64, f64::max);
+        assert!(
+            err <= 1e-10 * expected.amax().max(1.0),
+            "σ = {sigma}: {err:e}"
+        );
+    }
 }
