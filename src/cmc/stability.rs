@@ -224,26 +224,7 @@ fn analyse_with(
         }
         dense_spectrum(big_k, &basis)
     } else {
-        let certified = match sparse {
-            #[cfg(test)]
-            Sparse::Slicing => None,
-            _ => shift_invert::smallest(
-                k,
-                &entries,
-                &basis,
-                REPORTED,
-                NEGATIVE_TOLERANCE,
-                SLICING_TOLERANCE,
-            )
-            .unwrap_or(None),
-        };
-        let spectrum = match certified {
-            Some(spectrum) => Ok(spectrum),
-            #[cfg(test)]
-            None if sparse == Sparse::ShiftInvertOnly => Err("shift-invert not certified".into()),
-            None => slicing::smallest(k, &entries, &basis, REPORTED, NEGATIVE_TOLERANCE),
-        };
-        match spectrum {
+        match sparse_spectrum(k, &entries, &basis, sparse) {
             Ok(spectrum) => spectrum,
             Err(e) => {
                 result.verdict = format!("not analysed: {e}");
@@ -263,6 +244,35 @@ fn analyse_with(
     };
     result.pressures = pressures;
     result
+}
+
+/// The smallest eigenvalues of K (k×k, `entries` of both triangles) on the complement of the
+/// orthonormal `basis` above the dense limit, by the `sparse` method.
+fn sparse_spectrum(
+    k: usize,
+    entries: &[(usize, usize, f64)],
+    basis: &[DVector<f64>],
+    sparse: Sparse,
+) -> Result<Spectrum, String> {
+    let certified = match sparse {
+        #[cfg(test)]
+        Sparse::Slicing => None,
+        _ => shift_invert::smallest(
+            k,
+            entries,
+            basis,
+            REPORTED,
+            NEGATIVE_TOLERANCE,
+            SLICING_TOLERANCE,
+        )
+        .unwrap_or(None),
+    };
+    match certified {
+        Some(spectrum) => Ok(spectrum),
+        #[cfg(test)]
+        None if sparse == Sparse::ShiftInvertOnly => Err("shift-invert not certified".into()),
+        None => slicing::smallest(k, entries, basis, REPORTED, NEGATIVE_TOLERANCE),
+    }
 }
 
 /// Orthonormal bases of each vertex's normal motion (module header).
