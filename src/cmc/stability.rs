@@ -32,10 +32,10 @@
 //! counts them: at σ = −`NEGATIVE_TOLERANCE` × the spectrum's Gershgorin bound g it gives the
 //! number of negative ones. Its factors, at a shift below the spectrum, then apply
 //! `(P(K − σI)P)⁻¹` to a growing block of vectors whose Rayleigh–Ritz values on K converge to
-//! the smallest eigenvalues within [`SLICING_TOLERANCE`]·g ([`shift_invert`]); one more count
-//! certifies that none was missed. When it cannot certify, bisection on σ brackets each
-//! eigenvalue to the same width ([`slicing`], a factorization per step). Two factorizations
-//! instead of dozens on the 11k-facet double bubble: its whole run 1.22 → 0.49 s CPU.
+//! the smallest eigenvalues within [`SLICING_TOLERANCE`]·g (module `shift_invert`); one more
+//! count certifies that none was missed. When it cannot certify, bisection on σ brackets each
+//! eigenvalue to the same width (module `slicing`, a factorization per step). Two
+//! factorizations instead of dozens on the 11k-facet double bubble: its whole run 1.22 → 0.49 s CPU.
 //! Meshes above [`SPARSE_LIMIT`] degrees of freedom are not analysed.
 
 use nalgebra::{DMatrix, DVector, Matrix3};
