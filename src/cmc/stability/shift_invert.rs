@@ -18,6 +18,7 @@
 //! c. An uncertified result is `None` and the caller slices the spectrum instead.
 
 use nalgebra::{DMatrix, DVector};
+use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
 use super::Spectrum;
 use super::bordered::{Bordered, gershgorin};
@@ -31,45 +32,6 @@ const MAX_STEPS: usize = 30;
 
 /// Factor by which σ steps down while the count below it is positive.
 const STEP_DOWN: f64 = 32.0;
-
-/// The sparse symmetric K in compressed rows (both triangles, repeats summed).
-struct Compressed {
-    row_ptr: Vec<usize>,
-    col: Vec<usize>,
-    val: Vec<f64>,
-}
-
-impl Compressed {
-    fn new(n: usize, entries: &[(usize, usize, f64)]) -> Self {
-        let mut sorted = entries.to_vec();
-        sorted.sort_by_key(|&(i, j, _)| (i, j));
-        let mut row_ptr = vec![0; n + 1];
-        let (mut col, mut val): (Vec<usize>, Vec<f64>) = (Vec::new(), Vec::new());
-        let mut last = None;
-        for (i, j, v) in sorted {
-            if last == Some((i, j)) {
-                *val.last_mut().expect("a repeat follows an entry") += v;
-            } else {
-                col.push(j);
-                val.push(v);
-                row_ptr[i + 1] += 1;
-                last = Some((i, j));
-            }
-        }
-        for i in 0..n {
-            row_ptr[i + 1] += row_ptr[i];
-        }
-        Compressed { row_ptr, col, val }
-    }
-
-    fn multiply(&self, x: &DVector<f64>) -> DVector<f64> {
-        DVector::from_fn(x.len(), |i, _| {
-            (self.row_ptr[i]..self.row_ptr[i + 1])
-                .map(|p| self.val[p] * x[self.col[p]])
-                .sum()
-        })
-    }
-}
 
 /// Removes the components along the orthonormal `basis` (the projector P).
 fn project(x: &mut DVector<f64>, basis: &[DVector<f64>]) {
@@ -113,7 +75,11 @@ pub(super) fn smallest(
             }
         }
     }
-    let k = Compressed::new(n, entries);
+    let mut coo = CooMatrix::new(n, n);
+    for &(i, j, v) in entries {
+        coo.push(i, j, v);
+    }
+    let k = CsrMatrix::from(&coo);
     let block = (wanted + GUARD).min(free);
     // A deterministic spread start (Weyl sequence), projected.
     let start: Vec<DVector<f64>> = (0..block)
@@ -147,7 +113,7 @@ pub(super) fn smallest(
             let after = x.norm();
             if after > 1e-8 * before && v.len() < free {
                 x /= after;
-                kv.push(k.multiply(&x));
+                kv.push(&k * &x);
                 v.push(x);
             }
         }
