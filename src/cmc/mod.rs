@@ -40,6 +40,7 @@ pub mod ring_tent;
 pub mod spec;
 pub mod stability;
 pub mod subdivide;
+pub mod tangential;
 pub mod variables;
 pub mod volume;
 
