@@ -33,7 +33,9 @@
 
 use nalgebra::Matrix3;
 
-use super::area::{area_vector, triangle_area, triangle_area_gradient, triangle_area_hessian};
+use super::area::{
+    area_vector, triangle_area, triangle_area_gradient, triangle_area_hessian_diagonal,
+};
 use super::mesh::{Mesh, Point};
 use super::volume::{cone_volume, cone_volume_gradient};
 
@@ -250,7 +252,7 @@ impl Star<'_> {
             };
             gradient +=
                 triangle_area_gradient(&c)[k] - p * cone_volume_gradient(&c, &Point::zeros())[k];
-            hessian += triangle_area_hessian(&c)[k][k];
+            hessian += triangle_area_hessian_diagonal(&c, k);
         }
         for &k in &self.terms_of[v] {
             let term = &self.terms[k];
