@@ -51,6 +51,8 @@ use crate::spec::{Key, Source};
 
 use build::Model;
 use design::Design;
+use mass::Compression;
+use model::Objective;
 use nlp::{SetupError, TrussNlp};
 use quality::Quality;
 use spec::{StartForces, TrussSpec};
@@ -214,6 +216,11 @@ impl Problem {
             },
             max_length: self.spec.max_length,
             merge: true,
+            compression_runs: self.model.settings.objective == Objective::Length
+                || matches!(
+                    self.model.settings.mass.compression,
+                    Compression::Linear { .. }
+                ),
         }
     }
 }
