@@ -51,8 +51,6 @@ use crate::spec::{Key, Source};
 
 use build::Model;
 use design::Design;
-use mass::Compression;
-use model::Objective;
 use nlp::{SetupError, TrussNlp};
 use quality::Quality;
 use spec::{StartForces, TrussSpec};
@@ -216,11 +214,7 @@ impl Problem {
             },
             max_length: self.spec.max_length,
             merge: true,
-            compression_runs: self.model.settings.objective == Objective::Length
-                || matches!(
-                    self.model.settings.mass.compression,
-                    Compression::Linear { .. }
-                ),
+            compression_runs: self.model.settings.compression_linear_in_length(),
         }
     }
 }

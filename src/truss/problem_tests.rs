@@ -195,6 +195,13 @@ fn a_fink_roof_posed_against_the_lp_ends_optimal_below_its_certified_optimum() {
     };
     let outcome = crate::application::run_problem::<super::Truss>(&p, &opts).unwrap();
     assert_eq!(outcome.summary.status, "Optimal");
+    // The layout start joins the LP's struts through free joints (linear compression mass):
+    // 19 iterations; 112 with them kept.
+    assert!(
+        outcome.summary.iterations <= 60,
+        "{} iterations",
+        outcome.summary.iterations
+    );
     let figures = &outcome.summary.figures;
     let lp = &figures["start"]["lp"];
     assert_eq!(lp["all_pairs"], true);
