@@ -230,7 +230,9 @@ fn a_linear_warren_deck_joins_its_struts_through_free_joints_and_converges() {
     // warren_deck_linear: `linear` mass, default rounds and settings. Its first round leaves
     // free joints on straight struts (each a flat direction: linear compression mass slides
     // along the strut at no cost); kept, the last round crawled at a linear rate to Optimal
-    // after 1,160 iterations in all. The clean-up joins them, and the run ends within 400.
+    // after 1,160 iterations in all. The clean-up joins them (265 iterations), and the first
+    // round's creep toward them ends even while its violation hovers around the tolerance
+    // (166 iterations).
     let p = problem("warren_deck_linear");
     let opts = RunOptions {
         quiet: true,
@@ -245,7 +247,7 @@ fn a_linear_warren_deck_joins_its_struts_through_free_joints_and_converges() {
         .sum();
     assert!(runs >= 1, "{rounds:?}");
     assert!(
-        outcome.summary.iterations <= 400,
+        outcome.summary.iterations <= 220,
         "{} iterations",
         outcome.summary.iterations
     );
