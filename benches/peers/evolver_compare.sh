@@ -10,11 +10,14 @@
 # same file at the same resolution with no edge flips (so both keep the start's connectivity),
 # `-q --threads 1`. The two programs run alternately (optimize, Evolver, optimize, ... for
 # ROUNDS rounds, default 1) pinned to one core (`taskset -c ${CORE:-0}` when available); CPU
-# time is user + system from /usr/bin/time, the best of the rounds. Prints facets, both areas
-# (cm²), their relative difference, both CPU times and the ratio optimize / Evolver.
+# time is user + system from /usr/bin/time over REPEAT back-to-back runs of one program, divided
+# by REPEAT (default: enough runs for a reading of at least 0.5 s, from one timed run first, so
+# that the 0.01 s resolution of /usr/bin/time does not decide small cases), the best of the
+# rounds. Prints facets, both areas (cm²), their relative difference, both CPU times per run,
+# the ratio optimize / Evolver and the repeat counts.
 #
-# FORMULATION=normal (or area, curvature) sets optimize's top-level `formulation` for every
-# case (default: the file's own).
+# FORMULATION=area (or normal, curvature) sets optimize's top-level `formulation` for every
+# case (default: the file's own, normal unless it says otherwise).
 #
 # QP=sparse (or dense) sets optimize's `[solver] qp` for every case (default: the file's own
 # setting, i.e. the solver's automatic choice: dense below 2000 variables).
@@ -52,11 +55,19 @@ for ( inx := 1 ; inx <= 40 ; inx += 1 ) {
 printf "EVOLVER_AREA %.12f\n", total_area;
 q
 CMD
-# CPU seconds (user + system) of a command, its output to $1.
+# CPU seconds (user + system) of one run of a command, its output to $1: the total over
+# REPEAT runs (or, without REPEAT, over enough runs to take at least 0.5 s) divided by their
+# number, printed with that number.
 cpu() {
     local out=$1; shift
-    /usr/bin/time -f "%U %S" -o "$work/time" timeout "$LIMIT" "${pin[@]}" "$@" > "$out" 2>&1 || true
-    awk '{ print $1 + $2 }' "$work/time" | tail -1
+    local runs=${REPEAT:-}
+    if [ -z "$runs" ]; then
+        /usr/bin/time -f "%U %S" -o "$work/time" timeout "$LIMIT" "${pin[@]}" "$@" > "$out" 2>&1 || true
+        runs=$(awk '{ t = $1 + $2; n = t > 0 ? int(0.5 / t) + 1 : 50; print (n > 50 ? 50 : n) }' "$work/time" | tail -1)
+    fi
+    /usr/bin/time -f "%U %S" -o "$work/time" timeout "$LIMIT" "${pin[@]}" \
+        bash -c 'for _ in $(seq "$1"); do "${@:3}" > "$2" 2>&1 || true; done' _ "$runs" "$out" "$@" || true
+    awk -v n="$runs" '{ printf "%.4f:%d\n", ($1 + $2) / n, n }' "$work/time" | tail -1
 }
 printf "%-34s %7s %14s %14s %9s %9s %9s %7s\n" case facets "optimize cm²" "evolver cm²" "diff %" "opt CPU" "evol CPU" ratio
 for c in "${cases[@]}"; do
@@ -96,10 +107,13 @@ except (ValueError, OSError):
     area, status = float("nan"), "no result"
 match = re.findall(r"EVOLVER_AREA ([-0-9.eE+]+)", open(log).read())
 theirs = float(match[-1]) if match else float("nan")
-t_ours, t_theirs = min(map(float, ours_cpu.split())), min(map(float, theirs_cpu.split()))
+def best(readings):
+    # "seconds:runs" per round; the fastest round.
+    return min((float(t), int(n)) for t, n in (r.split(":") for r in readings.split()))
+(t_ours, n_ours), (t_theirs, n_theirs) = best(ours_cpu), best(theirs_cpu)
 diff = 100 * (area - theirs) / theirs if theirs else float("nan")
 print(f"{case:34s} {facets:>7s} {area:14.6f} {theirs:14.6f} "
-      f"{diff:9.4f} {t_ours:9.2f} {t_theirs:9.2f} "
-      f"{t_ours / max(t_theirs, 1e-9):7.1f}   ({status})")
+      f"{diff:9.4f} {t_ours:9.4f} {t_theirs:9.4f} "
+      f"{t_ours / max(t_theirs, 1e-9):7.2f}   ({status}; runs {n_ours} / {n_theirs})")
 PY
 done

@@ -73,6 +73,17 @@ pub fn triangle_area_hessian(p: &[Point; 3]) -> [[Matrix3<f64>; 3]; 3] {
     h
 }
 
+/// The diagonal block `∂²a/∂p_k²` of [`triangle_area_hessian`] alone (dimensionless):
+/// `−½ [e_k]× (I − n̂n̂ᵀ) ½[e_k]× / a`, positive semidefinite (the area is convex in one corner).
+pub fn triangle_area_hessian_diagonal(p: &[Point; 3], k: usize) -> Matrix3<f64> {
+    let big_n = area_vector(p);
+    let a = big_n.norm();
+    let n = big_n / a;
+    let projector = Matrix3::identity() - n * n.transpose();
+    let skew_e = skew(&opposite_edge(p, k));
+    -0.25 / a * skew_e * projector * skew_e
+}
+
 /// The mixed (Voronoi / obtuse-rule) area of corner 0 of a triangle, m², and its gradient
 /// w.r.t. the three corners (m).
 pub fn mixed_area_corner0(p: &[Point; 3]) -> (f64, [Point; 3]) {
@@ -173,6 +184,7 @@ mod tests {
             let p = random_triangle(&mut rng);
             let h = triangle_area_hessian(&p);
             for (k, row) in h.iter().enumerate() {
+                assert!((triangle_area_hessian_diagonal(&p, k) - row[k]).norm() < 1e-12);
                 for (l, block) in row.iter().enumerate() {
                     assert!((block - h[l][k].transpose()).norm() < 1e-12);
                     for c in 0..3 {

@@ -40,6 +40,7 @@ pub mod ring_tent;
 pub mod spec;
 pub mod stability;
 pub mod subdivide;
+pub mod tangential;
 pub mod variables;
 pub mod volume;
 
@@ -650,11 +651,12 @@ mod tests {
             let d = nlp.dims();
             let held = nlp.volumes().iter().filter(|v| v.pressure.is_none());
             assert!(d.n > 0 && d.m >= held.count(), "{name}");
-            // Normal coordinates where the start is the exact shape (docs/problem-files-cmc.md).
-            let expected = if name == "double_bubble_fine" {
-                nlp::Formulation::Normal
-            } else {
+            // Normal coordinates, the default, except where a file chooses the area formulation
+            // (docs/problem-files-cmc.md).
+            let expected = if name == "tennis_cushion" {
                 nlp::Formulation::Area
+            } else {
+                nlp::Formulation::Normal
             };
             assert_eq!(nlp.formulation(), expected, "{name}");
             assert_eq!(nlp.curvature_rows(), 0, "{name}");

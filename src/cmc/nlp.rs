@@ -42,6 +42,7 @@ use super::area::{total_area, total_area_gradient, triangle_area_hessian};
 use super::curvature::{mean_curvature, mean_curvature_gradient};
 use super::curvature_hessian::mean_curvature_hessian;
 use super::mesh::{Mesh, Point};
+use super::tangential::{Motion, Smoothing, relax, vertex_normal};
 use super::variables::{HessianPattern, Variables};
 use super::volume::{Region, chord, cone_volume_hessian};
 use crate::solver::log::ObjectiveUnit;
@@ -93,20 +94,21 @@ pub enum Formulation {
     /// Seed eq. 5.4: a row `H(x_j) − H_s = 0` at every curvature vertex and one variable `H_s`
     /// per surface; the area is minimized under those rows.
     Curvature,
-    /// Surface Evolver's (the default): the area alone is minimized under the volume (chord,
-    /// guide, gauge) rows; constant mean curvature is the optimality condition (`2H = p`, `p`
-    /// the volume's multiplier), not a constraint, and the Meyer curvature spread of the
-    /// solution is its check. No curvature rows, no `H_s` variables: a few rows instead of
-    /// one per vertex and no curvature Hessians, 2–18× less CPU on problems/cmc
+    /// Surface Evolver's: the area alone is minimized under the volume (chord, guide, gauge)
+    /// rows; constant mean curvature is the optimality condition (`2H = p`, `p` the volume's
+    /// multiplier), not a constraint, and the Meyer curvature spread of the solution is its
+    /// check. No curvature rows, no `H_s` variables: a few rows instead of one per vertex and
+    /// no curvature Hessians, 2–18× less CPU on problems/cmc than `Curvature`
     /// (docs/notes/cmc.md).
-    #[default]
     Area,
-    /// The area formulation in normal coordinates (Surface Evolver's `hessian_normal`): a
-    /// vertex inside one surface moves along its normal frozen at the start of a round (one
-    /// variable instead of three, [`super::variables`]); junction, guided and excluded
-    /// vertices keep their three coordinates. [`CmcNlp::solve`] repeats rounds, each
-    /// re-freezing positions and normals at the last solution, until a round moves no vertex
-    /// by more than [`ROUND_TOLERANCE`].
+    /// The area formulation in normal coordinates (Surface Evolver's `hessian_normal`; the
+    /// default): a vertex inside one surface moves along its normal frozen at the start of a
+    /// round (one variable instead of three, [`super::variables`]); junction, guided and
+    /// excluded vertices keep their three coordinates. [`CmcNlp::solve`] repeats rounds with a
+    /// tangential relaxation between them ([`super::tangential`]), which reach the `Area`
+    /// minimum; a first round that does not converge falls back to `Area`. On problems/cmc
+    /// 2.5× less CPU than `Area` over the set, every file Optimal (docs/notes/cmc.md).
+    #[default]
     Normal,
 }
 
@@ -114,25 +116,19 @@ pub enum Formulation {
 /// over the characteristic length) ends the rounds ([`Formulation::Normal`]).
 pub const ROUND_TOLERANCE: f64 = 1e-6;
 
-/// At most this many normal-coordinate rounds per solve.
-const MAX_ROUNDS: usize = 8;
+/// At most this many normal-coordinate rounds per solve, by default.
+pub const MAX_ROUNDS: usize = 8;
 
-/// One term `(w/2)|P (x_v − mean of ring)|²` of the regularization.
-#[derive(Debug, Clone)]
-struct Smoothing {
-    vertex: usize,
-    projector: Matrix3<f64>,
-    ring: Vec<usize>,
-}
+/// Tangential relaxation sweeps between two normal-coordinate rounds ([`relax`]).
+pub const RELAXATION_SWEEPS: usize = 3;
 
-impl Smoothing {
-    /// The vertex followed by its ring.
-    fn star(&self) -> Vec<usize> {
-        std::iter::once(self.vertex)
-            .chain(self.ring.iter().copied())
-            .collect()
-    }
-}
+/// The rounds end when the relaxation after a round lowers the energy by at most this
+/// fraction of the area.
+pub const RELAXATION_GAIN: f64 = 1e-5;
+
+/// A first normal-coordinate round still unconverged after this many iterations is abandoned
+/// for the area formulation ([`CmcNlp::solve`]).
+pub const ROUND_ITERATIONS: usize = 100;
 
 /// One constraint row's meaning.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -173,6 +169,10 @@ pub struct CmcNlp {
     smoothing_slots: Vec<Vec<usize>>,
     centre: Point,
     formulation: Formulation,
+    /// The formulation [`CmcNlp::remeshed`] builds (`formulation` but after a fall-back).
+    rebuilt_as: Formulation,
+    max_rounds: usize,
+    relaxation_gain: f64,
 }
 
 /// Why a problem cannot be built.
@@ -295,22 +295,12 @@ impl CmcNlp {
             // A vertex moving along its normal has no tangential motion to regularize, unless
             // its ring holds a vertex with three coordinates (a junction's neighbour): the term
             // then keeps that vertex from sliding tangentially over the film.
-            let mut terms: Vec<Smoothing> = curvature_vertices
-                .iter()
-                .filter(|&&(v, _)| {
-                    !vars.is_normal(v) || mesh.neighbours(v).iter().any(|&w| vars.width(w) == 3)
+            smoothing_terms(&mesh, &vars)
+                .into_iter()
+                .filter(|term| {
+                    !vars.is_normal(term.vertex) || term.ring.iter().any(|&w| vars.width(w) == 3)
                 })
-                .map(|&(v, _)| {
-                    let normal = vertex_normal(&mesh, v);
-                    Smoothing {
-                        vertex: v,
-                        projector: Matrix3::identity() - normal * normal.transpose(),
-                        ring: mesh.neighbours(v).to_vec(),
-                    }
-                })
-                .collect();
-            terms.extend(junction_smoothing(&mesh, &vars));
-            terms
+                .collect()
         } else {
             Vec::new()
         };
@@ -331,6 +321,9 @@ impl CmcNlp {
             smoothing_slots: Vec::new(),
             centre,
             formulation,
+            rebuilt_as: formulation,
+            max_rounds: MAX_ROUNDS,
+            relaxation_gain: RELAXATION_GAIN,
         };
         nlp.pattern = nlp.build_pattern();
         nlp.hessian = nlp.build_hessian_pattern();
@@ -351,13 +344,14 @@ impl CmcNlp {
     /// The same problem (volumes, chords, weight) on another mesh with the same vertices and
     /// surfaces, e.g. after [`super::remesh::equiangulate`].
     pub fn remeshed(&self, mesh: Mesh) -> Result<CmcNlp, BuildError> {
-        CmcNlp::with_formulation(
+        Ok(CmcNlp::with_formulation(
             mesh,
             self.volumes.clone(),
             self.chords.clone(),
             self.weight,
-            self.formulation,
-        )
+            self.rebuilt_as,
+        )?
+        .with_rounds(self.max_rounds, self.relaxation_gain))
     }
 
     /// The formulation in use.
@@ -378,49 +372,149 @@ impl CmcNlp {
     /// Solves from the start mesh, the log showing the objective as area in m² (the NLP's
     /// area / L² times L²; the small regularization term is included) under `stage`.
     ///
-    /// In normal coordinates ([`Formulation::Normal`]) a converged round whose largest
-    /// displacement exceeds [`ROUND_TOLERANCE`] is followed by another, on the problem rebuilt
-    /// at its solution (positions and normals frozen anew); `self` becomes the last round's
-    /// problem, the returned solution its solution, with the iterations, evaluations and logs
-    /// of every round. A round that fails to converge leaves the previous round's result.
+    /// In normal coordinates ([`Formulation::Normal`]) the solve runs in rounds: after a
+    /// converged round the mesh is relaxed tangentially ([`relax`], [`RELAXATION_SWEEPS`]
+    /// sweeps at the round's pressures) and the problem rebuilt there (positions and normals
+    /// frozen anew) and solved again, until the relaxation after a round lowers the energy by
+    /// at most [`RELAXATION_GAIN`] of the area, or a round and the relaxation after it move no
+    /// vertex by more than [`ROUND_TOLERANCE`], or after [`MAX_ROUNDS`] rounds (both settable,
+    /// [`CmcNlp::with_rounds`]). `self` becomes the last round's problem, the returned solution
+    /// its solution, with the iterations, evaluations and logs of every round; a round that
+    /// fails leaves the previous round's result. A first round that does not converge within
+    /// [`ROUND_ITERATIONS`] is abandoned and the solve repeated in the area formulation
+    /// ([`CmcNlp::fall_back`]).
     pub fn solve(&mut self, options: &Options, stage: &str) -> Solution {
         let mut options = options.clone();
         options.log.objective = ObjectiveUnit::new("area", "m²", self.scale * self.scale);
         options.log.stage = stage.to_string();
-        let mut solution = crate::solver::solve(&*self, &options);
-        for round in 2..=MAX_ROUNDS {
-            if self.formulation != Formulation::Normal
-                || !solution.status.is_success()
-                || self.largest_displacement(&solution.x) <= ROUND_TOLERANCE
+        if self.formulation != Formulation::Normal {
+            return crate::solver::solve(&*self, &options);
+        }
+        let mut round_options = options.clone();
+        round_options.max_iterations = options.max_iterations.min(ROUND_ITERATIONS);
+        let mut solution = crate::solver::solve(&*self, &round_options);
+        if !solution.status.is_success() {
+            return self.fall_back(solution, &options, stage);
+        }
+        for round in 2..=self.max_rounds {
+            let moved = self.largest_displacement(&solution.x) > ROUND_TOLERANCE;
+            let Ok(mut mesh) = self.mesh_at(&solution.x) else {
+                break;
+            };
+            let terms = if self.weight > 0.0 {
+                smoothing_terms(&mesh, &self.vars)
+            } else {
+                Vec::new()
+            };
+            let (relaxed, relaxation) = relax(
+                &mesh,
+                &self.surface_pressures(&solution.lambda),
+                |v| self.motion(v),
+                &terms,
+                self.weight,
+                ROUND_TOLERANCE * self.scale,
+                RELAXATION_SWEEPS,
+            );
+            let gain = relaxation.energy.0 - relaxation.energy.1;
+            if gain <= self.relaxation_gain * total_area(&mesh)
+                || (!moved && relaxation.last_move <= ROUND_TOLERANCE * self.scale)
             {
                 break;
             }
-            let Ok(next) = self.mesh_at(&solution.x).and_then(|mesh| {
-                self.remeshed(mesh)
-                    .map_err(|e| EvalError::Domain(e.to_string()))
-            }) else {
+            let Ok(next) = mesh
+                .set_positions(relaxed)
+                .map_err(|e| e.to_string())
+                .and_then(|()| self.remeshed(mesh).map_err(|e| e.to_string()))
+            else {
                 break;
             };
-            options.log.stage = match stage {
+            round_options.log.stage = match stage {
                 "" => format!("round {round}"),
                 _ => format!("{stage} round {round}"),
             };
-            options.log.objective = ObjectiveUnit::new("area", "m²", next.scale * next.scale);
-            let mut next_solution = crate::solver::solve(&next, &options);
+            round_options.log.objective = ObjectiveUnit::new("area", "m²", next.scale * next.scale);
+            let next_solution = crate::solver::solve(&next, &round_options);
             if !next_solution.status.is_success() {
                 break;
             }
-            next_solution.iterations += solution.iterations;
-            next_solution.evaluations.functions += solution.evaluations.functions;
-            next_solution.evaluations.derivatives += solution.evaluations.derivatives;
-            next_solution.evaluations.hessians += solution.evaluations.hessians;
-            next_solution.seconds += solution.seconds;
-            solution.log.append(&mut next_solution.log);
-            next_solution.log = solution.log;
             *self = next;
-            solution = next_solution;
+            solution = merged(solution, next_solution);
         }
         solution
+    }
+
+    /// After a first normal-coordinate round that ended `failed`: the same start solved in the
+    /// area formulation (three coordinates per vertex), whose solution is returned with the
+    /// failed round's iterations, evaluations and log; `self` becomes that problem, which
+    /// rebuilds in normal coordinates again ([`CmcNlp::remeshed`], e.g. for the next level).
+    fn fall_back(&mut self, failed: Solution, options: &Options, stage: &str) -> Solution {
+        let Ok(mut area) = CmcNlp::with_formulation(
+            self.start.clone(),
+            self.volumes.clone(),
+            self.chords.clone(),
+            self.weight,
+            Formulation::Area,
+        ) else {
+            return failed;
+        };
+        area.rebuilt_as = self.rebuilt_as;
+        area.max_rounds = self.max_rounds;
+        area.relaxation_gain = self.relaxation_gain;
+        let mut options = options.clone();
+        options.log.stage = match stage {
+            "" => "area formulation".to_string(),
+            _ => format!("{stage} area formulation"),
+        };
+        let solution = crate::solver::solve(&area, &options);
+        *self = area;
+        merged(failed, solution)
+    }
+
+    /// The same problem with at most `max_rounds` normal-coordinate rounds per solve (at
+    /// least 1), ending earlier when a relaxation lowers the energy by at most `gain` of the
+    /// area (see [`CmcNlp::solve`]; defaults [`MAX_ROUNDS`], [`RELAXATION_GAIN`]).
+    pub fn with_rounds(mut self, max_rounds: usize, gain: f64) -> CmcNlp {
+        self.max_rounds = max_rounds.max(1);
+        self.relaxation_gain = gain;
+        self
+    }
+
+    /// How [`relax`] may move vertex `v` between rounds: in its tangent plane when the rounds
+    /// move it along its normal; in space when they move its three coordinates and no guide or
+    /// chord holds it; else not at all.
+    fn motion(&self, v: usize) -> Motion {
+        let chord_end = self.chords.iter().any(|c| c.a == v || c.b == v);
+        if self.vars.is_normal(v) {
+            Motion::Tangential
+        } else if self.vars.width(v) == 3 && self.start.flags()[v].guide.is_none() && !chord_end {
+            Motion::Free
+        } else {
+            Motion::Held
+        }
+    }
+
+    /// The pressure jump across each surface (1/m) at a solution with multipliers `lambda`:
+    /// `Σ_k σ_ks p_k` over the bodies k that surface s bounds (σ_ks = ±1), `p_k` the prescribed
+    /// pressure or, for a held volume, `−λ/L` (the Lagrangian is `f + λᵀc` with `f = A/L²`
+    /// and `c = (V − V₀)/L³` in variables `x/L`, so `∇A = −(λ/L) ∇V` at a solution).
+    pub fn surface_pressures(&self, lambda: &[f64]) -> Vec<f64> {
+        let mut body_pressure: Vec<f64> = self
+            .volumes
+            .iter()
+            .map(|v| v.pressure.unwrap_or(0.0))
+            .collect();
+        for (row, &l) in self.rows.iter().zip(lambda) {
+            if let Row::Volume(k) = *row {
+                body_pressure[k] = -l / self.scale;
+            }
+        }
+        let mut jump = vec![0.0; self.start.surfaces().len()];
+        for (body, p) in self.volumes.iter().zip(&body_pressure) {
+            for &(s, sign) in &body.region.boundary {
+                jump[s] += sign * p;
+            }
+        }
+        jump
     }
 
     /// The largest displacement of a vertex from its start position at `x`, in scaled units.
@@ -487,7 +581,7 @@ impl CmcNlp {
         self.smoothing
             .iter()
             .map(|term| {
-                let r = term.projector * ring_offset(&pos, term) / self.scale;
+                let r = term.projector * term.offset(&pos) / self.scale;
                 0.5 * self.weight * r.norm_squared()
             })
             .sum()
@@ -609,6 +703,18 @@ impl CmcNlp {
     }
 }
 
+/// `later` with the iterations, evaluations, seconds and log of `earlier` before its own.
+fn merged(mut earlier: Solution, mut later: Solution) -> Solution {
+    later.iterations += earlier.iterations;
+    later.evaluations.functions += earlier.evaluations.functions;
+    later.evaluations.derivatives += earlier.evaluations.derivatives;
+    later.evaluations.hessians += earlier.evaluations.hessians;
+    later.seconds += earlier.seconds;
+    earlier.log.append(&mut later.log);
+    later.log = earlier.log;
+    later
+}
+
 /// The bounding-box diagonal over √3 (the edge of a cube with that diagonal), m; 1 for a
 /// single point.
 fn characteristic_length(mesh: &Mesh) -> f64 {
@@ -622,10 +728,22 @@ fn characteristic_length(mesh: &Mesh) -> f64 {
     if d > 0.0 { d } else { 1.0 }
 }
 
-/// `x_v − mean of the term's ring`, m.
-fn ring_offset(pos: &[Point], term: &Smoothing) -> Point {
-    let mean = term.ring.iter().map(|&w| pos[w]).sum::<Point>() / term.ring.len() as f64;
-    pos[term.vertex] - mean
+/// The area formulation's regularization terms: one per curvature vertex (`P = I − n nᵀ`, the
+/// ring its neighbours), then those of [`junction_smoothing`].
+fn smoothing_terms(mesh: &Mesh, vars: &Variables) -> Vec<Smoothing> {
+    let mut terms: Vec<Smoothing> = (0..mesh.vertex_count())
+        .filter(|&v| mesh.curvature_surface(v).is_some())
+        .map(|v| {
+            let normal = vertex_normal(mesh, v);
+            Smoothing {
+                vertex: v,
+                projector: Matrix3::identity() - normal * normal.transpose(),
+                ring: mesh.neighbours(v).to_vec(),
+            }
+        })
+        .collect();
+    terms.extend(junction_smoothing(mesh, vars));
+    terms
 }
 
 /// Regularization terms for free vertices inside a junction curve (exactly two junction
@@ -654,16 +772,6 @@ fn junction_smoothing(mesh: &Mesh, vars: &Variables) -> Vec<Smoothing> {
             })
         })
         .collect()
-}
-
-/// Unit area-weighted normal at a vertex (zero vector if it vanishes).
-fn vertex_normal(mesh: &Mesh, v: usize) -> Point {
-    let n: Point = mesh
-        .vertex_triangles(v)
-        .iter()
-        .map(|&t| super::area::area_vector(&mesh.corners(t)))
-        .sum();
-    n.try_normalize(0.0).unwrap_or_else(Point::zeros)
 }
 
 fn domain(e: impl std::fmt::Display) -> EvalError {
@@ -765,7 +873,7 @@ impl Nlp for CmcNlp {
         let pos = self.positions(x);
         for term in &self.smoothing {
             let p = term.projector;
-            let r = p * ring_offset(&pos, term) / l;
+            let r = p * term.offset(&pos) / l;
             let g = self.weight * p.transpose() * r;
             self.vars.add_gradient(grad, term.vertex, g);
             for &w in &term.ring {
@@ -1282,23 +1390,50 @@ mod tests {
         };
         let solution = nlp.solve(&options, "");
         assert!(solution.status.is_success(), "{:?}", solution.status);
-        // The last round moved no vertex further than the round tolerance.
-        assert!(nlp.largest_displacement(&solution.x) <= ROUND_TOLERANCE);
         let mesh = nlp.mesh_at(&solution.x).unwrap();
         let area = total_area(&mesh);
-        // Same mesh in Cartesian coordinates: the tangential freedom lowers the discrete area
-        // (1.1e-3 relative at these 288 triangles, 5.5e-6 at 11,250), the discretization
-        // error is ten times that.
+        // Same mesh in Cartesian coordinates; the relaxation between rounds brings the normal
+        // coordinates to its area (without it: 1.1e-3 relative above, at these 288 triangles).
         let cartesian_solution = cartesian.solve(&options, "");
         let cartesian_area = total_area(&cartesian.mesh_at(&cartesian_solution.x).unwrap());
         let exact = 11.854293128e-4;
         assert!(
-            area > cartesian_area && area < cartesian_area * (1.0 + 2e-3),
+            (area / cartesian_area - 1.0).abs() < 1e-4,
             "{area} {cartesian_area}"
         );
         assert!(area > exact && area < exact * 1.02, "{area}");
         for (body, target) in nlp.volumes().iter().zip([1e-6, 2e-6]) {
             assert!((body.region.volume(&mesh) - target).abs() < 1e-9 * target);
+        }
+    }
+
+    #[test]
+    fn normal_rounds_with_tangential_relaxation_reach_the_area_formulations_minimum() {
+        // Generated starts whose tangential layout is not the minimum's: the cube frame film's
+        // planar walls (junction lines travel) and the double bubble. Without relaxation the
+        // rounds end 1e-3 above the area formulation's area (+0.06…0.08 % on the cube film).
+        let options = Options {
+            verbosity: 0,
+            ..Options::default()
+        };
+        let cases = [
+            (generators::cube_frame(0.05, None, 4).unwrap(), 1.0),
+            (generators::double_bubble([1e-6, 2e-6], 4).unwrap(), 0.01),
+        ];
+        for (shape, weight) in cases {
+            let mut cartesian = formulated(shape.clone(), weight, Formulation::Area);
+            let cartesian_solution = cartesian.solve(&options, "");
+            assert!(cartesian_solution.status.is_success());
+            let cartesian_area = total_area(&cartesian.mesh_at(&cartesian_solution.x).unwrap());
+            let mut nlp = formulated(shape, weight, Formulation::Normal).with_rounds(80, 0.0);
+            let solution = nlp.solve(&options, "");
+            assert!(solution.status.is_success(), "{:?}", solution.status);
+            assert_eq!(nlp.formulation(), Formulation::Normal, "no fall-back");
+            let area = total_area(&nlp.mesh_at(&solution.x).unwrap());
+            assert!(
+                (area / cartesian_area - 1.0).abs() < 1e-5,
+                "normal {area}, area formulation {cartesian_area}"
+            );
         }
     }
 

@@ -3,7 +3,7 @@
 //! ```toml
 //! name = "double_bubble"        # optional; defaults to the file stem
 //! resolution = 6                # optional refinement level (meaning per shape, see below)
-//! formulation = "area"          # area | normal (area in normal coordinates) | curvature (per-vertex rows, seed eq. 5.4), cmc::nlp
+//! formulation = "normal"        # normal (area in normal coordinates) | area | curvature (per-vertex rows, seed eq. 5.4), cmc::nlp
 //! [shape]
 //! type = "double_bubble"        # sphere | double_bubble | triple_bubble | cube_frame |
 //! volumes = [1.0e-6, 2.0e-6]    # octahedron_frame | catenoid | u_wires | tents | cells |
@@ -66,7 +66,7 @@ pub struct CmcFile {
     pub name: Option<String>,
     /// Refinement level; defaults per shape ([`ShapeSpec::default_resolution`]).
     pub resolution: Option<usize>,
-    /// How the vertices are placed normally ([`Formulation`]); default `area`.
+    /// How the vertices are placed normally ([`Formulation`]); default `normal`.
     #[serde(default)]
     pub formulation: Formulation,
     /// The start shape.

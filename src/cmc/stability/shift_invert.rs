@@ -17,7 +17,7 @@
 //! certifies that no eigenvalue below c was missed: its count must equal the Ritz values below
 //! c. An uncertified result is `None` and the caller slices the spectrum instead.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DMatrixView, DVector};
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
 use super::Spectrum;
@@ -91,40 +91,48 @@ pub(super) fn smallest(
             x
         })
         .collect();
-    let mut v: Vec<DVector<f64>> = Vec::new();
-    let mut kv: Vec<DVector<f64>> = Vec::new();
+    // The basis V and K V, column-major n×m, grown a block at a time.
+    let mut v: Vec<f64> = Vec::new();
+    let mut kv: Vec<f64> = Vec::new();
     let mut h = DMatrix::zeros(0, 0);
     // The directions T is applied to: the start, then the residuals not yet converged.
     let mut directions = start;
     for _ in 0..MAX_STEPS {
         let mut applied: Vec<f64> = directions.iter().flat_map(|x| x.iter().copied()).collect();
         bordered.solve(&mut applied);
-        let old = v.len();
+        let old = v.len() / n;
         for column in applied.chunks_exact(n) {
             let mut x = DVector::from_column_slice(column);
             project(&mut x, basis);
             let before = x.norm();
+            let m = v.len() / n;
+            let basis_v = DMatrixView::from_slice(&v, n, m);
             for _ in 0..2 {
-                for q in &v {
-                    let c = q.dot(&x);
-                    x.axpy(-c, q, 1.0);
-                }
+                let c = basis_v.tr_mul(&x);
+                x.gemv(-1.0, &basis_v, &c, 1.0);
             }
             let after = x.norm();
-            if after > 1e-8 * before && v.len() < free {
+            if after > 1e-8 * before && m < free {
                 x /= after;
-                kv.push(&k * &x);
-                v.push(x);
+                kv.extend((&k * &x).iter());
+                v.extend(x.iter());
             }
         }
-        let m = v.len();
+        let m = v.len() / n;
         if m == old {
             return Ok(None);
         }
+        let (all_v, all_kv) = (
+            DMatrixView::from_slice(&v, n, m),
+            DMatrixView::from_slice(&kv, n, m),
+        );
+        // H = Vᵀ K V, symmetrized, for the new columns.
+        let v_kv_new = all_v.tr_mul(&all_kv.columns(old, m - old));
+        let kv_v_new = all_kv.tr_mul(&all_v.columns(old, m - old));
         h = h.resize(m, m, 0.0);
         for j in old..m {
             for i in 0..=j {
-                let e = 0.5 * (v[i].dot(&kv[j]) + v[j].dot(&kv[i]));
+                let e = 0.5 * (v_kv_new[(i, j - old)] + kv_v_new[(i, j - old)]);
                 h[(i, j)] = e;
                 h[(j, i)] = e;
             }
@@ -133,17 +141,14 @@ pub(super) fn smallest(
         let mut order: Vec<usize> = (0..m).collect();
         order.sort_by(|&a, &b| eigen.eigenvalues[a].total_cmp(&eigen.eigenvalues[b]));
         let theta: Vec<f64> = order.iter().map(|&i| eigen.eigenvalues[i]).collect();
-        let combine = |vectors: &[DVector<f64>], i: usize| {
-            let y = eigen.eigenvectors.column(order[i]);
-            let mut u = DVector::zeros(n);
-            for (q, c) in vectors.iter().zip(y.iter()) {
-                u.axpy(*c, q, 1.0);
-            }
-            u
-        };
-        let residuals: Vec<DVector<f64>> = (0..block.min(m))
+        // Ritz vectors U = V Y and residuals P (K U − U Θ) of the `block` smallest.
+        let kept = block.min(m);
+        let y = DMatrix::from_fn(m, kept, |i, j| eigen.eigenvectors[(i, order[j])]);
+        let u = all_v * &y;
+        let ku = all_kv * &y;
+        let residuals: Vec<DVector<f64>> = (0..kept)
             .map(|i| {
-                let mut r = combine(&kv, i) - combine(&v, i) * theta[i];
+                let mut r: DVector<f64> = ku.column(i) - u.column(i) * theta[i];
                 project(&mut r, basis);
                 r
             })

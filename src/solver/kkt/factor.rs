@@ -203,45 +203,56 @@ impl KktSolver {
     }
 
     /// Computes the Ruiz scaling of `values` into `scale` and writes `S values S` into
-    /// `shifted` (uses `residual` as scratch), the passes starting from the S in `scale` when
-    /// `warm` (see [`Equilibration::RuizFromLast`]), from I otherwise.
+    /// `shifted` (uses `residual` and `rhs_copy` as scratch), the passes starting from the S in
+    /// `scale` when `warm` (see [`Equilibration::RuizFromLast`]), from I otherwise. Each sweep
+    /// over the entries both applies a pass's factors and takes the next pass's row norms.
     fn equilibrate(&mut self, warm: bool) {
         if !warm || !self.scale.iter().all(|s| s.is_finite() && *s > 0.0) {
             self.scale.fill(1.0);
         }
-        for c in 0..self.dim {
-            for p in self.col_ptr[c]..self.col_ptr[c + 1] {
-                self.shifted[p] = self.values[p] * self.scale[self.row_idx[p]] * self.scale[c];
+        let KktSolver {
+            col_ptr,
+            row_idx,
+            values,
+            shifted,
+            scale,
+            residual: norms,
+            rhs_copy: factors,
+            ..
+        } = self;
+        norms.fill(0.0);
+        for c in 0..col_ptr.len() - 1 {
+            for p in col_ptr[c]..col_ptr[c + 1] {
+                let r = row_idx[p];
+                shifted[p] = values[p] * scale[r] * scale[c];
+                let v = shifted[p].abs();
+                norms[r] = norms[r].max(v);
+                norms[c] = norms[c].max(v);
             }
         }
-        let norms = &mut self.residual;
         for _ in 0..RUIZ_PASSES {
-            norms.fill(0.0);
-            for c in 0..self.dim {
-                for p in self.col_ptr[c]..self.col_ptr[c + 1] {
-                    let (r, v) = (self.row_idx[p], self.shifted[p].abs());
-                    norms[r] = norms[r].max(v);
-                    norms[c] = norms[c].max(v);
-                }
-            }
             let balanced = norms
                 .iter()
                 .all(|&n| n == 0.0 || (n - 1.0).abs() <= RUIZ_TOLERANCE);
             if balanced {
                 break;
             }
-            for (s, n) in self.scale.iter_mut().zip(norms.iter_mut()) {
-                // Reuse `norms` for this pass's factor.
-                *n = if *n > 0.0 && n.is_finite() {
+            for ((s, f), &n) in scale.iter_mut().zip(factors.iter_mut()).zip(norms.iter()) {
+                *f = if n > 0.0 && n.is_finite() {
                     1.0 / n.sqrt()
                 } else {
                     1.0
                 };
-                *s *= *n;
+                *s *= *f;
             }
-            for c in 0..self.dim {
-                for p in self.col_ptr[c]..self.col_ptr[c + 1] {
-                    self.shifted[p] *= norms[self.row_idx[p]] * norms[c];
+            norms.fill(0.0);
+            for c in 0..col_ptr.len() - 1 {
+                for p in col_ptr[c]..col_ptr[c + 1] {
+                    let r = row_idx[p];
+                    shifted[p] *= factors[r] * factors[c];
+                    let v = shifted[p].abs();
+                    norms[r] = norms[r].max(v);
+                    norms[c] = norms[c].max(v);
                 }
             }
         }

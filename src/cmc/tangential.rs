@@ -1,0 +1,292 @@
+//! Relaxation between normal-coordinate rounds: Gauss–Seidel sweeps of per-vertex Newton steps
+//! on the area formulation's energy, a surface vertex moving in its tangent plane and a free
+//! vertex off the surfaces (on a junction) in space.
+//!
+//! Normal coordinates ([`super::nlp::Formulation::Normal`]) move a surface vertex along its
+//! frozen normal only, so the start's tangential layout is kept; the area formulation moves it
+//! in 3-D and ends lower. This relaxation supplies the missing motion. The energy is the area
+//! formulation's Lagrangian in metres, the pressures `p_k` (1/m) held at a normal round's
+//! multipliers,
+//! ```text
+//!   E(x) = A(x) − Σ_k p_k V_k(x) + (w/2) Σ_j |P_j (x_j − mean of x_j's ring)|²     (m²)
+//! ```
+//! over the bodies k and the smoothing terms j (those of the area formulation, with their
+//! projectors `P_j` and rings, frozen when the sweeps start). Without the pressure term a step
+//! on a curved bubble would lower the area by shrinking the volume at second order, which the
+//! next round then has to undo at a higher area. In the volume term each triangle t of surface
+//! s carries `−p_s V_t`, with `p_s = Σ_k σ_ks p_k` the pressure jump across s (σ_ks = ±1 when s
+//! bounds region k) and `V_t` its cone volume from the origin: a moving vertex's star closes
+//! every region around it, so the reference points drop out of every change.
+//!
+//! A sweep visits the movable vertices in index order; vertex v minimizes its share of E (its
+//! triangles, and the terms whose vertex or ring holds it) by one Newton step `H d = −g`
+//! restricted to its motion: for a surface vertex with unit normal `n_v` (area-weighted, frozen
+//! when the sweeps start) `(P H P + tr(H) n nᵀ) d = −P g`, so that `d ⊥ n_v`. `H` is the 3×3
+//! diagonal block: positive semidefinite for the area (a triangle's area is convex in one
+//! corner), zero for the volumes (linear in one corner), `w Σ c² PᵀP` for the terms. The step is
+//! halved until the share decreases and no triangle of the star turns over (at most
+//! [`HALVINGS`] times), else the vertex stays. A motion ⊥ `n_v` changes every enclosed volume
+//! at second order only (a volume's gradient at v is the sum of the star's area vectors over
+//! 3, along `n_v`), so the next normal round restores the volumes in a step or two. At a
+//! stationary point of the area formulation every share is stationary, and the sweeps do not
+//! move it.
+
+use nalgebra::Matrix3;
+
+use super::area::{
+    area_vector, triangle_area, triangle_area_gradient, triangle_area_hessian_diagonal,
+};
+use super::mesh::{Mesh, Point};
+use super::volume::{cone_volume, cone_volume_gradient};
+
+/// Most halvings of a vertex's Newton step before the vertex is left where it is.
+const HALVINGS: usize = 6;
+
+/// One term `(w/2)|P (x_v − mean of ring)|²` of the tangential regularization.
+#[derive(Debug, Clone)]
+pub struct Smoothing {
+    /// The vertex pulled towards its ring's mean.
+    pub vertex: usize,
+    /// The projector P (dimensionless), frozen when the term is built.
+    pub projector: Matrix3<f64>,
+    /// The vertices whose mean it is pulled towards.
+    pub ring: Vec<usize>,
+}
+
+impl Smoothing {
+    /// The vertex followed by its ring.
+    pub fn star(&self) -> Vec<usize> {
+        std::iter::once(self.vertex)
+            .chain(self.ring.iter().copied())
+            .collect()
+    }
+
+    /// `x_v − mean of the ring` at `pos` (any length unit).
+    pub fn offset(&self, pos: &[Point]) -> Point {
+        let mean = self.ring.iter().map(|&w| pos[w]).sum::<Point>() / self.ring.len() as f64;
+        pos[self.vertex] - mean
+    }
+
+    /// `∂(x_v − mean)/∂x_u = c I`: the coefficient c of star vertex u (1 at the vertex, −1/k
+    /// on a ring of k).
+    fn coefficient(&self, u: usize) -> f64 {
+        if u == self.vertex {
+            1.0
+        } else {
+            -1.0 / self.ring.len() as f64
+        }
+    }
+}
+
+/// How the relaxation may move a vertex.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Motion {
+    /// Not at all (fixed, guided, a chord's end, or a vertex the rounds move in 3-D).
+    Held,
+    /// In its tangent plane (a vertex the rounds move along its normal).
+    Tangential,
+    /// In space.
+    Free,
+}
+
+/// The outcome of [`relax`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Relaxation {
+    /// Sweeps run.
+    pub sweeps: usize,
+    /// Largest move of a vertex in the last sweep, m.
+    pub last_move: f64,
+    /// The energy E before and after, m².
+    pub energy: (f64, f64),
+}
+
+/// The positions after sweeps (module header) until a sweep moves no vertex further than
+/// `tolerance` (m) or `max_sweeps` have run. `surface_pressure[s]` is the pressure jump `p_s`
+/// across surface s (1/m), `terms` the regularization's terms with weight `weight` (`w`).
+/// Every triangle keeps a positive area.
+pub fn relax(
+    mesh: &Mesh,
+    surface_pressure: &[f64],
+    motion: impl Fn(usize) -> Motion,
+    terms: &[Smoothing],
+    weight: f64,
+    tolerance: f64,
+    max_sweeps: usize,
+) -> (Vec<Point>, Relaxation) {
+    let n = mesh.vertex_count();
+    let mut terms_of: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for (k, term) in terms.iter().enumerate() {
+        for u in term.star() {
+            if !terms_of[u].contains(&k) {
+                terms_of[u].push(k);
+            }
+        }
+    }
+    let moving: Vec<(usize, Option<Point>)> = (0..n)
+        .filter_map(|v| match motion(v) {
+            Motion::Held => None,
+            Motion::Free => Some((v, None)),
+            Motion::Tangential => {
+                let normal = vertex_normal(mesh, v);
+                (normal != Point::zeros()).then_some((v, Some(normal)))
+            }
+        })
+        .collect();
+    let star = Star {
+        mesh,
+        terms,
+        terms_of: &terms_of,
+        surface_pressure,
+        weight,
+    };
+    let mut pos = mesh.positions().to_vec();
+    let before = star.total(&pos);
+    let mut relaxation = Relaxation {
+        sweeps: 0,
+        last_move: 0.0,
+        energy: (before, before),
+    };
+    while relaxation.sweeps < max_sweeps {
+        relaxation.sweeps += 1;
+        relaxation.last_move = moving
+            .iter()
+            .map(|&(v, normal)| star.step(&mut pos, v, normal))
+            .fold(0.0, f64::max);
+        if relaxation.last_move <= tolerance {
+            break;
+        }
+    }
+    relaxation.energy.1 = star.total(&pos);
+    (pos, relaxation)
+}
+
+/// One vertex's share of the energy and its Newton step.
+struct Star<'a> {
+    mesh: &'a Mesh,
+    terms: &'a [Smoothing],
+    terms_of: &'a [Vec<usize>],
+    surface_pressure: &'a [f64],
+    weight: f64,
+}
+
+impl Star<'_> {
+    /// Moves vertex `v` by its damped Newton step, in the plane ⊥ `normal` when given;
+    /// returns the move, m.
+    fn step(&self, pos: &mut [Point], v: usize, normal: Option<Point>) -> f64 {
+        let (mut gradient, mut hessian) = self.derivatives(pos, v);
+        if let Some(n) = normal {
+            let p = Matrix3::identity() - n * n.transpose();
+            hessian = p * hessian * p + hessian.trace() * n * n.transpose();
+            gradient = p * gradient;
+        }
+        // A flat star with w = 0 has no tangential stiffness: nothing to gain there.
+        let Some(cholesky) = hessian.cholesky() else {
+            return 0.0;
+        };
+        let mut step = -cholesky.solve(&gradient);
+        let start = pos[v];
+        let old_share = self.share(pos, v);
+        let old_vectors = self.triangle_vectors(pos, v);
+        for _ in 0..=HALVINGS {
+            pos[v] = start + step;
+            let turned = self
+                .triangle_vectors(pos, v)
+                .iter()
+                .zip(&old_vectors)
+                .any(|(new, old)| new.dot(old) <= 0.0);
+            if !turned && self.share(pos, v) < old_share {
+                return step.norm();
+            }
+            step *= 0.5;
+        }
+        pos[v] = start;
+        0.0
+    }
+
+    /// Area vectors of the triangles around `v`.
+    fn triangle_vectors(&self, pos: &[Point], v: usize) -> Vec<Point> {
+        self.mesh
+            .vertex_triangles(v)
+            .iter()
+            .map(|&t| area_vector(&corners(self.mesh, pos, t)))
+            .collect()
+    }
+
+    /// `A_t − p_s V_t` of triangle t (m²).
+    fn triangle_energy(&self, pos: &[Point], t: usize) -> f64 {
+        let c = corners(self.mesh, pos, t);
+        let p = self.surface_pressure[self.mesh.triangle_surface()[t]];
+        triangle_area(&c) - p * cone_volume(&c, &Point::zeros())
+    }
+
+    /// `(w/2)|P_k (x − mean)|²` of term k (m²).
+    fn term_energy(&self, pos: &[Point], k: usize) -> f64 {
+        let term = &self.terms[k];
+        0.5 * self.weight * (term.projector * term.offset(pos)).norm_squared()
+    }
+
+    /// The terms of E that depend on `x_v`, m².
+    fn share(&self, pos: &[Point], v: usize) -> f64 {
+        let triangles: f64 = self
+            .mesh
+            .vertex_triangles(v)
+            .iter()
+            .map(|&t| self.triangle_energy(pos, t))
+            .sum();
+        let terms: f64 = self.terms_of[v]
+            .iter()
+            .map(|&k| self.term_energy(pos, k))
+            .sum();
+        triangles + terms
+    }
+
+    /// Gradient (m) and diagonal Hessian block (dimensionless) of the share w.r.t. `x_v`.
+    fn derivatives(&self, pos: &[Point], v: usize) -> (Point, Matrix3<f64>) {
+        let mut gradient = Point::zeros();
+        let mut hessian = Matrix3::zeros();
+        for &t in self.mesh.vertex_triangles(v) {
+            let c = corners(self.mesh, pos, t);
+            let p = self.surface_pressure[self.mesh.triangle_surface()[t]];
+            let Some(k) = self.mesh.triangles()[t].iter().position(|&u| u == v) else {
+                continue;
+            };
+            gradient +=
+                triangle_area_gradient(&c)[k] - p * cone_volume_gradient(&c, &Point::zeros())[k];
+            hessian += triangle_area_hessian_diagonal(&c, k);
+        }
+        for &k in &self.terms_of[v] {
+            let term = &self.terms[k];
+            let c = term.coefficient(v);
+            let pp = term.projector.transpose() * term.projector;
+            gradient += self.weight * c * pp * term.offset(pos);
+            hessian += self.weight * c * c * pp;
+        }
+        (gradient, hessian)
+    }
+
+    /// E at `pos` (the volumes' cones from the origin), m².
+    fn total(&self, pos: &[Point]) -> f64 {
+        let triangles: f64 = (0..self.mesh.triangles().len())
+            .map(|t| self.triangle_energy(pos, t))
+            .sum();
+        let terms: f64 = (0..self.terms.len())
+            .map(|k| self.term_energy(pos, k))
+            .sum();
+        triangles + terms
+    }
+}
+
+/// The corners of triangle `t` at `pos`.
+fn corners(mesh: &Mesh, pos: &[Point], t: usize) -> [Point; 3] {
+    mesh.triangles()[t].map(|v| pos[v])
+}
+
+/// Unit area-weighted normal at a vertex (zero vector if it vanishes).
+pub fn vertex_normal(mesh: &Mesh, v: usize) -> Point {
+    let n: Point = mesh
+        .vertex_triangles(v)
+        .iter()
+        .map(|&t| area_vector(&mesh.corners(t)))
+        .sum();
+    n.try_normalize(0.0).unwrap_or_else(Point::zeros)
+}
