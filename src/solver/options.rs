@@ -118,7 +118,8 @@ settings! {
     constraint_tolerance: f64 = 1e-6, valid: open_unit_interval;
     /// Major-iteration limit.
     max_iterations: usize = 1000;
-    /// Feasible iterations in a window over which the objective must fall by more than
+    /// Iterations within 100× `constraint_tolerance` of feasibility, in a window over which
+    /// the objective must fall by more than
     /// `progress_tolerance` (relative to max(1, |f|)), or the solve ends `SlowProgress`; 0 (the
     /// default) turns the test off. Meant for a solve that a caller follows with a change of
     /// model (truss clean-up rounds), not for a final answer.

@@ -214,6 +214,7 @@ impl Problem {
             },
             max_length: self.spec.max_length,
             merge: true,
+            compression_runs: self.model.settings.compression_linear_in_length(),
         }
     }
 }

@@ -9,7 +9,7 @@
 
 use nalgebra::Vector3;
 
-use super::mass::MassModel;
+use super::mass::{Compression, MassModel};
 
 /// 3-vector in metres or newtons.
 pub type Vec3 = Vector3<f64>;
@@ -200,5 +200,14 @@ impl Settings {
     /// The coordinate directions in which joints must balance.
     pub fn balance_axes(&self) -> usize {
         if self.planar { 2 } else { 3 }
+    }
+
+    /// Whether the objective grows linearly with a compression member's length, as with a
+    /// tension member's: `linear` compression mass, or the length objective. A free joint on
+    /// a straight run of two members of one sign is then a flat direction whatever the sign
+    /// (Euler struts are not: two halves weigh half the whole).
+    pub fn compression_linear_in_length(&self) -> bool {
+        self.objective == Objective::Length
+            || matches!(self.mass.compression, Compression::Linear { .. })
     }
 }

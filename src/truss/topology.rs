@@ -18,19 +18,26 @@
 //!    shorter than l_min·(1 + merge_tolerance) is left (the merge of step 1 would undo it).
 //!    With `remove_crossings` the one with the smaller peak |λ| is dropped instead;
 //! 4. dangling: free joints left with at most one beam are removed with that beam (such a beam
-//!    carries no force in balance), repeatedly; and tension runs: a free joint left with exactly
-//!    two beams, both in tension in every case and collinear within [`RUN_ANGLE`], is removed
-//!    and the two become one beam between their far ends carrying their mean force (added to a
-//!    beam already there), unless that beam would exceed l_max. Such a joint is a flat
-//!    direction of the next solve: tension mass k_T·t·L is linear in length, so it can slide
-//!    along the run at no cost (the layout start removes the runs of its LP, see
-//!    [`super::start`]; these are the runs a solve leaves when a joint's other members go
-//!    idle). The singular reduced Hessian along the slide makes the exact Hessian's
-//!    convexification shift every direction (`solver::hessian::exact`: a direction of zero
-//!    reduced curvature coupled across the rows needs δ ≈ 1/`FALLBACK_GAMMA` of the Hessian
-//!    scale), and the solve crawls. The joint's own lumped weight kinks the run by about
-//!    k_T·L·g (≤ 1e-3 rad in the examples); only that justifies a kink at a joint without
-//!    other members, so the angle allowance is loose;
+//!    carries no force in balance), repeatedly; and straight runs: a free joint without load
+//!    left with exactly two beams, collinear within [`RUN_ANGLE`] and of one sign in every case
+//!    (tension; or compression when its mass is linear in length, `compression_runs`), is
+//!    removed and the two become one beam between their far ends carrying their mean force
+//!    (added to a beam already there), unless that beam would exceed l_max. Such a joint is a
+//!    flat direction of the next solve: tension mass k_T·t·L (and `linear` compression mass
+//!    k_C·c·L) is linear in length, so it can slide along the run at no cost (the layout start
+//!    removes the tension runs of its LP, see [`super::start`]; these are the runs a solve
+//!    leaves when a joint's other members go idle). The singular reduced Hessian along the
+//!    slide makes the exact Hessian's convexification shift every direction
+//!    (`solver::hessian::exact`: a direction of zero reduced curvature coupled across the rows
+//!    needs δ ≈ 1/`FALLBACK_GAMMA` of the Hessian scale), or the diagonal flip of a negative
+//!    length curvature becomes the slide's only curvature: the joint then moves by a constant
+//!    step at a constant dual residual and the solve never converges (pier_cantilever_linear
+//!    repeated a step of 1.4e-8 at optimality 2.0e-6 on a strut through a free joint; the
+//!    Warren deck's last round crawled 847 iterations on two struts through free joints).
+//!    Euler compression runs stay: two halves of a strut weigh half the whole (k_C·√c·L²), so
+//!    the joint has positive curvature along the run. The joint's own lumped weight kinks the
+//!    run by about k·L·g (≤ 1e-3 rad in the examples); only that justifies a kink at a joint
+//!    without other members, so the angle allowance is loose;
 //! 5. joints are renumbered in their original order.
 //!
 //! The forces returned are the start of the next round (N, case-major).
@@ -53,10 +60,14 @@ pub struct RoundSettings {
     pub prune: f64,
     /// What happens to crossing beams.
     pub crossings: Crossings,
-    /// l_max, m (a tension run is not merged into a longer beam).
+    /// l_max, m (a straight run is not merged into a longer beam).
     pub max_length: Option<f64>,
-    /// Whether joints may be merged (step 1) and tension runs joined (step 4).
+    /// Whether joints may be merged (step 1) and straight runs joined (step 4).
     pub merge: bool,
+    /// Whether compression runs are joined too (step 4): true when compression mass is linear
+    /// in length (`linear` mass, or the length objective), so that a free joint on a straight
+    /// strut is as flat a direction as one on a tie.
+    pub compression_runs: bool,
 }
 
 /// What a clean-up does with two beams that cross (module header, step 3).
@@ -70,7 +81,7 @@ pub enum Crossings {
     Remove,
 }
 
-/// Largest angle (rad) between the two members of a tension run that is merged (module header,
+/// Largest angle (rad) between the two members of a straight run that is merged (module header,
 /// step 4): well above the kink the joint's own weight explains, well below a real bend.
 pub const RUN_ANGLE: f64 = 0.05;
 
@@ -91,8 +102,8 @@ pub struct RoundReport {
     pub crossings_split: usize,
     /// Dangling free joints removed.
     pub dangling_joints: usize,
-    /// Free joints on straight tension runs merged away.
-    pub tension_runs: usize,
+    /// Free joints on straight runs (ties, and `linear` struts) merged away.
+    pub straight_runs: usize,
     /// Joints after.
     pub joints_after: usize,
     /// Beams after.
@@ -108,7 +119,7 @@ impl RoundReport {
             && self.crossings_removed == 0
             && self.crossings_split == 0
             && self.dangling_joints == 0
-            && self.tension_runs == 0
+            && self.straight_runs == 0
     }
 }
 
@@ -390,9 +401,9 @@ fn remove_dangling(
             if !settings.merge {
                 break;
             }
-            if let Some(i) = merge_tension_run(joints, alive, beams, settings.max_length) {
+            if let Some(i) = merge_straight_run(joints, alive, beams, settings) {
                 alive[i] = false;
-                report.tension_runs += 1;
+                report.straight_runs += 1;
                 continue;
             }
             break;
@@ -439,16 +450,26 @@ fn renumber(
     (out, start)
 }
 
-/// Merges the first tension run (module header, step 4) among the `alive` joints: removes
+/// Merges the first straight run (module header, step 4) among the `alive` joints: removes
 /// its joint's two beams from `beams` and adds (or adds to) the beam between their far ends.
 /// Returns the joint merged away.
-fn merge_tension_run(
+fn merge_straight_run(
     joints: &[Joint],
     alive: &[bool],
     beams: &mut Vec<(Beam, Vec<f64>)>,
-    max_length: Option<f64>,
+    settings: &RoundSettings,
 ) -> Option<usize> {
-    let tension = |f: &[f64]| f.iter().all(|&v| v < 0.0);
+    // One sign in every case, for both members: tension, or compression when allowed.
+    let sign = |f: &[f64]| {
+        if f.iter().all(|&v| v < 0.0) {
+            -1
+        } else if settings.compression_runs && f.iter().all(|&v| v > 0.0) {
+            1
+        } else {
+            0
+        }
+    };
+    let max_length = settings.max_length;
     let run = (0..joints.len()).find_map(|i| {
         let joint = &joints[i];
         if !alive[i] || !joint.is_free() || joint.loads.iter().any(|f| f.norm() != 0.0) {
@@ -468,8 +489,8 @@ fn merge_tension_run(
         );
         let bent = u.cross(&v).norm() > RUN_ANGLE.sin() * u.norm() * v.norm() || u.dot(&v) >= 0.0;
         let too_long = max_length.is_some_and(|l| (u - v).norm() > l);
-        (a != b && tension(&beams[k1].1) && tension(&beams[k2].1) && !bent && !too_long)
-            .then_some((i, k1, k2, Beam::new(a, b)))
+        let same_sign = sign(&beams[k1].1) != 0 && sign(&beams[k1].1) == sign(&beams[k2].1);
+        (a != b && same_sign && !bent && !too_long).then_some((i, k1, k2, Beam::new(a, b)))
     });
     let (joint, k1, k2, merged) = run?;
     let force: Vec<f64> = (beams[k1].1.iter().zip(&beams[k2].1))
@@ -499,6 +520,7 @@ mod tests {
             crossings: Crossings::Keep,
             max_length: None,
             merge: true,
+            compression_runs: false,
         }
     }
 
@@ -666,7 +688,7 @@ mod tests {
         };
         let forces = vec![vec![-3.0, -3.0, -3.0]];
         let merging = clean(&s, &positions(&s), &forces, &settings()).2;
-        assert_eq!((merging.merged_joints, merging.tension_runs), (1, 1));
+        assert_eq!((merging.merged_joints, merging.straight_runs), (1, 1));
         let kept = RoundSettings {
             merge: false,
             ..settings()
@@ -681,7 +703,8 @@ mod tests {
     fn a_joint_left_on_a_straight_tie_becomes_one_member() {
         // Anchors 0 and 1; free joint 2 on the tie between them (kinked by 1e-4 rad, its own
         // weight), free joint 3 on a bent tension path 0–3–1, free joint 4 on a compression run
-        // 0–4–1 (kept: two Euler halves weigh half the whole), and the pair 0–1 in tension.
+        // 0–4–1 (kept for Euler struts: two halves weigh half the whole), and the pair 0–1 in
+        // tension.
         let s = Structure {
             joints: tie_with_free_joints(&[(2.0, 2e-4), (2.0, 1.0), (2.0, -2e-4)]),
             beams: vec![
@@ -696,7 +719,7 @@ mod tests {
         };
         let forces = vec![vec![-1.0, -10.0, -12.0, -5.0, -5.0, 7.0, 7.0]];
         let (out, start, report) = clean(&s, &positions(&s), &forces, &settings());
-        assert_eq!(report.tension_runs, 1);
+        assert_eq!(report.straight_runs, 1);
         assert_eq!(out.joints.len(), 4);
         // Joint 2's mean force (−11) joins the beam already between the anchors.
         assert_eq!(
@@ -714,6 +737,23 @@ mod tests {
         let mut set = settings();
         set.max_length = Some(3.0);
         let (_, _, report) = clean(&s, &positions(&s), &forces, &set);
-        assert_eq!(report.tension_runs, 0);
+        assert_eq!(report.straight_runs, 0);
+        // With compression mass linear in length the strut through joint 4 is a flat
+        // direction too: it joins the pair 0–1 as well (−12 + 7).
+        let linear = RoundSettings {
+            compression_runs: true,
+            ..settings()
+        };
+        let (out, start, report) = clean(&s, &positions(&s), &forces, &linear);
+        assert_eq!(report.straight_runs, 2);
+        assert_eq!(
+            out.beams,
+            vec![Beam::new(0, 1), Beam::new(0, 2), Beam::new(1, 2)]
+        );
+        assert_eq!(start, vec![-5.0, -5.0, -5.0]);
+        // A run with one member in tension and one in compression is no run.
+        let mixed = vec![vec![-1.0, -10.0, 12.0, -5.0, -5.0, 7.0, -7.0]];
+        let (_, _, report) = clean(&s, &positions(&s), &mixed, &linear);
+        assert_eq!(report.straight_runs, 0);
     }
 }

@@ -63,8 +63,11 @@ impl Sqp<'_> {
         {
             return Some(Next::Finish(Status::Acceptable));
         }
+        // Near feasibility, as for `Acceptable`: a creep whose violation hovers around the
+        // tolerance (warren_deck_linear's first round, 1e-6 to 1e-5) would restart the window
+        // at every slightly infeasible iterate.
         if state.progress.creeping(
-            kkt.primal <= ctol,
+            kkt.primal <= 100.0 * ctol,
             state.point.values.f,
             self.options.progress_window,
             self.options.progress_tolerance,
