@@ -382,7 +382,7 @@ impl CmcNlp {
     /// its solution, with the iterations, evaluations and logs of every round; a round that
     /// fails leaves the previous round's result. A first round that does not converge within
     /// [`ROUND_ITERATIONS`] is abandoned and the solve repeated in the area formulation
-    /// ([`CmcNlp::fall_back`]).
+    /// (`CmcNlp::fall_back`).
     pub fn solve(&mut self, options: &Options, stage: &str) -> Solution {
         let mut options = options.clone();
         options.log.objective = ObjectiveUnit::new("area", "m²", self.scale * self.scale);

@@ -25,7 +25,7 @@
 //! diagonal block: positive semidefinite for the area (a triangle's area is convex in one
 //! corner), zero for the volumes (linear in one corner), `w Σ c² PᵀP` for the terms. The step is
 //! halved until the share decreases and no triangle of the star turns over (at most
-//! [`HALVINGS`] times), else the vertex stays. A motion ⊥ `n_v` changes every enclosed volume
+//! `HALVINGS` times), else the vertex stays. A motion ⊥ `n_v` changes every enclosed volume
 //! at second order only (a volume's gradient at v is the sum of the star's area vectors over
 //! 3, along `n_v`), so the next normal round restores the volumes in a step or two. At a
 //! stationary point of the area formulation every share is stationary, and the sweeps do not
