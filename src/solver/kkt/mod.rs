@@ -21,7 +21,8 @@
 //! the equality rows. S is a congruence, so the inertia is unchanged.
 //!
 //! The symbolic analysis (ordering, elimination tree, fill pattern) runs once in
-//! [`KktSolver::new`]; each [`KktSolver::factor`] works in buffers allocated there. Solves refine
+//! [`KktSolver::new`], or not at all when the thread analysed the same pattern recently
+//! (`analysis`); each [`KktSolver::factor`] works in buffers allocated there. Solves refine
 //! iteratively against the *unregularized* matrix, so the static regularization only affects
 //! the convergence of refinement, not the answer. The inertia (signs of the pivots of D, equal
 //! to the signs of K's eigenvalues by Sylvester's law) is reported for IPOPT-style inertia
@@ -30,15 +31,15 @@
 //! Split by verb: construction and symbolic analysis here, `factor.rs` the numeric
 //! factorization and inertia, `solve.rs` the refined solves and the product with K.
 
+mod analysis;
 mod factor;
 mod solve;
 
+use std::sync::Arc;
+
 use faer::Par;
 use faer::dyn_stack::{MemBuffer, StackReq};
-use faer::sparse::SymbolicSparseColMatRef;
-use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
-};
+use faer::sparse::linalg::cholesky::SymbolicCholesky;
 
 pub use factor::{Equilibration, Inertia, Regularization};
 pub use solve::SolveReport;
@@ -76,7 +77,8 @@ pub struct KktSolver {
     shifted: Vec<f64>,
     /// The equilibrating diagonal S of the last factorization.
     scale: Vec<f64>,
-    symbolic: SymbolicCholesky<usize>,
+    /// Shared with the other solvers of the same pattern (`analysis`).
+    symbolic: Arc<SymbolicCholesky<usize>>,
     l_values: Vec<f64>,
     factor_mem: MemBuffer,
     solve_mem: MemBuffer,
@@ -107,16 +109,7 @@ impl KktSolver {
         let dim = n_primal + n_dual;
         let diag_pos = check_pattern(dim, &col_ptr, &row_idx)?;
         let nnz = row_idx.len();
-        let symbolic = {
-            let pattern = SymbolicSparseColMatRef::new_checked(dim, dim, &col_ptr, None, &row_idx);
-            factorize_symbolic_cholesky(
-                pattern,
-                faer::Side::Lower,
-                SymmetricOrdering::Amd,
-                CholeskySymbolicParams::default(),
-            )
-            .map_err(|e| KktError::Symbolic(format!("{e:?}")))?
-        };
+        let symbolic = analysis::analyse(dim, &col_ptr, &row_idx)?;
         let factor_req =
             symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default());
         let solve_req = symbolic.solve_in_place_scratch::<f64>(1, Par::Seq);

@@ -1,0 +1,75 @@
+//! The symbolic analysis of a KKT pattern, shared by every solver of the same pattern.
+//!
+//! The analysis (AMD ordering, elimination tree, fill pattern of L) is a function of the
+//! lower-triangle pattern alone, so a solver built for a pattern analysed before on the same
+//! thread takes that analysis instead of repeating it: the result is the same bit for bit, only
+//! the work is saved. Problems solved in rounds that rebuild the NLP with the same sparsity
+//! (cmc normal coordinates, a refinement level solved again) then analyse their KKT patterns
+//! once. Each thread keeps the [`REMEMBERED`] most recently used patterns (least recently used
+//! forgotten first), so nothing crosses threads and the results do not depend on `--threads`.
+
+use std::cell::RefCell;
+use std::sync::Arc;
+
+use faer::sparse::SymbolicSparseColMatRef;
+use faer::sparse::linalg::cholesky::{
+    CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+};
+
+use super::KktError;
+
+/// Patterns remembered per thread: an SQP solve analyses up to three (least-squares
+/// multipliers, the QP's Newton system, the elastic or feasibility subproblem), and the cmc
+/// stability analysis one more.
+pub const REMEMBERED: usize = 4;
+
+/// One analysed pattern (lower triangle, compressed sparse columns).
+struct Analysed {
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    symbolic: Arc<SymbolicCholesky<usize>>,
+}
+
+thread_local! {
+    /// This thread's analysed patterns, most recently used last.
+    static ANALYSED: RefCell<Vec<Analysed>> = const { RefCell::new(Vec::new()) };
+}
+
+/// The symbolic LDLᵀ analysis of the `dim`-square lower-triangle pattern `(col_ptr, row_idx)`
+/// (checked by the caller), from this thread's remembered patterns when it is one of them.
+pub fn analyse(
+    dim: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> Result<Arc<SymbolicCholesky<usize>>, KktError> {
+    ANALYSED.with_borrow_mut(|analysed| {
+        let found = analysed
+            .iter()
+            .position(|a| a.col_ptr == col_ptr && a.row_idx == row_idx);
+        let entry = match found {
+            Some(k) => analysed.remove(k),
+            None => {
+                let pattern =
+                    SymbolicSparseColMatRef::new_checked(dim, dim, col_ptr, None, row_idx);
+                let symbolic = factorize_symbolic_cholesky(
+                    pattern,
+                    faer::Side::Lower,
+                    SymmetricOrdering::Amd,
+                    CholeskySymbolicParams::default(),
+                )
+                .map_err(|e| KktError::Symbolic(format!("{e:?}")))?;
+                if analysed.len() == REMEMBERED {
+                    analysed.remove(0);
+                }
+                Analysed {
+                    col_ptr: col_ptr.to_vec(),
+                    row_idx: row_idx.to_vec(),
+                    symbolic: Arc::new(symbolic),
+                }
+            }
+        };
+        let symbolic = Arc::clone(&entry.symbolic);
+        analysed.push(entry);
+        Ok(symbolic)
+    })
+}
