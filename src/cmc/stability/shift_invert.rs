@@ -6,7 +6,7 @@
 //!     σ < λ₁:  T = (P(K − σI)P)⁻¹ on null(R), applied by the bordered solve of [`super::bordered`]
 //!     H = Vᵀ K V = Y Θ Yᵀ,  U = V Y,  r_i = P(K u_i − θ_i u_i)  (the p smallest Ritz pairs)
 //!     V ← orth[V, T r_i for the r_i not converged]   (the first block: T applied to a start)
-//!     converged when ‖r_i‖ ≤ tol·g for the wanted i   (then some λ lies within tol·g of θ_i)
+//!     converged when ‖r_i‖ ≤ tol·g, or ‖R_C‖²/δ_C ≤ tol·g for θ_i's cluster C (Kato–Temple)
 //! ```
 //! The first factorization, at σ₀ = −negative_tolerance·g, counts the negative eigenvalues (the
 //! verdict) and is the shift when there are none; otherwise σ steps down by 32× until the
@@ -26,6 +26,9 @@ use crate::solver::kkt::KktError;
 
 /// Ritz vectors kept beyond the wanted ones (guards the convergence of the last wanted).
 const GUARD: usize = 4;
+
+/// Ritz values closer than this (× g) are one cluster for the Kato–Temple bound.
+const CLUSTER: f64 = 1e-6;
 
 /// Most block steps before giving up.
 const MAX_STEPS: usize = 30;
@@ -153,8 +156,10 @@ pub(super) fn smallest(
                 r
             })
             .collect();
-        let converged = |r: &DVector<f64>| r.norm() <= tolerance * g;
-        if m >= wanted && residuals[..wanted].iter().all(converged) {
+        let norms: Vec<f64> = residuals.iter().map(|r| r.norm()).collect();
+        let beyond = theta.get(kept).copied();
+        let done = settled(&theta[..kept], &norms, beyond, tolerance * g, CLUSTER * g);
+        if m >= wanted && done[..wanted].iter().all(|&d| d) {
             let c = theta[wanted - 1] + 10.0 * tolerance * g;
             let below = theta.iter().filter(|&&t| t < c).count();
             if bordered.count(c)? != below {
@@ -165,7 +170,76 @@ pub(super) fn smallest(
                 negative,
             }));
         }
-        directions = residuals.into_iter().filter(|r| !converged(r)).collect();
+        directions = residuals
+            .into_iter()
+            .zip(done)
+            .filter(|(_, d)| !d)
+            .map(|(r, _)| r)
+            .collect();
     }
     Ok(None)
+}
+
+/// Which of the ascending Ritz values `theta` (residual norms `norms`; `beyond` the next Ritz
+/// value without a residual, if any) are within `bound` of an eigenvalue: either the residual
+/// itself is ≤ `bound`, or the block Kato–Temple bound of its cluster is. Consecutive values
+/// closer than `join` form one cluster C; with ‖R_C‖ the Frobenius norm of its residuals and
+/// δ its distance to the neighbouring clusters less their largest residual, the cluster's
+/// eigenvalues lie within ‖R_C‖²/δ of its Ritz values (when δ > ‖R_C‖). A cluster at the top
+/// with no `beyond` gets no gap bound.
+fn settled(theta: &[f64], norms: &[f64], beyond: Option<f64>, bound: f64, join: f64) -> Vec<bool> {
+    let mut done: Vec<bool> = norms.iter().map(|&r| r <= bound).collect();
+    let mut start = 0;
+    while start < theta.len() {
+        let mut end = start + 1;
+        while end < theta.len() && theta[end] - theta[end - 1] < join {
+            end += 1;
+        }
+        let below = (start > 0).then(|| theta[start - 1] + norms[start - 1]);
+        let above = match theta.get(end) {
+            Some(&t) => Some(t - norms[end]),
+            None => beyond,
+        };
+        if let Some(above) = above {
+            let spread = norms[start..end].iter().map(|r| r * r).sum::<f64>().sqrt();
+            let gap = below.map_or(above - theta[end - 1], |b| {
+                (theta[start] - b).min(above - theta[end - 1])
+            });
+            if gap > spread && spread * spread / gap <= bound {
+                done[start..end].iter_mut().for_each(|d| *d = true);
+            }
+        }
+        start = end;
+    }
+    done
+}
+
+#[cfg(test)]
+mod tests {
+    use super::settled;
+
+    #[test]
+    fn kato_temple_settles_isolated_values_and_whole_clusters_but_not_an_open_top() {
+        // 1.0 alone (gap 1 to the pair), the pair 2.0 / 2.0 + 1e-9 one cluster, 5.0 on top.
+        let theta = [1.0, 2.0, 2.0 + 1e-9, 5.0];
+        let norms = [1e-4, 1e-4, 1e-4, 1e-4];
+        // r²/δ = 1e-8 / (1 − 1e-4) ≤ 2e-8 for 1.0; ‖R‖² = 2e-8 over δ ≈ 1 for the pair.
+        assert_eq!(
+            settled(&theta, &norms, None, 3e-8, 1e-6),
+            [true, true, true, false]
+        );
+        // A tighter bound than ‖R‖²/δ settles nothing.
+        assert_eq!(
+            settled(&theta, &norms, None, 5e-9, 1e-6),
+            [false, false, false, false]
+        );
+        // With the next Ritz value known the top one has a gap too (1e-8 / 2 ≤ 1e-8).
+        assert!(settled(&theta, &norms, Some(7.0), 1e-8, 1e-6)[3]);
+        // A residual larger than the gap gives no bound; a residual ≤ the bound always does.
+        let wide = [1e-4, 2.0, 2.0, 1e-9];
+        assert_eq!(
+            settled(&theta, &wide, Some(9.0), 1e-8, 1e-6),
+            [false, false, false, true]
+        );
+    }
 }
