@@ -290,3 +290,85 @@ pub fn vertex_normal(mesh: &Mesh, v: usize) -> Point {
         .sum();
     n.try_normalize(0.0).unwrap_or_else(Point::zeros)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cmc::generators;
+
+    /// A vertex's share of E: its gradient and diagonal Hessian block against central
+    /// differences of the share (and of that gradient), on a jittered cube frame with a bubble
+    /// (films, junction lines and a body), pressures on every surface and smoothing terms.
+    #[test]
+    fn a_vertex_shares_derivatives_match_central_differences() {
+        let mut mesh = generators::cube_frame(0.05, Some(2e-5), 3).unwrap().mesh;
+        let jittered: Vec<Point> = mesh
+            .positions()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let t = i as f64;
+                p + 2e-3 * Point::new((1.3 * t).sin(), (2.1 * t).cos(), (0.7 * t).sin())
+            })
+            .collect();
+        mesh.set_positions(jittered).unwrap();
+        let n = mesh.vertex_count();
+        let terms: Vec<Smoothing> = (0..n)
+            .step_by(3)
+            .map(|v| {
+                let normal = vertex_normal(&mesh, v);
+                Smoothing {
+                    vertex: v,
+                    projector: Matrix3::identity() - normal * normal.transpose(),
+                    ring: mesh.neighbours(v).to_vec(),
+                }
+            })
+            .collect();
+        let mut terms_of: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for (k, term) in terms.iter().enumerate() {
+            for u in term.star() {
+                if !terms_of[u].contains(&k) {
+                    terms_of[u].push(k);
+                }
+            }
+        }
+        let pressures: Vec<f64> = (0..mesh.surfaces().len())
+            .map(|s| 30.0 + 7.0 * s as f64)
+            .collect();
+        let star = Star {
+            mesh: &mesh,
+            terms: &terms,
+            terms_of: &terms_of,
+            surface_pressure: &pressures,
+            weight: 0.7,
+        };
+        let h = 1e-6;
+        let mut pos = mesh.positions().to_vec();
+        for v in (0..n).step_by(5) {
+            let (gradient, hessian) = star.derivatives(&pos, v);
+            let centre = pos[v];
+            for a in 0..3 {
+                pos[v][a] = centre[a] + h;
+                let (plus, g_plus) = (star.share(&pos, v), star.derivatives(&pos, v).0);
+                pos[v][a] = centre[a] - h;
+                let (minus, g_minus) = (star.share(&pos, v), star.derivatives(&pos, v).0);
+                pos[v][a] = centre[a];
+                let slope = (plus - minus) / (2.0 * h);
+                assert!(
+                    (slope - gradient[a]).abs() <= 1e-6 * (1.0 + gradient.norm()),
+                    "vertex {v} axis {a}: {slope} vs {}",
+                    gradient[a]
+                );
+                let column = (g_plus - g_minus) / (2.0 * h);
+                for b in 0..3 {
+                    assert!(
+                        (column[b] - hessian[(b, a)]).abs() <= 1e-5 * (1.0 + hessian.norm()),
+                        "vertex {v} H[{b},{a}]: {} vs {}",
+                        column[b],
+                        hessian[(b, a)]
+                    );
+                }
+            }
+        }
+    }
+}
