@@ -448,7 +448,7 @@ impl CmcNlp {
     /// failed round's iterations, evaluations and log; `self` becomes that problem, which
     /// rebuilds in normal coordinates again ([`CmcNlp::remeshed`], e.g. for the next level).
     fn fall_back(&mut self, failed: Solution, options: &Options, stage: &str) -> Solution {
-        let Ok(mut area) = CmcNlp::with_formulation(
+        let Ok(area) = CmcNlp::with_formulation(
             self.start.clone(),
             self.volumes.clone(),
             self.chords.clone(),
@@ -457,9 +457,8 @@ impl CmcNlp {
         ) else {
             return failed;
         };
+        let mut area = area.with_rounds(self.max_rounds, self.relaxation_gain);
         area.rebuilt_as = self.rebuilt_as;
-        area.max_rounds = self.max_rounds;
-        area.relaxation_gain = self.relaxation_gain;
         let mut options = options.clone();
         options.log.stage = match stage {
             "" => "area formulation".to_string(),

@@ -51,7 +51,9 @@ impl Sqp<'_> {
         }
         let point = &state.point;
         let xnorm = point.x.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
-        if kkt.primal <= 100.0 * ctol
+        // Within 100× the constraint tolerance of feasibility, the level `Acceptable` uses.
+        let near_feasible = kkt.primal <= 100.0 * ctol;
+        if near_feasible
             && (point.values.f / self.ev.scale_f < self.tuning.unbounded_objective
                 || xnorm > self.tuning.unbounded_step)
         {
@@ -63,11 +65,11 @@ impl Sqp<'_> {
         {
             return Some(Next::Finish(Status::Acceptable));
         }
-        // Near feasibility, as for `Acceptable`: a creep whose violation hovers around the
+        // Near feasibility, not strict feasibility: a creep whose violation hovers around the
         // tolerance (warren_deck_linear's first round, 1e-6 to 1e-5) would restart the window
         // at every slightly infeasible iterate.
         if state.progress.creeping(
-            kkt.primal <= 100.0 * ctol,
+            near_feasible,
             state.point.values.f,
             self.options.progress_window,
             self.options.progress_tolerance,
