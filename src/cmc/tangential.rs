@@ -34,10 +34,10 @@
 use nalgebra::Matrix3;
 
 use super::area::{
-    area_vector, triangle_area, triangle_area_gradient, triangle_area_hessian_diagonal,
+    area_vector, triangle_area, triangle_area_corner_gradient, triangle_area_hessian_diagonal,
 };
 use super::mesh::{Mesh, Point};
-use super::volume::{cone_volume, cone_volume_gradient};
+use super::volume::{cone_volume, cone_volume_corner_gradient};
 
 /// Most halvings of a vertex's Newton step before the vertex is left where it is.
 const HALVINGS: usize = 6;
@@ -114,14 +114,6 @@ pub fn relax(
     max_sweeps: usize,
 ) -> (Vec<Point>, Relaxation) {
     let n = mesh.vertex_count();
-    let mut terms_of: Vec<Vec<usize>> = vec![Vec::new(); n];
-    for (k, term) in terms.iter().enumerate() {
-        for u in term.star() {
-            if !terms_of[u].contains(&k) {
-                terms_of[u].push(k);
-            }
-        }
-    }
     let moving: Vec<(usize, Option<Point>)> = (0..n)
         .filter_map(|v| match motion(v) {
             Motion::Held => None,
@@ -132,14 +124,9 @@ pub fn relax(
             }
         })
         .collect();
-    let star = Star {
-        mesh,
-        terms,
-        terms_of: &terms_of,
-        surface_pressure,
-        weight,
-    };
+    let star = Star::new(mesh, terms, surface_pressure, weight);
     let mut pos = mesh.positions().to_vec();
+    let mut old_vectors = Vec::new();
     let before = star.total(&pos);
     let mut relaxation = Relaxation {
         sweeps: 0,
@@ -150,7 +137,7 @@ pub fn relax(
         relaxation.sweeps += 1;
         relaxation.last_move = moving
             .iter()
-            .map(|&(v, normal)| star.step(&mut pos, v, normal))
+            .map(|&(v, normal)| star.step(&mut pos, v, normal, &mut old_vectors))
             .fold(0.0, f64::max);
         if relaxation.last_move <= tolerance {
             break;
@@ -164,15 +151,51 @@ pub fn relax(
 struct Star<'a> {
     mesh: &'a Mesh,
     terms: &'a [Smoothing],
-    terms_of: &'a [Vec<usize>],
+    /// The terms whose vertex or ring holds each vertex.
+    terms_of: Vec<Vec<usize>>,
+    /// `PᵀP` of each term.
+    gram: Vec<Matrix3<f64>>,
     surface_pressure: &'a [f64],
     weight: f64,
 }
 
-impl Star<'_> {
+impl<'a> Star<'a> {
+    fn new(
+        mesh: &'a Mesh,
+        terms: &'a [Smoothing],
+        surface_pressure: &'a [f64],
+        weight: f64,
+    ) -> Star<'a> {
+        let mut terms_of: Vec<Vec<usize>> = vec![Vec::new(); mesh.vertex_count()];
+        for (k, term) in terms.iter().enumerate() {
+            for u in term.star() {
+                if !terms_of[u].contains(&k) {
+                    terms_of[u].push(k);
+                }
+            }
+        }
+        Star {
+            mesh,
+            terms,
+            terms_of,
+            gram: terms
+                .iter()
+                .map(|term| term.projector.transpose() * term.projector)
+                .collect(),
+            surface_pressure,
+            weight,
+        }
+    }
+
     /// Moves vertex `v` by its damped Newton step, in the plane ⊥ `normal` when given;
-    /// returns the move, m.
-    fn step(&self, pos: &mut [Point], v: usize, normal: Option<Point>) -> f64 {
+    /// returns the move, m. `old_vectors` is scratch space.
+    fn step(
+        &self,
+        pos: &mut [Point],
+        v: usize,
+        normal: Option<Point>,
+        old_vectors: &mut Vec<Point>,
+    ) -> f64 {
         let (mut gradient, mut hessian) = self.derivatives(pos, v);
         if let Some(n) = normal {
             let p = Matrix3::identity() - n * n.transpose();
@@ -186,14 +209,19 @@ impl Star<'_> {
         let mut step = -cholesky.solve(&gradient);
         let start = pos[v];
         let old_share = self.share(pos, v);
-        let old_vectors = self.triangle_vectors(pos, v);
+        let triangles = self.mesh.vertex_triangles(v);
+        old_vectors.clear();
+        old_vectors.extend(
+            triangles
+                .iter()
+                .map(|&t| area_vector(&corners(self.mesh, pos, t))),
+        );
         for _ in 0..=HALVINGS {
             pos[v] = start + step;
-            let turned = self
-                .triangle_vectors(pos, v)
+            let turned = triangles
                 .iter()
-                .zip(&old_vectors)
-                .any(|(new, old)| new.dot(old) <= 0.0);
+                .zip(old_vectors.iter())
+                .any(|(&t, old)| area_vector(&corners(self.mesh, pos, t)).dot(old) <= 0.0);
             if !turned && self.share(pos, v) < old_share {
                 return step.norm();
             }
@@ -201,15 +229,6 @@ impl Star<'_> {
         }
         pos[v] = start;
         0.0
-    }
-
-    /// Area vectors of the triangles around `v`.
-    fn triangle_vectors(&self, pos: &[Point], v: usize) -> Vec<Point> {
-        self.mesh
-            .vertex_triangles(v)
-            .iter()
-            .map(|&t| area_vector(&corners(self.mesh, pos, t)))
-            .collect()
     }
 
     /// `A_t − p_s V_t` of triangle t (m²).
@@ -250,14 +269,14 @@ impl Star<'_> {
             let Some(k) = self.mesh.triangles()[t].iter().position(|&u| u == v) else {
                 continue;
             };
-            gradient +=
-                triangle_area_gradient(&c)[k] - p * cone_volume_gradient(&c, &Point::zeros())[k];
+            gradient += triangle_area_corner_gradient(&c, k)
+                - p * cone_volume_corner_gradient(&c, &Point::zeros(), k);
             hessian += triangle_area_hessian_diagonal(&c, k);
         }
         for &k in &self.terms_of[v] {
             let term = &self.terms[k];
             let c = term.coefficient(v);
-            let pp = term.projector.transpose() * term.projector;
+            let pp = self.gram[k];
             gradient += self.weight * c * pp * term.offset(pos);
             hessian += self.weight * c * c * pp;
         }
@@ -324,24 +343,10 @@ mod tests {
                 }
             })
             .collect();
-        let mut terms_of: Vec<Vec<usize>> = vec![Vec::new(); n];
-        for (k, term) in terms.iter().enumerate() {
-            for u in term.star() {
-                if !terms_of[u].contains(&k) {
-                    terms_of[u].push(k);
-                }
-            }
-        }
         let pressures: Vec<f64> = (0..mesh.surfaces().len())
             .map(|s| 30.0 + 7.0 * s as f64)
             .collect();
-        let star = Star {
-            mesh: &mesh,
-            terms: &terms,
-            terms_of: &terms_of,
-            surface_pressure: &pressures,
-            weight: 0.7,
-        };
+        let star = Star::new(&mesh, &terms, &pressures, 0.7);
         let h = 1e-6;
         let mut pos = mesh.positions().to_vec();
         for v in (0..n).step_by(5) {
