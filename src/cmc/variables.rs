@@ -237,6 +237,11 @@ impl HessianPattern {
             .collect()
     }
 
+    /// [`HessianPattern::star_slots`] of a triangle's corners, without allocating.
+    pub fn triangle_slots(&self, vars: &Variables, corners: &[usize; 3]) -> [usize; 9] {
+        std::array::from_fn(|k| self.slot(vars, corners[k / 3], corners[k % 3]))
+    }
+
     /// Adds `factor · B_uᵀ m B_w` at `slot` (from [`HessianPattern::star_slots`]), `m =
     /// ∂²/∂x_u∂x_w` (rows of u, columns of w).
     pub fn add_at(
