@@ -33,9 +33,7 @@
 
 use nalgebra::Matrix3;
 
-use super::area::{
-    area_vector, triangle_area, triangle_area_corner_gradient, triangle_area_hessian_diagonal,
-};
+use super::area::{area_vector, triangle_area_corner_gradient, triangle_area_hessian_diagonal};
 use super::mesh::{Mesh, Point};
 use super::volume::{cone_volume, cone_volume_corner_gradient};
 
@@ -196,7 +194,7 @@ impl<'a> Star<'a> {
         normal: Option<Point>,
         old_vectors: &mut Vec<Point>,
     ) -> f64 {
-        let (mut gradient, mut hessian) = self.derivatives(pos, v);
+        let (mut gradient, mut hessian, old_share) = self.derivatives(pos, v, old_vectors);
         if let Some(n) = normal {
             let p = Matrix3::identity() - n * n.transpose();
             hessian = p * hessian * p + hessian.trace() * n * n.transpose();
@@ -208,21 +206,12 @@ impl<'a> Star<'a> {
         };
         let mut step = -cholesky.solve(&gradient);
         let start = pos[v];
-        let old_share = self.share(pos, v);
-        let triangles = self.mesh.vertex_triangles(v);
-        old_vectors.clear();
-        old_vectors.extend(
-            triangles
-                .iter()
-                .map(|&t| area_vector(&corners(self.mesh, pos, t))),
-        );
         for _ in 0..=HALVINGS {
             pos[v] = start + step;
-            let turned = triangles
-                .iter()
-                .zip(old_vectors.iter())
-                .any(|(&t, old)| area_vector(&corners(self.mesh, pos, t)).dot(old) <= 0.0);
-            if !turned && self.share(pos, v) < old_share {
+            if self
+                .unturned_share(pos, v, old_vectors)
+                .is_some_and(|share| share < old_share)
+            {
                 return step.norm();
             }
             step *= 0.5;
@@ -231,11 +220,31 @@ impl<'a> Star<'a> {
         0.0
     }
 
+    /// The share of `v` ([`Star::share`]) when no triangle around `v` has turned over against
+    /// its area vector in `old_vectors` (in [`Mesh::vertex_triangles`] order), else None.
+    fn unturned_share(&self, pos: &[Point], v: usize, old_vectors: &[Point]) -> Option<f64> {
+        let mut triangles = 0.0;
+        for (&t, old) in self.mesh.vertex_triangles(v).iter().zip(old_vectors) {
+            let c = corners(self.mesh, pos, t);
+            let vector = area_vector(&c);
+            if vector.dot(old) <= 0.0 {
+                return None;
+            }
+            triangles += self.area_less_work(&c, t, vector);
+        }
+        Some(triangles + self.terms_share(pos, v))
+    }
+
     /// `A_t − p_s V_t` of triangle t (m²).
     fn triangle_energy(&self, pos: &[Point], t: usize) -> f64 {
         let c = corners(self.mesh, pos, t);
+        self.area_less_work(&c, t, area_vector(&c))
+    }
+
+    /// `A_t − p_s V_t` of triangle t with corners `c` and area vector `vector` (m²).
+    fn area_less_work(&self, c: &[Point; 3], t: usize, vector: Point) -> f64 {
         let p = self.surface_pressure[self.mesh.triangle_surface()[t]];
-        triangle_area(&c) - p * cone_volume(&c, &Point::zeros())
+        vector.norm() - p * cone_volume(c, &Point::zeros())
     }
 
     /// `(w/2)|P_k (x − mean)|²` of term k (m²).
@@ -245,6 +254,7 @@ impl<'a> Star<'a> {
     }
 
     /// The terms of E that depend on `x_v`, m².
+    #[cfg(test)]
     fn share(&self, pos: &[Point], v: usize) -> f64 {
         let triangles: f64 = self
             .mesh
@@ -252,19 +262,34 @@ impl<'a> Star<'a> {
             .iter()
             .map(|&t| self.triangle_energy(pos, t))
             .sum();
-        let terms: f64 = self.terms_of[v]
-            .iter()
-            .map(|&k| self.term_energy(pos, k))
-            .sum();
-        triangles + terms
+        triangles + self.terms_share(pos, v)
     }
 
-    /// Gradient (m) and diagonal Hessian block (dimensionless) of the share w.r.t. `x_v`.
-    fn derivatives(&self, pos: &[Point], v: usize) -> (Point, Matrix3<f64>) {
+    /// The smoothing terms' part of the share of `v`, m².
+    fn terms_share(&self, pos: &[Point], v: usize) -> f64 {
+        self.terms_of[v]
+            .iter()
+            .map(|&k| self.term_energy(pos, k))
+            .sum()
+    }
+
+    /// Gradient (m) and diagonal Hessian block (dimensionless) of the share w.r.t. `x_v`, and
+    /// the share (m²); `vectors` becomes the area vectors of the triangles around `v`.
+    fn derivatives(
+        &self,
+        pos: &[Point],
+        v: usize,
+        vectors: &mut Vec<Point>,
+    ) -> (Point, Matrix3<f64>, f64) {
         let mut gradient = Point::zeros();
         let mut hessian = Matrix3::zeros();
+        let mut triangles = 0.0;
+        vectors.clear();
         for &t in self.mesh.vertex_triangles(v) {
             let c = corners(self.mesh, pos, t);
+            let vector = area_vector(&c);
+            vectors.push(vector);
+            triangles += self.area_less_work(&c, t, vector);
             let p = self.surface_pressure[self.mesh.triangle_surface()[t]];
             let Some(k) = self.mesh.triangles()[t].iter().position(|&u| u == v) else {
                 continue;
@@ -280,7 +305,7 @@ impl<'a> Star<'a> {
             gradient += self.weight * c * pp * term.offset(pos);
             hessian += self.weight * c * c * pp;
         }
-        (gradient, hessian)
+        (gradient, hessian, triangles + self.terms_share(pos, v))
     }
 
     /// E at `pos` (the volumes' cones from the origin), m².
@@ -350,13 +375,22 @@ mod tests {
         let h = 1e-6;
         let mut pos = mesh.positions().to_vec();
         for v in (0..n).step_by(5) {
-            let (gradient, hessian) = star.derivatives(&pos, v);
+            let mut vectors = Vec::new();
+            let (gradient, hessian, share) = star.derivatives(&pos, v, &mut vectors);
+            assert_eq!(share, star.share(&pos, v));
+            assert_eq!(vectors.len(), mesh.vertex_triangles(v).len());
             let centre = pos[v];
             for a in 0..3 {
                 pos[v][a] = centre[a] + h;
-                let (plus, g_plus) = (star.share(&pos, v), star.derivatives(&pos, v).0);
+                let (plus, g_plus) = (
+                    star.share(&pos, v),
+                    star.derivatives(&pos, v, &mut vectors).0,
+                );
                 pos[v][a] = centre[a] - h;
-                let (minus, g_minus) = (star.share(&pos, v), star.derivatives(&pos, v).0);
+                let (minus, g_minus) = (
+                    star.share(&pos, v),
+                    star.derivatives(&pos, v, &mut vectors).0,
+                );
                 pos[v][a] = centre[a];
                 let slope = (plus - minus) / (2.0 * h);
                 assert!(
