@@ -79,6 +79,48 @@ pub fn triangle_area_hessian(p: &[Point; 3]) -> [[Matrix3<f64>; 3]; 3] {
     h
 }
 
+/// The triangle area's Hessian as a bilinear form, for contracting its blocks with a few
+/// directions instead of forming all nine 3×3 blocks. With `x` a displacement of corner k
+/// and `y` one of corner l (m), `xᵀ (∂²a/∂p_k∂p_l) y = (x × e_k)·(I − n̂n̂ᵀ)(y × e_l) / 4a
+/// + s n̂·(x × y) / 2`, `s = +1` for `l = k+1`, `−1` for `l = k+2`, 0 for `l = k` (the module
+/// header's blocks written out; dimensionless, like [`triangle_area_hessian`]).
+#[derive(Debug, Clone, Copy)]
+pub struct TriangleAreaForm {
+    /// Unit normal n̂.
+    normal: Point,
+    /// Edges `e_k` opposite each corner (m).
+    edges: [Point; 3],
+    /// `1 / 4a` (1/m²).
+    quarter_inverse_area: f64,
+}
+
+impl TriangleAreaForm {
+    /// The form of the triangle with corners `p` (m); the triangle must not be degenerate.
+    pub fn new(p: &[Point; 3]) -> Self {
+        let big_n = area_vector(p);
+        let a = big_n.norm();
+        Self {
+            normal: big_n / a,
+            edges: [0, 1, 2].map(|k| opposite_edge(p, k)),
+            quarter_inverse_area: 0.25 / a,
+        }
+    }
+
+    /// `(∂²a/∂p_k∂p_l)ᵀ x`: the vector g with `g·y = xᵀ (∂²a/∂p_k∂p_l) y` (m, x in m).
+    pub fn row(&self, k: usize, l: usize, x: &Point) -> Point {
+        let c = x.cross(&self.edges[k]);
+        let projected = c - self.normal * self.normal.dot(&c);
+        let g = self.edges[l].cross(&projected) * self.quarter_inverse_area;
+        if l == (k + 1) % 3 {
+            g + 0.5 * self.normal.cross(x)
+        } else if l == (k + 2) % 3 {
+            g - 0.5 * self.normal.cross(x)
+        } else {
+            g
+        }
+    }
+}
+
 /// The diagonal block `∂²a/∂p_k²` of [`triangle_area_hessian`] alone (dimensionless):
 /// `−½ [e_k]× (I − n̂n̂ᵀ) ½[e_k]× / a`, positive semidefinite (the area is convex in one corner).
 pub fn triangle_area_hessian_diagonal(p: &[Point; 3], k: usize) -> Matrix3<f64> {
@@ -205,6 +247,24 @@ mod tests {
                         let exact = block.column(c).into_owned();
                         assert!((exact - fd).norm() < 1e-6, "{exact} vs {fd}");
                     }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn area_form_rows_are_the_hessian_blocks_transposed_times_x() {
+        let mut rng = crate::cmc::testing::rng(7);
+        for _ in 0..50 {
+            let p = random_triangle(&mut rng);
+            let x = random_triangle(&mut rng)[0];
+            let h = triangle_area_hessian(&p);
+            let form = TriangleAreaForm::new(&p);
+            for (k, row) in h.iter().enumerate() {
+                for (l, block) in row.iter().enumerate() {
+                    let expected = block.transpose() * x;
+                    let got = form.row(k, l, &x);
+                    assert!((got - expected).norm() < 1e-12 * (1.0 + expected.norm()));
                 }
             }
         }

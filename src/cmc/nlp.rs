@@ -27,7 +27,7 @@
 //! ([`super::remesh`]), after which the problem is rebuilt ([`CmcNlp::remeshed`]).
 //!
 //! Exact Lagrangian Hessian `σ∇²f + Σ λ_r ∇²c_r` in scaled variables, lower triangle in 3×3
-//! vertex blocks: area blocks of [`super::area::triangle_area_hessian`] (factor 1), the
+//! vertex blocks: area blocks of [`super::area::TriangleAreaForm`] (factor 1), the
 //! regularization `w Σ c_a c_b PᵀP` (c = 1 at the vertex, −1/k on its k neighbours), curvature
 //! rows `L³ ∇²H` ([`super::curvature_hessian`]), volume rows `∇²V / L`
 //! ([`super::volume::cone_volume_hessian`]), chords `L (I − ûûᵀ)/|x_a − x_b|` and the circle
@@ -38,7 +38,7 @@ use std::sync::Mutex;
 use nalgebra::Matrix3;
 use rayon::prelude::*;
 
-use super::area::{total_area, total_area_gradient, triangle_area_hessian};
+use super::area::{TriangleAreaForm, total_area, total_area_gradient};
 use super::curvature::{mean_curvature, mean_curvature_gradient};
 use super::curvature_hessian::mean_curvature_hessian;
 use super::mesh::{Mesh, Point};
@@ -637,6 +637,32 @@ impl CmcNlp {
             .sum()
     }
 
+    /// Adds `factor ·` triangle t's corner blocks `M_km` (corners `tri`) to the Hessian
+    /// values, each given by `rows(k, m, x) = M_kmᵀ x` (see [`HessianPattern::add_rows_at`]).
+    fn add_triangle(
+        &self,
+        values: &mut [f64],
+        t: usize,
+        tri: &[usize; 3],
+        rows: impl Fn(usize, usize, &Point) -> Point,
+        factor: f64,
+    ) {
+        let slots = &self.triangle_slots[t];
+        for k in 0..3 {
+            for m in 0..3 {
+                HessianPattern::add_rows_at(
+                    values,
+                    &self.vars,
+                    slots[3 * k + m],
+                    tri[k],
+                    tri[m],
+                    |x| rows(k, m, x),
+                    factor,
+                );
+            }
+        }
+    }
+
     fn build_pattern(&self) -> Vec<(usize, usize)> {
         let mut pattern = Vec::new();
         for (r, &row) in self.rows.iter().enumerate() {
@@ -969,36 +995,10 @@ impl Nlp for CmcNlp {
                 }
             }
         }
-        // The 3×3 corner blocks of triangle t, times `factor`.
-        let add_triangle = |values: &mut [f64],
-                            t: usize,
-                            tri: &[usize; 3],
-                            blocks: &[[Matrix3<f64>; 3]; 3],
-                            factor: f64| {
-            let slots = &self.triangle_slots[t];
-            for k in 0..3 {
-                for m in 0..3 {
-                    HessianPattern::add_at(
-                        values,
-                        vars,
-                        slots[3 * k + m],
-                        tri[k],
-                        tri[m],
-                        &blocks[k][m],
-                        factor,
-                    );
-                }
-            }
-        };
         self.with_mesh(x, |mesh| {
             for (t, tri) in mesh.triangles().iter().enumerate() {
-                add_triangle(
-                    values,
-                    t,
-                    tri,
-                    &triangle_area_hessian(&mesh.corners(t)),
-                    sigma,
-                );
+                let form = TriangleAreaForm::new(&mesh.corners(t));
+                self.add_triangle(values, t, tri, |k, m, x| form.row(k, m, x), sigma);
             }
             let curvature: Vec<(usize, f64)> = self
                 .rows
@@ -1028,7 +1028,8 @@ impl Nlp for CmcNlp {
                     for t in mesh.surface_triangles(s) {
                         let tri = mesh.triangles()[t];
                         let blocks = cone_volume_hessian(&mesh.corners(t), &region.reference);
-                        add_triangle(values, t, &tri, &blocks, factor * sign);
+                        let rows = |k: usize, m: usize, x: &Point| blocks[k][m].transpose() * x;
+                        self.add_triangle(values, t, &tri, rows, factor * sign);
                     }
                 }
             };

@@ -268,6 +268,48 @@ impl HessianPattern {
         }
     }
 
+    /// Adds `factor · B_uᵀ m B_w` at `slot` like [`HessianPattern::add_at`], `m` given by
+    /// `row(x) = mᵀ x` (x a direction of u's position): a normal vertex contracts one
+    /// direction, `n_u`, instead of forming the block.
+    pub fn add_rows_at(
+        values: &mut [f64],
+        vars: &Variables,
+        slot: usize,
+        u: usize,
+        w: usize,
+        row: impl Fn(&Point) -> Point,
+        factor: f64,
+    ) {
+        if slot == NO_SLOT {
+            return;
+        }
+        let mut k = slot;
+        let mut put = |r: usize, g: Point| match vars.basis[w] {
+            Basis::Fixed => {}
+            Basis::Normal(_, n) => {
+                values[k] += factor * g.dot(&n);
+                k += 1;
+            }
+            Basis::Cartesian(_) => {
+                for c in 0..3 {
+                    if u != w || c <= r {
+                        values[k] += factor * g[c];
+                        k += 1;
+                    }
+                }
+            }
+        };
+        match vars.basis[u] {
+            Basis::Fixed => {}
+            Basis::Normal(_, n) => put(0, row(&n)),
+            Basis::Cartesian(_) => {
+                for r in 0..3 {
+                    put(r, row(&Point::ith(r, 1.0)));
+                }
+            }
+        }
+    }
+
     /// Adds `factor · B_uᵀ m B_w` to block `(u, w)` (one lookup; see
     /// [`HessianPattern::add_at`]).
     pub fn add(
