@@ -107,6 +107,7 @@ impl TriangleAreaForm {
     }
 
     /// `(∂²a/∂p_k∂p_l)ᵀ x`: the vector g with `g·y = xᵀ (∂²a/∂p_k∂p_l) y` (m, x in m).
+    #[inline]
     pub fn row(&self, k: usize, l: usize, x: &Point) -> Point {
         let c = x.cross(&self.edges[k]);
         let projected = c - self.normal * self.normal.dot(&c);

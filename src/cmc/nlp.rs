@@ -30,7 +30,7 @@
 //! vertex blocks: area blocks of [`super::area::TriangleAreaForm`] (factor 1), the
 //! regularization `w Σ c_a c_b PᵀP` (c = 1 at the vertex, −1/k on its k neighbours), curvature
 //! rows `L³ ∇²H` ([`super::curvature_hessian`]), volume rows `∇²V / L`
-//! ([`super::volume::cone_volume_hessian`]), chords `L (I − ûûᵀ)/|x_a − x_b|` and the circle
+//! ([`super::volume::cone_volume_hessian_row`]), chords `L (I − ûûᵀ)/|x_a − x_b|` and the circle
 //! guide's second row `L/r · I`; plane and line guides and the `H_s` columns are linear.
 
 use std::sync::Mutex;
@@ -44,7 +44,7 @@ use super::curvature_hessian::mean_curvature_hessian;
 use super::mesh::{Mesh, Point};
 use super::tangential::{Motion, Smoothing, relax, vertex_normal};
 use super::variables::{HessianPattern, Variables};
-use super::volume::{Region, chord, cone_volume_hessian};
+use super::volume::{Region, chord, cone_volume_hessian_row};
 use crate::solver::log::ObjectiveUnit;
 use crate::solver::{Dims, EvalError, Nlp, Options, Solution};
 
@@ -1027,8 +1027,8 @@ impl Nlp for CmcNlp {
                 for &(s, sign) in &region.boundary {
                     for t in mesh.surface_triangles(s) {
                         let tri = mesh.triangles()[t];
-                        let blocks = cone_volume_hessian(&mesh.corners(t), &region.reference);
-                        let rows = |k: usize, m: usize, x: &Point| blocks[k][m].transpose() * x;
+                        let q = mesh.corners(t).map(|p| p - region.reference);
+                        let rows = |k, m, x: &Point| cone_volume_hessian_row(&q, k, m, x);
                         self.add_triangle(values, t, &tri, rows, factor * sign);
                     }
                 }

@@ -271,6 +271,7 @@ impl HessianPattern {
     /// Adds `factor · B_uᵀ m B_w` at `slot` like [`HessianPattern::add_at`], `m` given by
     /// `row(x) = mᵀ x` (x a direction of u's position): a normal vertex contracts one
     /// direction, `n_u`, instead of forming the block.
+    #[inline]
     pub fn add_rows_at(
         values: &mut [f64],
         vars: &Variables,
@@ -283,28 +284,33 @@ impl HessianPattern {
         if slot == NO_SLOT {
             return;
         }
-        let mut k = slot;
-        let mut put = |r: usize, g: Point| match vars.basis[w] {
-            Basis::Fixed => {}
-            Basis::Normal(_, n) => {
-                values[k] += factor * g.dot(&n);
-                k += 1;
+        let (diagonal, column) = (u == w, vars.basis[w]);
+        match (vars.basis[u], column) {
+            (Basis::Fixed, _) | (_, Basis::Fixed) => {}
+            (Basis::Normal(_, n), Basis::Normal(_, nw)) => {
+                values[slot] += factor * row(&n).dot(&nw)
             }
-            Basis::Cartesian(_) => {
+            (Basis::Normal(_, n), Basis::Cartesian(_)) => {
+                let g = row(&n);
                 for c in 0..3 {
-                    if u != w || c <= r {
-                        values[k] += factor * g[c];
-                        k += 1;
-                    }
+                    values[slot + c] += factor * g[c];
                 }
             }
-        };
-        match vars.basis[u] {
-            Basis::Fixed => {}
-            Basis::Normal(_, n) => put(0, row(&n)),
-            Basis::Cartesian(_) => {
+            (Basis::Cartesian(_), _) => {
+                let mut k = slot;
                 for r in 0..3 {
-                    put(r, row(&Point::ith(r, 1.0)));
+                    let g = row(&Point::ith(r, 1.0));
+                    if let Basis::Normal(_, nw) = column {
+                        values[k] += factor * g.dot(&nw);
+                        k += 1;
+                        continue;
+                    }
+                    for c in 0..3 {
+                        if !diagonal || c <= r {
+                            values[k] += factor * g[c];
+                            k += 1;
+                        }
+                    }
                 }
             }
         }

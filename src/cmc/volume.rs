@@ -56,6 +56,22 @@ pub fn cone_volume_hessian(p: &[Point; 3], o: &Point) -> [[Matrix3<f64>; 3]; 3] 
     h
 }
 
+/// `(∂²V/∂p_k∂p_l)ᵀ x` of [`cone_volume`] with `q = p − o` its corners from the apex (m, x
+/// in m): `V = ⅙ det(q_0, q_1, q_2)` is linear in each corner, so the row is `⅙ q_j × x` for
+/// `l = k+1`, `−⅙ q_j × x` for `l = k+2` (j the third corner) and 0 for `l = k`; the blocks of
+/// [`cone_volume_hessian`] contracted with x.
+#[inline]
+pub fn cone_volume_hessian_row(q: &[Point; 3], k: usize, l: usize, x: &Point) -> Point {
+    let third = 3 - k - l;
+    if l == (k + 1) % 3 {
+        q[third].cross(x) / 6.0
+    } else if l == (k + 2) % 3 {
+        -q[third].cross(x) / 6.0
+    } else {
+        Point::zeros()
+    }
+}
+
 impl Region {
     /// Volume of the region, m³.
     pub fn volume(&self, mesh: &Mesh) -> f64 {
@@ -182,6 +198,9 @@ mod tests {
                             / 2e-6;
                         assert!((h[k][l].column(c) - fd).norm() < 1e-8);
                     }
+                    let q = p.map(|pk| pk - o);
+                    let row = cone_volume_hessian_row(&q, k, l, &g[l]);
+                    assert!((row - h[k][l].transpose() * g[l]).norm() < 1e-14);
                 }
             }
         }
