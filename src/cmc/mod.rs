@@ -242,7 +242,7 @@ fn stability_figure(
         .iter()
         .map(|v| (&v.region, v.pressure))
         .collect();
-    let stability = stability::analyse(mesh, &bodies);
+    let stability = stability::analyse(mesh, &bodies, stability::REPORTED);
     opts.say(&format!(
         "stability: {} (smallest eigenvalues [{}] 1/m², {} normal degrees of freedom)",
         stability.verdict,
