@@ -57,6 +57,8 @@ struct Constraints<'a> {
     n: usize,
     m: usize,
     rows: DMatrix<f64>,
+    /// Euclidean norm of each row of `rows`.
+    row_norms: Vec<f64>,
     problem: &'a QpProblem<'a>,
 }
 
@@ -70,10 +72,12 @@ impl<'a> Constraints<'a> {
                 rows[(i, j)] += v;
             }
         }
+        let row_norms = rows.row_iter().map(|row| row.norm()).collect();
         Constraints {
             n,
             m,
             rows,
+            row_norms,
             problem,
         }
     }
@@ -136,7 +140,7 @@ impl<'a> Constraints<'a> {
     fn normal_norm(&self, id: ConstraintId) -> f64 {
         match side_of(id, self.n, self.m) {
             ConstraintSide::VarLower(_) | ConstraintSide::VarUpper(_) => 1.0,
-            ConstraintSide::RowLower(i) | ConstraintSide::RowUpper(i) => self.rows.row(i).norm(),
+            ConstraintSide::RowLower(i) | ConstraintSide::RowUpper(i) => self.row_norms[i],
         }
     }
 }
@@ -392,9 +396,10 @@ impl<'a> DualIteration<'a> {
         })
     }
 
-    /// The violation below which constraint `id` (right-hand side `b`) counts as met at `x`.
-    fn violation_tol(&self, id: ConstraintId, b: f64) -> f64 {
-        1e-11 * (1.0 + b.abs() + self.cons.normal_norm(id) * self.x.amax())
+    /// The violation below which constraint `id` (right-hand side `b`) counts as met at `x`,
+    /// `x_max` being `‖x‖∞` (passed in: the scan over all constraints computes it once).
+    fn violation_tol(&self, id: ConstraintId, b: f64, x_max: f64) -> f64 {
+        1e-11 * (1.0 + b.abs() + self.cons.normal_norm(id) * x_max)
     }
 
     /// Adds the equalities first, each by a full primal step (no drops are possible);
@@ -411,7 +416,7 @@ impl<'a> DualIteration<'a> {
             let zn = self.cons.dot(id, &z);
             if zn.abs() <= 1e-14 * (1.0 + self.cons.normal_norm(id).powi(2)) {
                 // Dependent on earlier equalities: consistent ones are redundant.
-                if s.abs() > self.violation_tol(id, b) * 1e3 {
+                if s.abs() > self.violation_tol(id, b, self.x.amax()) * 1e3 {
                     return Err(QpStatus::Infeasible);
                 }
                 continue;
@@ -423,7 +428,7 @@ impl<'a> DualIteration<'a> {
                 self.active[id] = true;
             } else {
                 let s = self.cons.dot(id, &self.x) - b;
-                if s.abs() > self.violation_tol(id, b) * 1e3 {
+                if s.abs() > self.violation_tol(id, b, self.x.amax()) * 1e3 {
                     return Err(QpStatus::Infeasible);
                 }
             }
@@ -437,13 +442,14 @@ impl<'a> DualIteration<'a> {
     fn most_violated(&self) -> Option<ConstraintId> {
         let cons = &self.cons;
         let mut best: Option<(ConstraintId, f64, bool)> = None;
+        let x_max = self.x.amax();
         for id in 0..cons.count() {
             if self.active[id] || cons.is_equality_lower(id) || cons.is_equality_upper(id) {
                 continue;
             }
             let Some(b) = cons.rhs(id) else { continue };
             let s = cons.dot(id, &self.x) - b;
-            if s >= -self.violation_tol(id, b) {
+            if s >= -self.violation_tol(id, b, x_max) {
                 continue;
             }
             let score = s / cons.normal_norm(id);
