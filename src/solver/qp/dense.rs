@@ -52,34 +52,50 @@ fn side_of(id: ConstraintId, n: usize, m: usize) -> ConstraintSide {
     }
 }
 
-/// The constraints of a QP in `nₖᵀd ≥ bₖ` form, with the rows of A held densely.
+/// The constraints of a QP in `nₖᵀd ≥ bₖ` form. Products with a row normal use the sparse
+/// rows of A (a truss balance row has a handful of nonzeros among a hundred variables).
 struct Constraints<'a> {
     n: usize,
     m: usize,
-    rows: DMatrix<f64>,
-    /// Euclidean norm of each row of `rows`.
+    /// Euclidean norm of each row of A.
     row_norms: Vec<f64>,
     problem: &'a QpProblem<'a>,
 }
 
 impl<'a> Constraints<'a> {
     fn new(problem: &'a QpProblem<'a>) -> Self {
-        let n = problem.g.len();
-        let m = problem.a.nrows();
-        let mut rows = DMatrix::zeros(m, n);
-        for (i, row) in problem.a.row_iter().enumerate() {
-            for (&j, &v) in row.col_indices().iter().zip(row.values()) {
-                rows[(i, j)] += v;
-            }
-        }
-        let row_norms = rows.row_iter().map(|row| row.norm()).collect();
+        let row_norms = (problem.a.row_iter())
+            .map(|row| row.values().iter().map(|v| v * v).sum::<f64>().sqrt())
+            .collect();
         Constraints {
-            n,
-            m,
-            rows,
+            n: problem.g.len(),
+            m: problem.a.nrows(),
             row_norms,
             problem,
         }
+    }
+
+    /// Row `i` of A: its column indices and values.
+    fn row(&self, i: usize) -> (&'a [usize], &'a [f64]) {
+        let a = self.problem.a;
+        let span = a.row_offsets()[i]..a.row_offsets()[i + 1];
+        (&a.col_indices()[span.clone()], &a.values()[span])
+    }
+
+    /// aᵢᵀv for row `i` of A.
+    fn row_dot(&self, i: usize, v: &DVector<f64>) -> f64 {
+        let (cols, vals) = self.row(i);
+        cols.iter().zip(vals).map(|(&c, &a)| a * v[c]).sum()
+    }
+
+    /// Jᵀaᵢ for row `i` of A: the sum of aᵢⱼ times row j of J.
+    fn jt_times_row(&self, i: usize, j: &DMatrix<f64>) -> DVector<f64> {
+        let (cols, vals) = self.row(i);
+        let mut out = DVector::zeros(j.ncols());
+        for (&c, &a) in cols.iter().zip(vals) {
+            out.axpy(a, &j.row(c).transpose(), 1.0);
+        }
+        out
     }
 
     fn count(&self) -> usize {
@@ -122,8 +138,8 @@ impl<'a> Constraints<'a> {
         match side_of(id, self.n, self.m) {
             ConstraintSide::VarLower(j) => v[j],
             ConstraintSide::VarUpper(j) => -v[j],
-            ConstraintSide::RowLower(i) => self.rows.row(i).transpose().dot(v),
-            ConstraintSide::RowUpper(i) => -self.rows.row(i).transpose().dot(v),
+            ConstraintSide::RowLower(i) => self.row_dot(i, v),
+            ConstraintSide::RowUpper(i) => -self.row_dot(i, v),
         }
     }
 
@@ -132,8 +148,8 @@ impl<'a> Constraints<'a> {
         match side_of(id, self.n, self.m) {
             ConstraintSide::VarLower(c) => j.row(c).transpose(),
             ConstraintSide::VarUpper(c) => -j.row(c).transpose(),
-            ConstraintSide::RowLower(i) => j.tr_mul(&self.rows.row(i).transpose()),
-            ConstraintSide::RowUpper(i) => -j.tr_mul(&self.rows.row(i).transpose()),
+            ConstraintSide::RowLower(i) => self.jt_times_row(i, j),
+            ConstraintSide::RowUpper(i) => -self.jt_times_row(i, j),
         }
     }
 
