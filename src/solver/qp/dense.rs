@@ -312,6 +312,27 @@ impl ActiveSet {
     }
 }
 
+/// `U⁻¹` for an upper triangular `u` with a positive diagonal (a Cholesky factor's `Lᵀ`).
+/// Column k solves `U x = eₖ` by back substitution over rows `0..=k` only (the rest of x is
+/// zero): n³/6 multiply-adds instead of a full solve's n³/2, in the same order of operations
+/// as `solve_upper_triangular` (so the same numbers).
+fn inverse_of_upper(u: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = u.nrows();
+    let mut inv = DMatrix::zeros(n, n);
+    for k in 0..n {
+        let mut x = inv.column_mut(k);
+        x[k] = 1.0;
+        for i in (0..=k).rev() {
+            let coeff = x[i] / u[(i, i)];
+            x[i] = coeff;
+            for r in 0..i {
+                x[r] += -coeff * u[(r, i)];
+            }
+        }
+    }
+    inv
+}
+
 /// Iteration cap of the dual active-set loop, in additions plus drops.
 fn iteration_cap(n: usize, m: usize) -> usize {
     50 + 10 * (n + m)
@@ -384,8 +405,7 @@ impl<'a> DualIteration<'a> {
         let m = problem.a.nrows();
         let chol = h.clone().cholesky()?;
         let cons = Constraints::new(problem);
-        let l_t = chol.l().transpose();
-        let j = l_t.solve_upper_triangular(&DMatrix::identity(n, n))?;
+        let j = inverse_of_upper(&chol.l().transpose());
         let g = DVector::from_column_slice(problem.g);
         let x = -chol.solve(&g);
         let mut is_preferred = vec![false; cons.count()];
@@ -798,5 +818,17 @@ mod tests {
             solve(&p.h, &p.problem(), &[]).solution.status,
             QpStatus::Numerical
         );
+    }
+
+    #[test]
+    fn the_triangular_inverse_is_the_full_solve_to_the_bit() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let b = DMatrix::from_fn(9, 9, |_, _| rng.random_range(-1.0..1.0));
+        let h = &b * b.transpose() + DMatrix::identity(9, 9) * 0.1;
+        let u = h.cholesky().expect("positive definite").l().transpose();
+        let inv = inverse_of_upper(&u);
+        let full = u.solve_upper_triangular(&DMatrix::identity(9, 9)).unwrap();
+        assert_eq!(inv, full);
+        assert!((&u * &inv - DMatrix::identity(9, 9)).amax() < 1e-12);
     }
 }
