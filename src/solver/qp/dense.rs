@@ -193,8 +193,9 @@ fn rotate_columns(mat: &mut DMatrix<f64>, p: usize, q: usize, c: f64, s: f64) {
 struct ActiveSet {
     /// J with J Jᵀ = H⁻¹, rotated so that its first `iq` columns span the active normals.
     j: DMatrix<f64>,
-    /// Upper triangular, first `iq` columns used.
-    r: DMatrix<f64>,
+    /// Rᵀ: R upper triangular (first `iq` columns used), held transposed so that the back
+    /// substitution in [`ActiveSet::directions`] reads R's rows contiguously.
+    rt: DMatrix<f64>,
     /// Active constraint ids in order.
     ids: Vec<ConstraintId>,
     /// Multipliers of the active constraints (≥ 0 for inequalities).
@@ -222,9 +223,9 @@ impl ActiveSet {
         for i in (0..iq).rev() {
             let mut s = d[i];
             for k in i + 1..iq {
-                s -= self.r[(i, k)] * r[k];
+                s -= self.rt[(k, i)] * r[k];
             }
-            r[i] = s / self.r[(i, i)];
+            r[i] = s / self.rt[(i, i)];
         }
         (z, r)
     }
@@ -247,7 +248,7 @@ impl ActiveSet {
             return false;
         }
         for i in 0..=iq {
-            self.r[(i, iq)] = d[i];
+            self.rt[(iq, i)] = d[i];
         }
         self.r_norm = self.r_norm.max(d[iq].abs());
         self.ids.push(id);
@@ -261,27 +262,27 @@ impl ActiveSet {
         let iq = self.len();
         for c in pos..iq - 1 {
             for i in 0..=c + 1 {
-                self.r[(i, c)] = self.r[(i, c + 1)];
+                self.rt[(c, i)] = self.rt[(c + 1, i)];
             }
         }
         for i in 0..iq {
-            self.r[(i, iq - 1)] = 0.0;
+            self.rt[(iq - 1, i)] = 0.0;
         }
         self.ids.remove(pos);
         self.u.remove(pos);
         self.equality.remove(pos);
         let iq = iq - 1;
         for c in pos..iq {
-            let (cs, sn, h) = givens(self.r[(c, c)], self.r[(c + 1, c)]);
+            let (cs, sn, h) = givens(self.rt[(c, c)], self.rt[(c, c + 1)]);
             if sn == 0.0 {
                 continue;
             }
-            self.r[(c, c)] = h;
-            self.r[(c + 1, c)] = 0.0;
+            self.rt[(c, c)] = h;
+            self.rt[(c, c + 1)] = 0.0;
             for k in c + 1..iq {
-                let (a, b) = (self.r[(c, k)], self.r[(c + 1, k)]);
-                self.r[(c, k)] = cs * a + sn * b;
-                self.r[(c + 1, k)] = -sn * a + cs * b;
+                let (a, b) = (self.rt[(k, c)], self.rt[(k, c + 1)]);
+                self.rt[(k, c)] = cs * a + sn * b;
+                self.rt[(k, c + 1)] = -sn * a + cs * b;
             }
             rotate_columns(&mut self.j, c, c + 1, cs, sn);
         }
@@ -417,7 +418,7 @@ impl<'a> DualIteration<'a> {
         Some(DualIteration {
             set: ActiveSet {
                 j,
-                r: DMatrix::zeros(n, n),
+                rt: DMatrix::zeros(n, n),
                 ids: Vec::new(),
                 u: Vec::new(),
                 equality: Vec::new(),
