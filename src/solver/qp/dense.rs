@@ -82,18 +82,62 @@ impl<'a> Constraints<'a> {
         (&a.col_indices()[span.clone()], &a.values()[span])
     }
 
-    /// aᵢᵀv for row `i` of A.
+    /// aᵢᵀv for row `i` of A (the dense product's number, [`dense_dot_slot`]).
     fn row_dot(&self, i: usize, v: &DVector<f64>) -> f64 {
         let (cols, vals) = self.row(i);
-        cols.iter().zip(vals).map(|(&c, &a)| a * v[c]).sum()
+        let mut partial = [0.0; 8];
+        let mut sum = 0.0;
+        let mut tail = 0;
+        for (k, (&c, &a)) in cols.iter().zip(vals).enumerate() {
+            match dense_dot_slot(c, self.n) {
+                Some(p) => partial[p] += a * v[c],
+                None => {
+                    tail = k;
+                    break;
+                }
+            }
+            tail = k + 1;
+        }
+        for p in 0..4 {
+            sum += partial[p] + partial[p + 4];
+        }
+        for (&c, &a) in cols[tail..].iter().zip(&vals[tail..]) {
+            sum += a * v[c];
+        }
+        sum
     }
 
-    /// Jᵀaᵢ for row `i` of A: the sum of aᵢⱼ times row j of J.
+    /// Jᵀaᵢ for row `i` of A: the sum of aᵢⱼ times row j of J (the dense product's numbers,
+    /// [`dense_dot_slot`]).
     fn jt_times_row(&self, i: usize, j: &DMatrix<f64>) -> DVector<f64> {
         let (cols, vals) = self.row(i);
-        let mut out = DVector::zeros(j.ncols());
-        for (&c, &a) in cols.iter().zip(vals) {
-            out.axpy(a, &j.row(c).transpose(), 1.0);
+        let width = j.ncols();
+        let mut partial = DMatrix::<f64>::zeros(width, 8);
+        let mut out = DVector::<f64>::zeros(width);
+        let mut tail = 0;
+        for (k, (&c, &a)) in cols.iter().zip(vals).enumerate() {
+            match dense_dot_slot(c, self.n) {
+                Some(p) => {
+                    for col in 0..width {
+                        partial[(col, p)] += j[(c, col)] * a;
+                    }
+                }
+                None => {
+                    tail = k;
+                    break;
+                }
+            }
+            tail = k + 1;
+        }
+        for p in 0..4 {
+            for col in 0..width {
+                out[col] += partial[(col, p)] + partial[(col, p + 4)];
+            }
+        }
+        for (&c, &a) in cols[tail..].iter().zip(&vals[tail..]) {
+            for col in 0..width {
+                out[col] += j[(c, col)] * a;
+            }
         }
         out
     }
@@ -159,6 +203,16 @@ impl<'a> Constraints<'a> {
             ConstraintSide::RowLower(i) | ConstraintSide::RowUpper(i) => self.row_norms[i],
         }
     }
+}
+
+/// Which of the eight partial sums of nalgebra's dense dot product (length `n`) takes index
+/// `c`, or None for the tail added one by one after them: indices below `n − n mod 8` go to
+/// the partial sum `c mod 8`, and the partial sums are combined as (s₀ + s₄), (s₁ + s₅),
+/// (s₂ + s₆), (s₃ + s₇) in turn. Summing a sparse row's nonzeros (in increasing index order)
+/// this way gives the dense product's number to the bit (a zero term changes no sum), so the
+/// QP's iterates do not depend on how A is stored.
+fn dense_dot_slot(c: usize, n: usize) -> Option<usize> {
+    (c < n - n % 8).then_some(c % 8)
 }
 
 /// Result of a dense QP solve together with the final working set (for warm starts).
@@ -831,5 +885,23 @@ mod tests {
         let full = u.solve_upper_triangular(&DMatrix::identity(9, 9)).unwrap();
         assert_eq!(inv, full);
         assert!((&u * &inv - DMatrix::identity(9, 9)).amax() < 1e-12);
+    }
+
+    #[test]
+    fn sparse_row_products_are_the_dense_ones_to_the_bit() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        for n in [5, 8, 13, 29] {
+            let p = random_qp(&mut rng, n, 6);
+            let problem = p.problem();
+            let cons = Constraints::new(&problem);
+            let dense = DMatrix::from(&p.a);
+            let v = DVector::from_fn(n, |_, _| rng.random_range(-1e3..1e3));
+            let j = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
+            for i in 0..6 {
+                let row = dense.row(i).transpose();
+                assert_eq!(cons.row_dot(i, &v), row.dot(&v));
+                assert_eq!(cons.jt_times_row(i, &j), j.tr_mul(&row));
+            }
+        }
     }
 }
