@@ -48,6 +48,12 @@ pub fn triangle_area_gradient(p: &[Point; 3]) -> [Point; 3] {
     [0, 1, 2].map(|k| 0.5 * n.cross(&opposite_edge(p, k)))
 }
 
+/// Gradient of the triangle area w.r.t. corner `k` alone (m): entry k of
+/// [`triangle_area_gradient`].
+pub fn triangle_area_corner_gradient(p: &[Point; 3], k: usize) -> Point {
+    0.5 * area_vector(p).normalize().cross(&opposite_edge(p, k))
+}
+
 /// Hessian of the triangle area as 3×3 blocks: `h[k][l] = ∂²a / ∂p_k ∂p_l` (dimensionless).
 pub fn triangle_area_hessian(p: &[Point; 3]) -> [[Matrix3<f64>; 3]; 3] {
     let big_n = area_vector(p);

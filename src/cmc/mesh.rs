@@ -452,13 +452,13 @@ impl Mesh {
     /// curvature is defined only where the surface is locally manifold).
     pub fn curvature_surface(&self, v: usize) -> Option<usize> {
         let f = self.flags[v];
-        if f.fixed || f.excluded || f.guide.is_some() || !self.is_interior_manifold(v) {
+        if f.fixed || f.excluded || f.guide.is_some() {
             return None;
         }
-        match self.vertex_surfaces(v).as_slice() {
-            [s] => Some(*s),
-            _ => None,
-        }
+        let star = &self.vertex_triangles[v];
+        let s = self.triangle_surface[*star.first()?];
+        (star.iter().all(|&t| self.triangle_surface[t] == s) && self.is_interior_manifold(v))
+            .then_some(s)
     }
 
     /// Vertices on junction edges (edges shared by three or more triangles).

@@ -118,6 +118,21 @@ impl Problem {
         self.resolution
     }
 
+    /// `[quality] tangential_weight`, or the shape's default
+    /// ([`spec::ShapeSpec::default_tangential_weight`]).
+    pub fn tangential_weight(&self) -> f64 {
+        let file = &self.spec.file;
+        (file.quality.tangential_weight).unwrap_or_else(|| file.shape.default_tangential_weight())
+    }
+
+    /// `[quality] coarse_resolution`, or the shape's default at this resolution
+    /// ([`spec::ShapeSpec::default_coarse_resolution`]).
+    pub fn coarse_resolution(&self) -> Option<usize> {
+        let file = &self.spec.file;
+        (file.quality.coarse_resolution)
+            .or_else(|| file.shape.default_coarse_resolution(self.resolution))
+    }
+
     /// The same problem at another refinement level (reduced versions for CI).
     pub fn with_resolution(&self, resolution: usize) -> Problem {
         Problem {
@@ -145,7 +160,7 @@ impl Problem {
             shape.mesh,
             volumes,
             chords,
-            self.spec.file.quality.tangential_weight,
+            self.tangential_weight(),
             self.spec.file.formulation,
         )
         .map_err(|e| Error::Runtime(format!("{}: {e}", self.name)))
@@ -707,6 +722,40 @@ mod tests {
         let result = load(&file);
         let _ = std::fs::remove_file(&file);
         result
+    }
+
+    #[test]
+    fn shapes_fill_in_the_quality_settings_a_file_leaves_out() {
+        let cluster = "resolution = 3\n[shape]\ntype = \"cluster\"\n[[shape.bubble]]\n\
+                       name = \"a\"\ncentre = [0.0, 0.0, 0.0]\nvolume = 1e-6\n";
+        let p = load_text(cluster).unwrap();
+        assert_eq!(
+            (p.tangential_weight(), p.coarse_resolution()),
+            (1.0, Some(1))
+        );
+        let triple = "[shape]\ntype = \"triple_bubble\"\nvolumes = [1e-6, 2e-6, 3e-6]\n";
+        let p = load_text(triple).unwrap();
+        assert_eq!(p.tangential_weight(), 1.0);
+        let levels: Vec<_> = [3, 4, 5, 6, 8, 10, 12]
+            .iter()
+            .map(|&r| p.with_resolution(r).coarse_resolution())
+            .collect();
+        assert_eq!(
+            levels,
+            [None, None, None, Some(3), Some(4), Some(2), Some(4)]
+        );
+        let bubble = "[shape]\ntype = \"double_bubble\"\nvolumes = [1e-6, 2e-6]\n";
+        let p = load_text(bubble).unwrap();
+        assert_eq!((p.tangential_weight(), p.coarse_resolution()), (0.01, None));
+        // A file's own values win.
+        let p = load_text(&format!(
+            "{triple}[quality]\ntangential_weight = 0.1\ncoarse_resolution = 2\n"
+        ))
+        .unwrap();
+        assert_eq!(
+            (p.tangential_weight(), p.coarse_resolution()),
+            (0.1, Some(2))
+        );
     }
 
     #[test]

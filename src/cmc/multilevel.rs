@@ -89,7 +89,7 @@ pub fn levels(resolution: usize, coarse: usize) -> (usize, Vec<usize>) {
 /// resolution's NLP started from the last subdivision; `None` when there is nothing to do
 /// (no `coarse_resolution`, or it is not below the resolution).
 pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Staged>, Error> {
-    let Some(coarse) = problem.spec.file.quality.coarse_resolution else {
+    let Some(coarse) = problem.coarse_resolution() else {
         return Ok(None);
     };
     if coarse >= problem.resolution {

@@ -165,7 +165,7 @@ pub struct CmcNlp {
     hessian: HessianPattern,
     /// Hessian slots of each triangle's corners and of each smoothing term's star
     /// ([`HessianPattern::star_slots`]).
-    triangle_slots: Vec<Vec<usize>>,
+    triangle_slots: Vec<[usize; 9]>,
     smoothing_slots: Vec<Vec<usize>>,
     centre: Point,
     formulation: Formulation,
@@ -331,7 +331,7 @@ impl CmcNlp {
             .start
             .triangles()
             .iter()
-            .map(|tri| nlp.hessian.star_slots(&nlp.vars, tri))
+            .map(|tri| nlp.hessian.triangle_slots(&nlp.vars, tri))
             .collect();
         nlp.smoothing_slots = nlp
             .smoothing

@@ -9,9 +9,9 @@
 //! volumes = [1.0e-6, 2.0e-6]    # octahedron_frame | catenoid | u_wires | tents | cells |
 //!                               # cluster | obj | gltf
 //! [quality]
-//! tangential_weight = 0.01      # w of the tangential regularization (cmc::nlp), ≥ 0
+//! tangential_weight = 0.01      # w of the tangential regularization (cmc::nlp), ≥ 0; default per shape
 //! flip_rounds = 1               # edge-flip + re-solve rounds after the first solve (cmc::remesh)
-//! coarse_resolution = 1         # optional: solve coarse first, then refine (cmc::multilevel)
+//! coarse_resolution = 1         # solve coarse first, then refine (cmc::multilevel); default per shape
 //! refine = 1.5                  # optional: in those rounds split edges > 1.5 × median start edge
 //! [refine]                      # optional refinement study (cmc::refinement)
 //! levels = 4                    # the resolution, then 3 levels each subdivided ×2
@@ -93,24 +93,22 @@ pub struct CmcFile {
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct QualitySpec {
-    /// Weight of the tangential regularization (dimensionless, ≥ 0); default 0.01.
-    #[serde(default = "default_weight")]
-    pub tangential_weight: f64,
+    /// Weight of the tangential regularization (dimensionless, ≥ 0); default per shape
+    /// ([`ShapeSpec::default_tangential_weight`]).
+    #[serde(default)]
+    pub tangential_weight: Option<f64>,
     /// Rounds of equiangulation (edge flips) and re-solving after the first solve; default 1.
     #[serde(default = "default_flip_rounds")]
     pub flip_rounds: usize,
     /// Resolution of the first solve of a coarse-to-fine start ([`super::multilevel`]);
-    /// default none (solve the resolution's start directly).
+    /// default per shape ([`ShapeSpec::default_coarse_resolution`]), for most shapes none
+    /// (solve the resolution's start directly).
     #[serde(default)]
     pub coarse_resolution: Option<usize>,
     /// In those rounds also split edges longer than `refine` × the start mesh's median edge
     /// length (cmc::remesh::split_long_edges); omitted: no refinement.
     #[serde(default)]
     pub refine: Option<f64>,
-}
-
-fn default_weight() -> f64 {
-    0.01
 }
 
 fn default_flip_rounds() -> usize {
@@ -120,7 +118,7 @@ fn default_flip_rounds() -> usize {
 impl Default for QualitySpec {
     fn default() -> Self {
         QualitySpec {
-            tangential_weight: default_weight(),
+            tangential_weight: None,
             flip_rounds: default_flip_rounds(),
             coarse_resolution: None,
             refine: None,
@@ -436,6 +434,46 @@ impl ShapeSpec {
         100.0 * r * r * pieces
     }
 
+    /// The tangential weight `w` used when `[quality] tangential_weight` is not given: 1 for
+    /// the shapes whose films drift into collapsed triangles at w = 0.01 (frames, cells,
+    /// clusters, the triple bubble), 0.01 for the others, where w = 1 would raise the area
+    /// more than it helps (U wires +0.04 %, tents +0.15–0.4 %, the double bubble +0.007 % at the
+    /// shipped resolutions). Measured at w = 0.01: the cube frame with its bubble and the triple
+    /// bubble Stalled with 0° triangles from resolution 3 on, the tennis cushion with 0.08°
+    /// triangles; a triple bubble of 1, 2 and 3 cm³ Stalled at resolution 4 and took 7.3 s at
+    /// resolution 8 (0.05 and 0.32 s with these defaults); the cube film took 116 iterations
+    /// instead of 35 (docs/notes/cmc.md, "defaults for far starts").
+    pub fn default_tangential_weight(&self) -> f64 {
+        match self {
+            ShapeSpec::CubeFrame { .. }
+            | ShapeSpec::OctahedronFrame { .. }
+            | ShapeSpec::Cells { .. }
+            | ShapeSpec::Cluster { .. }
+            | ShapeSpec::TripleBubble { .. } => 1.0,
+            _ => 0.01,
+        }
+    }
+
+    /// The coarse level used when `[quality] coarse_resolution` is not given at `resolution`
+    /// (cmc::multilevel): the octahedral frames and clusters start at one segment per wall
+    /// edge (1), their starts being flat partitions whose junctions must travel far (without
+    /// it the quadrilateral and pentagon films stall on collapsed triangles, and five clusters
+    /// written from the docs, 2–6 bubbles, took 8–45× longer or stopped at the iteration
+    /// limit); the triple bubble above resolution 4 at the largest divisor of its resolution
+    /// from 2 to 4, if any (its one-row start is too coarse to subdivide: at resolutions 5 and
+    /// 7 that start ended at the iteration limit; at resolution 12 the direct solve took
+    /// 31.6 s, from level 4 0.6 s; at 4 and below the direct solve is as fast). Other shapes
+    /// solve their start directly.
+    pub fn default_coarse_resolution(&self, resolution: usize) -> Option<usize> {
+        match self {
+            ShapeSpec::OctahedronFrame { .. } | ShapeSpec::Cluster { .. } => Some(1),
+            ShapeSpec::TripleBubble { .. } if resolution > 4 => {
+                (2..=4).rev().find(|&d| resolution.is_multiple_of(d))
+            }
+            _ => None,
+        }
+    }
+
     /// The resolution used when the file gives none.
     pub fn default_resolution(&self) -> usize {
         match self {
@@ -540,10 +578,9 @@ impl CmcSpec {
                 "`expected_order` must be a number from 0.5 to 8",
             ));
         }
-        src.non_negative(
-            &["quality".into(), "tangential_weight".into()],
-            f.quality.tangential_weight,
-        )?;
+        if let Some(w) = f.quality.tangential_weight {
+            src.non_negative(&["quality".into(), "tangential_weight".into()], w)?;
+        }
         for (i, c) in f.chord.iter().enumerate() {
             src.positive(&["chord".into(), i.into(), "length".into()], c.length)?;
         }

@@ -33,11 +33,9 @@
 
 use nalgebra::Matrix3;
 
-use super::area::{
-    area_vector, triangle_area, triangle_area_gradient, triangle_area_hessian_diagonal,
-};
+use super::area::{area_vector, triangle_area_corner_gradient, triangle_area_hessian_diagonal};
 use super::mesh::{Mesh, Point};
-use super::volume::{cone_volume, cone_volume_gradient};
+use super::volume::{cone_volume, cone_volume_corner_gradient};
 
 /// Most halvings of a vertex's Newton step before the vertex is left where it is.
 const HALVINGS: usize = 6;
@@ -114,14 +112,6 @@ pub fn relax(
     max_sweeps: usize,
 ) -> (Vec<Point>, Relaxation) {
     let n = mesh.vertex_count();
-    let mut terms_of: Vec<Vec<usize>> = vec![Vec::new(); n];
-    for (k, term) in terms.iter().enumerate() {
-        for u in term.star() {
-            if !terms_of[u].contains(&k) {
-                terms_of[u].push(k);
-            }
-        }
-    }
     let moving: Vec<(usize, Option<Point>)> = (0..n)
         .filter_map(|v| match motion(v) {
             Motion::Held => None,
@@ -132,14 +122,9 @@ pub fn relax(
             }
         })
         .collect();
-    let star = Star {
-        mesh,
-        terms,
-        terms_of: &terms_of,
-        surface_pressure,
-        weight,
-    };
+    let star = Star::new(mesh, terms, surface_pressure, weight);
     let mut pos = mesh.positions().to_vec();
+    let mut old_vectors = Vec::new();
     let before = star.total(&pos);
     let mut relaxation = Relaxation {
         sweeps: 0,
@@ -150,7 +135,7 @@ pub fn relax(
         relaxation.sweeps += 1;
         relaxation.last_move = moving
             .iter()
-            .map(|&(v, normal)| star.step(&mut pos, v, normal))
+            .map(|&(v, normal)| star.step(&mut pos, v, normal, &mut old_vectors))
             .fold(0.0, f64::max);
         if relaxation.last_move <= tolerance {
             break;
@@ -164,16 +149,52 @@ pub fn relax(
 struct Star<'a> {
     mesh: &'a Mesh,
     terms: &'a [Smoothing],
-    terms_of: &'a [Vec<usize>],
+    /// The terms whose vertex or ring holds each vertex.
+    terms_of: Vec<Vec<usize>>,
+    /// `PᵀP` of each term.
+    gram: Vec<Matrix3<f64>>,
     surface_pressure: &'a [f64],
     weight: f64,
 }
 
-impl Star<'_> {
+impl<'a> Star<'a> {
+    fn new(
+        mesh: &'a Mesh,
+        terms: &'a [Smoothing],
+        surface_pressure: &'a [f64],
+        weight: f64,
+    ) -> Star<'a> {
+        let mut terms_of: Vec<Vec<usize>> = vec![Vec::new(); mesh.vertex_count()];
+        for (k, term) in terms.iter().enumerate() {
+            for u in term.star() {
+                if !terms_of[u].contains(&k) {
+                    terms_of[u].push(k);
+                }
+            }
+        }
+        Star {
+            mesh,
+            terms,
+            terms_of,
+            gram: terms
+                .iter()
+                .map(|term| term.projector.transpose() * term.projector)
+                .collect(),
+            surface_pressure,
+            weight,
+        }
+    }
+
     /// Moves vertex `v` by its damped Newton step, in the plane ⊥ `normal` when given;
-    /// returns the move, m.
-    fn step(&self, pos: &mut [Point], v: usize, normal: Option<Point>) -> f64 {
-        let (mut gradient, mut hessian) = self.derivatives(pos, v);
+    /// returns the move, m. `old_vectors` is scratch space.
+    fn step(
+        &self,
+        pos: &mut [Point],
+        v: usize,
+        normal: Option<Point>,
+        old_vectors: &mut Vec<Point>,
+    ) -> f64 {
+        let (mut gradient, mut hessian, old_share) = self.derivatives(pos, v, old_vectors);
         if let Some(n) = normal {
             let p = Matrix3::identity() - n * n.transpose();
             hessian = p * hessian * p + hessian.trace() * n * n.transpose();
@@ -185,16 +206,12 @@ impl Star<'_> {
         };
         let mut step = -cholesky.solve(&gradient);
         let start = pos[v];
-        let old_share = self.share(pos, v);
-        let old_vectors = self.triangle_vectors(pos, v);
         for _ in 0..=HALVINGS {
             pos[v] = start + step;
-            let turned = self
-                .triangle_vectors(pos, v)
-                .iter()
-                .zip(&old_vectors)
-                .any(|(new, old)| new.dot(old) <= 0.0);
-            if !turned && self.share(pos, v) < old_share {
+            if self
+                .unturned_share(pos, v, old_vectors)
+                .is_some_and(|share| share < old_share)
+            {
                 return step.norm();
             }
             step *= 0.5;
@@ -203,20 +220,31 @@ impl Star<'_> {
         0.0
     }
 
-    /// Area vectors of the triangles around `v`.
-    fn triangle_vectors(&self, pos: &[Point], v: usize) -> Vec<Point> {
-        self.mesh
-            .vertex_triangles(v)
-            .iter()
-            .map(|&t| area_vector(&corners(self.mesh, pos, t)))
-            .collect()
+    /// The share of `v` ([`Star::share`]) when no triangle around `v` has turned over against
+    /// its area vector in `old_vectors` (in [`Mesh::vertex_triangles`] order), else None.
+    fn unturned_share(&self, pos: &[Point], v: usize, old_vectors: &[Point]) -> Option<f64> {
+        let mut triangles = 0.0;
+        for (&t, old) in self.mesh.vertex_triangles(v).iter().zip(old_vectors) {
+            let c = corners(self.mesh, pos, t);
+            let vector = area_vector(&c);
+            if vector.dot(old) <= 0.0 {
+                return None;
+            }
+            triangles += self.area_less_work(&c, t, vector);
+        }
+        Some(triangles + self.terms_share(pos, v))
     }
 
     /// `A_t − p_s V_t` of triangle t (m²).
     fn triangle_energy(&self, pos: &[Point], t: usize) -> f64 {
         let c = corners(self.mesh, pos, t);
+        self.area_less_work(&c, t, area_vector(&c))
+    }
+
+    /// `A_t − p_s V_t` of triangle t with corners `c` and area vector `vector` (m²).
+    fn area_less_work(&self, c: &[Point; 3], t: usize, vector: Point) -> f64 {
         let p = self.surface_pressure[self.mesh.triangle_surface()[t]];
-        triangle_area(&c) - p * cone_volume(&c, &Point::zeros())
+        vector.norm() - p * cone_volume(c, &Point::zeros())
     }
 
     /// `(w/2)|P_k (x − mean)|²` of term k (m²).
@@ -226,6 +254,7 @@ impl Star<'_> {
     }
 
     /// The terms of E that depend on `x_v`, m².
+    #[cfg(test)]
     fn share(&self, pos: &[Point], v: usize) -> f64 {
         let triangles: f64 = self
             .mesh
@@ -233,35 +262,50 @@ impl Star<'_> {
             .iter()
             .map(|&t| self.triangle_energy(pos, t))
             .sum();
-        let terms: f64 = self.terms_of[v]
-            .iter()
-            .map(|&k| self.term_energy(pos, k))
-            .sum();
-        triangles + terms
+        triangles + self.terms_share(pos, v)
     }
 
-    /// Gradient (m) and diagonal Hessian block (dimensionless) of the share w.r.t. `x_v`.
-    fn derivatives(&self, pos: &[Point], v: usize) -> (Point, Matrix3<f64>) {
+    /// The smoothing terms' part of the share of `v`, m².
+    fn terms_share(&self, pos: &[Point], v: usize) -> f64 {
+        self.terms_of[v]
+            .iter()
+            .map(|&k| self.term_energy(pos, k))
+            .sum()
+    }
+
+    /// Gradient (m) and diagonal Hessian block (dimensionless) of the share w.r.t. `x_v`, and
+    /// the share (m²); `vectors` becomes the area vectors of the triangles around `v`.
+    fn derivatives(
+        &self,
+        pos: &[Point],
+        v: usize,
+        vectors: &mut Vec<Point>,
+    ) -> (Point, Matrix3<f64>, f64) {
         let mut gradient = Point::zeros();
         let mut hessian = Matrix3::zeros();
+        let mut triangles = 0.0;
+        vectors.clear();
         for &t in self.mesh.vertex_triangles(v) {
             let c = corners(self.mesh, pos, t);
+            let vector = area_vector(&c);
+            vectors.push(vector);
+            triangles += self.area_less_work(&c, t, vector);
             let p = self.surface_pressure[self.mesh.triangle_surface()[t]];
             let Some(k) = self.mesh.triangles()[t].iter().position(|&u| u == v) else {
                 continue;
             };
-            gradient +=
-                triangle_area_gradient(&c)[k] - p * cone_volume_gradient(&c, &Point::zeros())[k];
+            gradient += triangle_area_corner_gradient(&c, k)
+                - p * cone_volume_corner_gradient(&c, &Point::zeros(), k);
             hessian += triangle_area_hessian_diagonal(&c, k);
         }
         for &k in &self.terms_of[v] {
             let term = &self.terms[k];
             let c = term.coefficient(v);
-            let pp = term.projector.transpose() * term.projector;
+            let pp = self.gram[k];
             gradient += self.weight * c * pp * term.offset(pos);
             hessian += self.weight * c * c * pp;
         }
-        (gradient, hessian)
+        (gradient, hessian, triangles + self.terms_share(pos, v))
     }
 
     /// E at `pos` (the volumes' cones from the origin), m².
@@ -324,34 +368,29 @@ mod tests {
                 }
             })
             .collect();
-        let mut terms_of: Vec<Vec<usize>> = vec![Vec::new(); n];
-        for (k, term) in terms.iter().enumerate() {
-            for u in term.star() {
-                if !terms_of[u].contains(&k) {
-                    terms_of[u].push(k);
-                }
-            }
-        }
         let pressures: Vec<f64> = (0..mesh.surfaces().len())
             .map(|s| 30.0 + 7.0 * s as f64)
             .collect();
-        let star = Star {
-            mesh: &mesh,
-            terms: &terms,
-            terms_of: &terms_of,
-            surface_pressure: &pressures,
-            weight: 0.7,
-        };
+        let star = Star::new(&mesh, &terms, &pressures, 0.7);
         let h = 1e-6;
         let mut pos = mesh.positions().to_vec();
         for v in (0..n).step_by(5) {
-            let (gradient, hessian) = star.derivatives(&pos, v);
+            let mut vectors = Vec::new();
+            let (gradient, hessian, share) = star.derivatives(&pos, v, &mut vectors);
+            assert_eq!(share, star.share(&pos, v));
+            assert_eq!(vectors.len(), mesh.vertex_triangles(v).len());
             let centre = pos[v];
             for a in 0..3 {
                 pos[v][a] = centre[a] + h;
-                let (plus, g_plus) = (star.share(&pos, v), star.derivatives(&pos, v).0);
+                let (plus, g_plus) = (
+                    star.share(&pos, v),
+                    star.derivatives(&pos, v, &mut vectors).0,
+                );
                 pos[v][a] = centre[a] - h;
-                let (minus, g_minus) = (star.share(&pos, v), star.derivatives(&pos, v).0);
+                let (minus, g_minus) = (
+                    star.share(&pos, v),
+                    star.derivatives(&pos, v, &mut vectors).0,
+                );
                 pos[v][a] = centre[a];
                 let slope = (plus - minus) / (2.0 * h);
                 assert!(

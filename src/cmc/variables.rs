@@ -17,8 +17,6 @@
 //! corners, a smoothing term's vertex and ring) get their blocks' positions once, at build
 //! ([`HessianPattern::star_slots`]), so the per-iteration scatter does no lookups.
 
-use std::collections::HashMap;
-
 use nalgebra::Matrix3;
 
 use super::mesh::Point;
@@ -164,7 +162,9 @@ const NO_SLOT: usize = usize::MAX;
 /// Lower-triangle pattern of the Lagrangian Hessian in per-vertex blocks (module header).
 #[derive(Debug, Default)]
 pub struct HessianPattern {
-    block: HashMap<(usize, usize), usize>,
+    /// `blocks[u]`: `(w, position of block (u, w) in the values)` for the blocks in row u
+    /// (`column(u) ≥ column(w)`), in insertion order.
+    blocks: Vec<Vec<(usize, usize)>>,
     entries: Vec<(usize, usize)>,
 }
 
@@ -184,10 +184,13 @@ impl HessianPattern {
         } else {
             (w, u, cw, cu)
         };
-        if self.block.contains_key(&(u, w)) {
+        if self.find(u, w).is_some() {
             return;
         }
-        self.block.insert((u, w), self.entries.len());
+        if self.blocks.len() <= u {
+            self.blocks.resize_with(u + 1, Vec::new);
+        }
+        self.blocks[u].push((w, self.entries.len()));
         for r in 0..vars.width(u) {
             for c in 0..vars.width(w) {
                 if u != w || c <= r {
@@ -211,9 +214,18 @@ impl HessianPattern {
     /// `(w, u)`).
     fn slot(&self, vars: &Variables, u: usize, w: usize) -> usize {
         match (vars.column(u), vars.column(w)) {
-            (Some(cu), Some(cw)) if cu >= cw => self.block.get(&(u, w)).copied().unwrap_or(NO_SLOT),
+            (Some(cu), Some(cw)) if cu >= cw => self.find(u, w).unwrap_or(NO_SLOT),
             _ => NO_SLOT,
         }
+    }
+
+    /// Position of block `(u, w)` in the values when it is in the pattern.
+    fn find(&self, u: usize, w: usize) -> Option<usize> {
+        self.blocks
+            .get(u)?
+            .iter()
+            .find(|&&(other, _)| other == w)
+            .map(|&(_, slot)| slot)
     }
 
     /// The slots of every ordered pair of `star` (row-major, `star.len()²`), for
@@ -223,6 +235,11 @@ impl HessianPattern {
             .flat_map(|&u| star.iter().map(move |&w| (u, w)))
             .map(|(u, w)| self.slot(vars, u, w))
             .collect()
+    }
+
+    /// [`HessianPattern::star_slots`] of a triangle's corners, without allocating.
+    pub fn triangle_slots(&self, vars: &Variables, corners: &[usize; 3]) -> [usize; 9] {
+        std::array::from_fn(|k| self.slot(vars, corners[k / 3], corners[k % 3]))
     }
 
     /// Adds `factor · B_uᵀ m B_w` at `slot` (from [`HessianPattern::star_slots`]), `m =

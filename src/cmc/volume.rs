@@ -35,7 +35,12 @@ pub fn cone_volume(p: &[Point; 3], o: &Point) -> f64 {
 
 /// Gradient of [`cone_volume`] w.r.t. each corner (m²).
 pub fn cone_volume_gradient(p: &[Point; 3], o: &Point) -> [Point; 3] {
-    [0, 1, 2].map(|k| (p[(k + 1) % 3] - o).cross(&(p[(k + 2) % 3] - o)) / 6.0)
+    [0, 1, 2].map(|k| cone_volume_corner_gradient(p, o, k))
+}
+
+/// Gradient of [`cone_volume`] w.r.t. corner `k` alone (m²).
+pub fn cone_volume_corner_gradient(p: &[Point; 3], o: &Point, k: usize) -> Point {
+    (p[(k + 1) % 3] - o).cross(&(p[(k + 2) % 3] - o)) / 6.0
 }
 
 /// Hessian blocks `h[k][l] = ∂²V/∂p_k∂p_l` of [`cone_volume`] (m).
@@ -67,16 +72,20 @@ impl Region {
 
     /// Gradient of the volume, as `(vertex, ∂V/∂x_vertex)` pairs sorted by vertex (m²).
     pub fn volume_gradient(&self, mesh: &Mesh) -> Vec<(usize, Point)> {
-        let mut grad = std::collections::BTreeMap::new();
+        // Accumulated per vertex in triangle order, then listed by vertex.
+        let mut grad: Vec<Option<Point>> = vec![None; mesh.vertex_count()];
         for &(s, sign) in &self.boundary {
             for t in mesh.surface_triangles(s) {
                 let g = cone_volume_gradient(&mesh.corners(t), &self.reference);
                 for (k, &v) in mesh.triangles()[t].iter().enumerate() {
-                    *grad.entry(v).or_insert_with(Point::zeros) += sign * g[k];
+                    *grad[v].get_or_insert_with(Point::zeros) += sign * g[k];
                 }
             }
         }
-        grad.into_iter().collect()
+        grad.into_iter()
+            .enumerate()
+            .filter_map(|(v, g)| Some((v, g?)))
+            .collect()
     }
 
     /// Vertices whose positions the volume depends on, ascending.

@@ -150,26 +150,43 @@ impl KktSolver {
         if rows.len() != cols.len() {
             return Err(KktError::Pattern("rows and cols differ in length".into()));
         }
-        let mut entries: Vec<(usize, usize)> = Vec::with_capacity(rows.len() + dim);
-        for (&r, &c) in rows.iter().zip(cols) {
-            if r >= dim || c > r {
-                return Err(KktError::Pattern(format!(
-                    "entry ({r}, {c}) is outside the lower triangle of a {dim}×{dim} matrix"
-                )));
-            }
-            entries.push((c, r));
+        if let Some((&r, &c)) = rows.iter().zip(cols).find(|&(&r, &c)| r >= dim || c > r) {
+            return Err(KktError::Pattern(format!(
+                "entry ({r}, {c}) is outside the lower triangle of a {dim}×{dim} matrix"
+            )));
         }
-        entries.extend((0..dim).map(|k| (k, k)));
-        entries.sort_unstable();
-        entries.dedup();
-        let mut col_ptr = vec![0usize; dim + 1];
-        for &(c, _) in &entries {
-            col_ptr[c + 1] += 1;
+        // Bucketed by column (each diagonal first), then each column sorted and deduplicated.
+        let mut start = vec![1usize; dim + 1];
+        start[0] = 0;
+        for &c in cols {
+            start[c + 1] += 1;
         }
         for c in 0..dim {
-            col_ptr[c + 1] += col_ptr[c];
+            start[c + 1] += start[c];
         }
-        let row_idx: Vec<usize> = entries.iter().map(|&(_, r)| r).collect();
+        let mut bucketed = vec![0usize; start[dim]];
+        let mut next = start.clone();
+        for k in 0..dim {
+            bucketed[next[k]] = k;
+            next[k] += 1;
+        }
+        for (&r, &c) in rows.iter().zip(cols) {
+            bucketed[next[c]] = r;
+            next[c] += 1;
+        }
+        let mut col_ptr = vec![0usize; dim + 1];
+        let mut row_idx = Vec::with_capacity(bucketed.len());
+        for c in 0..dim {
+            let column = &mut bucketed[start[c]..start[c + 1]];
+            column.sort_unstable();
+            let first = row_idx.len();
+            for &r in column.iter() {
+                if row_idx.len() == first || row_idx.last() != Some(&r) {
+                    row_idx.push(r);
+                }
+            }
+            col_ptr[c + 1] = row_idx.len();
+        }
         let positions = rows
             .iter()
             .zip(cols)
