@@ -250,6 +250,62 @@ fn cmc_problem_file_starts_from_a_shipped_glb() {
     );
 }
 
+#[test]
+fn cmc_stability_table_sets_the_eigenvalues_reported_or_switches_the_analysis_off() {
+    let scratch = Scratch::new("stability");
+    let short = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/golden/problems/cmc/double_bubble_short.toml"),
+    )
+    .unwrap();
+    let solve = |tag: &str, table: &str| -> serde_json::Value {
+        let path = scratch.file(&format!("{tag}.toml"), &format!("{short}\n{table}"));
+        solved("cmc", path.to_str().unwrap(), &scratch.0.join(tag), &[])
+    };
+    // Default: six eigenvalues, each with its error bound within the stated precision.
+    let default = solve("default", "");
+    let s = &default["figures"]["stability"];
+    let values: Vec<f64> = serde_json::from_value(s["smallest_eigenvalues"].clone()).unwrap();
+    let errors: Vec<f64> = serde_json::from_value(s["eigenvalue_errors"].clone()).unwrap();
+    assert_eq!((values.len(), errors.len()), (6, 6), "{s}");
+    assert_eq!(s["relative_precision"], 1e-6, "{s}");
+    let largest = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for e in &errors {
+        assert!(*e >= 0.0 && *e <= 1e-6 * largest, "{s}");
+    }
+    // Two eigenvalues: the same two smallest, within their bounds.
+    let two = solve("two", "[stability]\neigenvalues = 2\n");
+    let s2 = &two["figures"]["stability"];
+    let fewer: Vec<f64> = serde_json::from_value(s2["smallest_eigenvalues"].clone()).unwrap();
+    assert_eq!(fewer.len(), 2, "{s2}");
+    for (a, b) in fewer.iter().zip(&values) {
+        assert!((a - b).abs() <= 2e-6 * largest, "{s2} {s}");
+    }
+    assert_eq!(s2["verdict"], "stable", "{s2}");
+    // 0: no analysis, the same solution.
+    let off = solve("off", "[stability]\neigenvalues = 0\n");
+    assert!(off["figures"].get("stability").is_none(), "{off}");
+    assert_eq!(off["objective"], default["objective"]);
+    // A misspelt key and an out-of-range count are positioned input errors.
+    for (text, needle, expected) in [
+        (
+            "[stability]\neigenvalue = 3\n",
+            "eigenvalue =",
+            "did you mean `eigenvalues`",
+        ),
+        (
+            "[stability]\neigenvalues = 51\n",
+            "eigenvalues = 51",
+            "`eigenvalues` must be between 0 and 50, got 51",
+        ),
+    ] {
+        let text = format!("{short}\n{text}");
+        let path = scratch.file("bad.toml", &text);
+        let out = optimize(&["cmc", path.to_str().unwrap(), "--check", "-q"]);
+        assert_input_error(&out, &path, Some(line_of(&text, needle)), &[expected]);
+    }
+}
+
 /// Every file under `dir` (recursively) by its path relative to `dir`, with its bytes.
 fn snapshot(dir: &Path) -> std::collections::BTreeMap<PathBuf, Vec<u8>> {
     let mut files = std::collections::BTreeMap::new();

@@ -16,6 +16,19 @@
 # rounds. Prints facets, both areas (cm²), their relative difference, both CPU times per run,
 # the ratio optimize / Evolver and the repeat counts.
 #
+# What both do: by default the film only: Evolver's script computes no eigenvalues and optimize
+# runs with `[stability] eigenvalues = 0` (its stability analysis off). STABILITY=1: the film
+# and its six smallest eigenvalues: optimize runs its default stability analysis (the inertia
+# count and the six smallest eigenvalues of the area's second variation in normal motion under
+# the volume constraints, mass-weighted) and Evolver's script ends, after convergence, with
+# `linear_metric; ritz(-1e-6, 6)` (hessian_normal is on by default: normal motion; the volume
+# constraints are projected out; `linear_metric` weights by the linear-interpolation metric so
+# that the eigenvalues approximate the smooth operator's, as optimize's mixed-area weights do;
+# ritz factors the Hessian at the probe, prints the inertia there and the six eigenvalues above
+# it). Evolver does not exclude rigid motions, so on a free double bubble its six include the
+# five near-zero rigid modes; the work, an inertia count and six eigenvalues from one
+# factorization, is the same. The mode is printed first.
+#
 # FORMULATION=area (or normal, curvature) sets optimize's top-level `formulation` for every
 # case (default: the file's own, normal unless it says otherwise).
 #
@@ -53,8 +66,14 @@ for ( inx := 1 ; inx <= 40 ; inx += 1 ) {
     if abs(oldE - total_energy) < 1e-12 * abs(total_energy) then break;
 };
 printf "EVOLVER_AREA %.12f\n", total_area;
-q
 CMD
+if [ "${STABILITY:-0}" = 1 ]; then
+    printf 'linear_metric;\nritz(-1e-6, 6);\n' >> "$work/run.cmd"
+    echo "mode: STABILITY=1, film and six smallest eigenvalues (optimize's default stability analysis; Evolver: linear_metric; ritz(-1e-6, 6) after convergence)"
+else
+    echo "mode: film only (optimize [stability] eigenvalues = 0; Evolver computes no eigenvalues); STABILITY=1 adds them to both"
+fi
+echo q >> "$work/run.cmd"
 # CPU seconds (user + system) of one run of a command, its output to $1: the total over
 # REPEAT runs (or, without REPEAT, over enough runs to take at least 0.5 s) divided by their
 # number, printed with that number.
@@ -81,6 +100,9 @@ for c in "${cases[@]}"; do
     else
         printf '\n[quality]\nflip_rounds = 0\n' >> "$work/$name.toml"
     fi
+    if [ "${STABILITY:-0}" != 1 ]; then
+        printf '\n[stability]\neigenvalues = 0\n' >> "$work/$name.toml"
+    fi
     if [ -n "${FORMULATION:-}" ]; then
         sed -i -e '/^formulation = /d' -e "0,/^name = .*/s//&\nformulation = \"$FORMULATION\"/" "$work/$name.toml"
     fi
@@ -104,9 +126,18 @@ try:
     ours = json.load(open(summary))
     area, status = ours["objective"] * 1e4, f"{ours['status']}, {ours['iterations']} iterations"
 except (ValueError, OSError):
-    area, status = float("nan"), "no result"
-match = re.findall(r"EVOLVER_AREA ([-0-9.eE+]+)", open(log).read())
+    ours, area, status = {}, float("nan"), "no result"
+text = open(log).read()
+match = re.findall(r"EVOLVER_AREA ([-0-9.eE+]+)", text)
 theirs = float(match[-1]) if match else float("nan")
+# STABILITY=1: optimize's smallest and sixth eigenvalue and Evolver's six as printed, 1/cm²
+# (Evolver's include the rigid modes of a free cluster).
+stability = ours.get("figures", {}).get("stability")
+if stability:
+    ritz = re.findall(r"^\s*\d+\.\s+(\S+)\s*$", text.split("ritz(")[-1], re.M)
+    status += (f"; optimize λ {stability['smallest_eigenvalues'][0] * 1e-4:.5g}…"
+               f"{stability['smallest_eigenvalues'][-1] * 1e-4:.5g} /cm², Evolver ritz "
+               + " ".join(f"{float(v):.4g}" for v in ritz[:6]))
 def best(readings):
     # "seconds:runs" per round; the fastest round.
     return min((float(t), int(n)) for t, n in (r.split(":") for r in readings.split()))

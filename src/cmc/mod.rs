@@ -246,10 +246,12 @@ fn mesh_solver_options(mut options: solver::Options) -> solver::Options {
 }
 
 /// The stability analysis of the solved `mesh` under the problem's volume constraints
-/// ([`stability`]), logged in one line and returned as its `figures.stability` value.
+/// ([`stability`], the `reported` smallest eigenvalues), logged in one line and returned as its
+/// `figures.stability` value.
 fn stability_figure(
     nlp: &CmcNlp,
     mesh: &mesh::Mesh,
+    reported: usize,
     opts: &RunOptions,
 ) -> Result<serde_json::Value, Error> {
     let bodies: Vec<(&volume::Region, Option<f64>)> = nlp
@@ -257,7 +259,7 @@ fn stability_figure(
         .iter()
         .map(|v| (&v.region, v.pressure))
         .collect();
-    let stability = stability::analyse(mesh, &bodies);
+    let stability = stability::analyse(mesh, &bodies, reported);
     opts.say(&format!(
         "stability: {} (smallest eigenvalues [{}] 1/m², {} normal degrees of freedom)",
         stability.verdict,
@@ -358,7 +360,13 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     if let Some(obj) = summary.figures.as_object_mut() {
         obj.insert("flip_rounds".into(), rounds.into());
         obj.insert("mesh".into(), restart::mesh_json(&mesh));
-        obj.insert("stability".into(), stability_figure(&nlp, &mesh, opts)?);
+        match problem.spec.file.stability.eigenvalues {
+            0 => opts.say("stability: not analysed ([stability] eigenvalues = 0)"),
+            reported => {
+                let figure = stability_figure(&nlp, &mesh, reported, opts)?;
+                obj.insert("stability".into(), figure);
+            }
+        }
         if let Some(study) = &study {
             let value = serde_json::to_value(study)
                 .map_err(|e| Error::Runtime(format!("refinement study: {e}")))?;

@@ -16,6 +16,8 @@
 //! [refine]                      # optional refinement study (cmc::refinement)
 //! levels = 4                    # the resolution, then 3 levels each subdivided ×2
 //! expected_order = 2.0          # order the area is expected to converge at
+//! [stability]                   # optional: the stability analysis at the solution
+//! eigenvalues = 6               # smallest eigenvalues reported (0–50); 0 switches it off
 //! [[chord]]                     # optional chord-length constraints between vertex indices
 //! a = 0
 //! b = 12
@@ -78,6 +80,9 @@ pub struct CmcFile {
     /// Refinement study.
     #[serde(default)]
     pub refine: RefineSpec,
+    /// Stability analysis.
+    #[serde(default)]
+    pub stability: StabilitySpec,
     /// Chord-length constraints.
     #[serde(default)]
     pub chord: Vec<ChordSpec>,
@@ -137,6 +142,31 @@ pub struct RefineSpec {
     /// Expected order of convergence of the area in the edge length (0.5–8); default 2.
     #[serde(default = "default_order")]
     pub expected_order: f64,
+}
+
+/// `[stability]`: the stability analysis at the solution ([`super::stability`]).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct StabilitySpec {
+    /// Smallest eigenvalues reported (0 to [`MAX_REPORTED_EIGENVALUES`]); 0 switches the
+    /// analysis off (no `figures.stability`); default [`super::stability::REPORTED`].
+    #[serde(default = "default_eigenvalues")]
+    pub eigenvalues: usize,
+}
+
+/// Most eigenvalues `[stability] eigenvalues` may ask for.
+pub const MAX_REPORTED_EIGENVALUES: usize = 50;
+
+fn default_eigenvalues() -> usize {
+    super::stability::REPORTED
+}
+
+impl Default for StabilitySpec {
+    fn default() -> Self {
+        StabilitySpec {
+            eigenvalues: default_eigenvalues(),
+        }
+    }
 }
 
 /// Most levels of a refinement study.
@@ -535,7 +565,8 @@ impl CmcSpec {
         self.validate_shape()
     }
 
-    /// The meshing keys: `resolution`, `[quality]`, `[refine]` and the chord lengths (m).
+    /// The meshing keys: `resolution`, `[quality]`, `[refine]`, `[stability]` and the chord
+    /// lengths (m).
     fn validate_meshing(&self) -> Result<(), InputError> {
         let f = &self.file;
         let src = &self.source;
@@ -570,6 +601,12 @@ impl CmcSpec {
             f.refine.levels,
             1,
             MAX_REFINE_LEVELS,
+        )?;
+        src.count_in(
+            &["stability".into(), "eigenvalues".into()],
+            f.stability.eigenvalues,
+            0,
+            MAX_REPORTED_EIGENVALUES,
         )?;
         let order = f.refine.expected_order;
         if !(order.is_finite() && (0.5..=8.0).contains(&order)) {

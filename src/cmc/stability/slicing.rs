@@ -6,13 +6,14 @@
 //!     λ_i = inf{σ : count(σ) ≥ i}, bracketed by bisection from the Gershgorin interval [−g, g]
 //! ```
 //! Every count is one sparse LDLᵀ factorization of the same pattern ([`super::bordered`]). A
-//! bracket stops at width [`super::SLICING_TOLERANCE`]·g; the midpoint is reported. The
+//! bracket stops at twice the tolerance of its midpoint ([`super::tolerances`] with the midpoint
+//! as its own scale); the midpoint is reported, half the width its error bound. The
 //! fallback of [`super::shift_invert`], which needs two factorizations instead of dozens.
 
 use nalgebra::DVector;
 
 use super::bordered::{Bordered, gershgorin};
-use super::{SLICING_TOLERANCE, Spectrum};
+use super::{Spectrum, tolerances};
 use crate::solver::kkt::KktError;
 
 /// The `wanted` smallest eigenvalues of K (n×n, `entries` of both triangles) on the orthogonal
@@ -33,6 +34,7 @@ pub(super) fn smallest(
     let (low, high) = (-1.01 * g, 1.01 * g);
     let mut known = vec![(low, 0), (high, free)];
     let mut smallest = Vec::with_capacity(wanted);
+    let mut errors = Vec::with_capacity(wanted);
     for i in 1..=wanted {
         // The bracket: the largest σ known with count < i, the smallest with count ≥ i.
         let mut lo = known
@@ -43,7 +45,7 @@ pub(super) fn smallest(
             .iter()
             .filter(|&&(_, c)| c >= i)
             .fold(high, |m, &(s, _)| m.min(s));
-        while hi - lo > SLICING_TOLERANCE * g {
+        while hi - lo > 2.0 * tolerances(&[0.5 * (lo + hi)], 1, g)[0] {
             let mid = 0.5 * (lo + hi);
             let c = bordered.count(mid).map_err(why)?;
             known.push((mid, c));
@@ -54,7 +56,12 @@ pub(super) fn smallest(
             }
         }
         smallest.push(0.5 * (lo + hi));
+        errors.push(0.5 * (hi - lo));
     }
     let negative = bordered.count(-negative_tolerance * g).map_err(why)?;
-    Ok(Spectrum { smallest, negative })
+    Ok(Spectrum {
+        smallest,
+        errors,
+        negative,
+    })
 }

@@ -12,26 +12,16 @@ use std::cell::RefCell;
 use std::sync::Arc;
 
 use faer::sparse::SymbolicSparseColMatRef;
-use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
 };
 
 use super::KktError;
 
-/// The flops per entry of L that faer's `SupernodalThreshold(1.0)` stands for.
-const FAER_FLOPS_PER_ENTRY: f64 = 40.0;
-
 /// Patterns remembered per thread: an SQP solve analyses up to three (least-squares
 /// multipliers, the QP's Newton system, the elastic or feasibility subproblem), and the cmc
 /// stability analysis one more.
 pub const REMEMBERED: usize = 4;
-
-/// The supernodal (blocked) numeric factorization is chosen when the analysis predicts at
-/// least this many flops per entry of L (faer's default: 40, its `SupernodalThreshold` 1.0).
-/// On the KKT systems of cmc films (648–11,250 facets, ratios 20–40) the supernodal
-/// factorization took 10–15 % less CPU per run than the simplicial one faer chose at 40.
-pub const SUPERNODAL_FLOPS_PER_ENTRY: f64 = 20.0;
 
 /// One analysed pattern (lower triangle, compressed sparse columns).
 struct Analysed {
@@ -65,12 +55,7 @@ pub fn analyse(
                     pattern,
                     faer::Side::Lower,
                     SymmetricOrdering::Amd,
-                    CholeskySymbolicParams {
-                        supernodal_flop_ratio_threshold: SupernodalThreshold(
-                            SUPERNODAL_FLOPS_PER_ENTRY / FAER_FLOPS_PER_ENTRY,
-                        ),
-                        ..Default::default()
-                    },
+                    CholeskySymbolicParams::default(),
                 )
                 .map_err(|e| KktError::Symbolic(format!("{e:?}")))?;
                 if analysed.len() == REMEMBERED {
