@@ -245,16 +245,38 @@ fn analyse_with(
     result.negative = spectrum.negative;
     result.smallest_eigenvalues = spectrum.smallest;
     result.eigenvalue_errors = spectrum.errors;
-    result.verdict = if result.negative > 0 {
+    result.verdict = verdict(
+        result.negative,
+        &result.smallest_eigenvalues,
+        &result.eigenvalue_errors,
+    );
+    result.pressures = pressures;
+    result
+}
+
+/// The one-line verdict: a saddle when the certified count of negative eigenvalues is
+/// positive; stable when none is negative and every reported eigenvalue is known to
+/// [`RELATIVE_PRECISION`] of the largest reported magnitude; otherwise not resolved. A mesh
+/// with nearly collapsed triangles has a huge largest curvature scale g, and the eigenvalues'
+/// bounds (never finer than 1e-10·g) and the negative threshold (−[`NEGATIVE_TOLERANCE`]·g)
+/// then exceed the eigenvalues themselves: "stable" would claim what the count cannot see
+/// (measured on an unconverged five-bubble cluster: six equal values 6.2e5 1/m², each ± 6.2e5).
+fn verdict(negative: usize, eigenvalues: &[f64], errors: &[f64]) -> String {
+    if negative > 0 {
+        return format!(
+            "saddle: {negative} negative eigenvalue(s), a descent direction the constraints allow"
+        );
+    }
+    let scale = eigenvalues.iter().fold(0.0f64, |m, l| m.max(l.abs()));
+    let worst = errors.iter().fold(0.0f64, |m, &e| m.max(e));
+    if worst > RELATIVE_PRECISION * scale {
         format!(
-            "saddle: {} negative eigenvalue(s), a descent direction the constraints allow",
-            result.negative
+            "not resolved: eigenvalue bounds up to {worst:.3e} 1/m² against values up to \
+             {scale:.3e} (a degenerate or unconverged mesh)"
         )
     } else {
         "stable".into()
-    };
-    result.pressures = pressures;
-    result
+    }
 }
 
 /// The smallest eigenvalues of K (k×k, `entries` of both triangles) on the complement of the
@@ -479,6 +501,20 @@ mod tests {
         }
         assert!(s.smallest_eigenvalues[5] > 2.0, "{s:?}");
         assert_eq!(s.degrees_of_freedom, mesh.vertex_count());
+    }
+
+    #[test]
+    fn eigenvalues_not_known_to_the_stated_precision_are_not_called_stable() {
+        let values = [2.0e4, 5.0e4, 7.0e4];
+        assert_eq!(verdict(0, &values, &[1e-9, 0.05, 0.069]), "stable");
+        // A bound of 1e-6 × 7e4 is the stated precision; just above it is not resolved.
+        let v = verdict(0, &values, &[1e-9, 0.05, 0.0701]);
+        assert!(v.starts_with("not resolved"), "{v}");
+        let v = verdict(0, &[6.2e5; 6], &[6.2e5; 6]);
+        assert!(v.starts_with("not resolved"), "{v}");
+        // A certified negative count is a saddle whatever the bounds.
+        let v = verdict(1, &[-3.0e6, 2.8e4], &[3.0e6, 1.0]);
+        assert!(v.starts_with("saddle: 1 negative"), "{v}");
     }
 
     #[test]
