@@ -255,8 +255,8 @@ fn analyse_with(
 }
 
 /// The one-line verdict: a saddle when the certified count of negative eigenvalues is
-/// positive; stable when none is negative and every reported eigenvalue is known to
-/// [`RELATIVE_PRECISION`] of the largest reported magnitude; otherwise not resolved. A mesh
+/// positive; stable when none is negative and every reported eigenvalue is known to its
+/// relative tolerance ([`tolerances`] without the 1e-10·g floor); otherwise not resolved. A mesh
 /// with nearly collapsed triangles has a huge largest curvature scale g, and the eigenvalues'
 /// bounds (never finer than 1e-10·g) and the negative threshold (−[`NEGATIVE_TOLERANCE`]·g)
 /// then exceed the eigenvalues themselves: "stable" would claim what the count cannot see
@@ -267,15 +267,13 @@ fn verdict(negative: usize, eigenvalues: &[f64], errors: &[f64]) -> String {
             "saddle: {negative} negative eigenvalue(s), a descent direction the constraints allow"
         );
     }
-    let scale = eigenvalues.iter().fold(0.0f64, |m, l| m.max(l.abs()));
-    let worst = errors.iter().fold(0.0f64, |m, &e| m.max(e));
-    if worst > RELATIVE_PRECISION * scale {
-        format!(
-            "not resolved: eigenvalue bounds up to {worst:.3e} 1/m² against values up to \
-             {scale:.3e} (a degenerate or unconverged mesh)"
-        )
-    } else {
-        "stable".into()
+    let tolerance = tolerances(eigenvalues, eigenvalues.len(), 0.0);
+    match (eigenvalues.iter().zip(errors).zip(&tolerance)).find(|((_, e), t)| e > t) {
+        Some(((value, error), _)) => format!(
+            "not resolved: eigenvalue {value:.4e} ± {error:.3e} 1/m², above the stated \
+             precision (a degenerate or unconverged mesh)"
+        ),
+        None => "stable".into(),
     }
 }
 

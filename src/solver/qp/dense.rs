@@ -82,22 +82,15 @@ impl<'a> Constraints<'a> {
         (&a.col_indices()[span.clone()], &a.values()[span])
     }
 
-    /// aᵢᵀv for row `i` of A (the dense product's number, [`dense_dot_slot`]).
+    /// aᵢᵀv for row `i` of A (the dense product's number, [`dense_dot_tail`]).
     fn row_dot(&self, i: usize, v: &DVector<f64>) -> f64 {
         let (cols, vals) = self.row(i);
+        let tail = dense_dot_tail(cols, self.n);
         let mut partial = [0.0; 8];
-        let mut sum = 0.0;
-        let mut tail = 0;
-        for (k, (&c, &a)) in cols.iter().zip(vals).enumerate() {
-            match dense_dot_slot(c, self.n) {
-                Some(p) => partial[p] += a * v[c],
-                None => {
-                    tail = k;
-                    break;
-                }
-            }
-            tail = k + 1;
+        for (&c, &a) in cols[..tail].iter().zip(vals) {
+            partial[c % 8] += a * v[c];
         }
+        let mut sum = 0.0;
         for p in 0..4 {
             sum += partial[p] + partial[p + 4];
         }
@@ -108,27 +101,18 @@ impl<'a> Constraints<'a> {
     }
 
     /// Jᵀaᵢ for row `i` of A: the sum of aᵢⱼ times row j of J (the dense product's numbers,
-    /// [`dense_dot_slot`]).
+    /// [`dense_dot_tail`]).
     fn jt_times_row(&self, i: usize, j: &DMatrix<f64>) -> DVector<f64> {
         let (cols, vals) = self.row(i);
+        let tail = dense_dot_tail(cols, self.n);
         let width = j.ncols();
         let mut partial = DMatrix::<f64>::zeros(width, 8);
-        let mut out = DVector::<f64>::zeros(width);
-        let mut tail = 0;
-        for (k, (&c, &a)) in cols.iter().zip(vals).enumerate() {
-            match dense_dot_slot(c, self.n) {
-                Some(p) => {
-                    for col in 0..width {
-                        partial[(col, p)] += j[(c, col)] * a;
-                    }
-                }
-                None => {
-                    tail = k;
-                    break;
-                }
+        for (&c, &a) in cols[..tail].iter().zip(vals) {
+            for col in 0..width {
+                partial[(col, c % 8)] += j[(c, col)] * a;
             }
-            tail = k + 1;
         }
+        let mut out = DVector::<f64>::zeros(width);
         for p in 0..4 {
             for col in 0..width {
                 out[col] += partial[(col, p)] + partial[(col, p + 4)];
@@ -205,14 +189,14 @@ impl<'a> Constraints<'a> {
     }
 }
 
-/// Which of the eight partial sums of nalgebra's dense dot product (length `n`) takes index
-/// `c`, or None for the tail added one by one after them: indices below `n − n mod 8` go to
-/// the partial sum `c mod 8`, and the partial sums are combined as (s₀ + s₄), (s₁ + s₅),
-/// (s₂ + s₆), (s₃ + s₇) in turn. Summing a sparse row's nonzeros (in increasing index order)
-/// this way gives the dense product's number to the bit (a zero term changes no sum), so the
-/// QP's iterates do not depend on how A is stored.
-fn dense_dot_slot(c: usize, n: usize) -> Option<usize> {
-    (c < n - n % 8).then_some(c % 8)
+/// Where the tail of nalgebra's dense dot product (length `n`) starts among a sparse row's
+/// increasing column indices `cols`: indices below `n − n mod 8` go to the partial sum
+/// `c mod 8`, the partial sums are combined as (s₀ + s₄), (s₁ + s₅), (s₂ + s₆), (s₃ + s₇) in
+/// turn, and the rest is added one by one after them. Summing a sparse row's nonzeros this way
+/// gives the dense product's number to the bit (a zero term changes no sum), so the QP's
+/// iterates do not depend on how A is stored.
+fn dense_dot_tail(cols: &[usize], n: usize) -> usize {
+    cols.partition_point(|&c| c < n - n % 8)
 }
 
 /// Result of a dense QP solve together with the final working set (for warm starts).
