@@ -59,11 +59,12 @@ impl<'p> Formulation<'p> {
         );
         let mut objective_scale = 0.0;
         for (a, act) in problem.model.actuators.iter().enumerate() {
-            let [lo, hi] = act.bounds;
+            let [lo, hi] = act.control_range();
             let half = 0.5 * (hi - lo);
             let delta = margin * half;
             let slope = 4.0 * delta / grid.spacing();
-            objective_scale += half * half * grid.horizon;
+            let force = 0.5 * (act.bounds[1] - act.bounds[0]);
+            objective_scale += force * force * grid.horizon;
             for j in 0..block {
                 let i = a * block + j;
                 if j < k {

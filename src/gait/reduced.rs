@@ -285,15 +285,33 @@ impl<'p> Reduced<'p> {
         Ok(out)
     }
 
+    /// Whether the effort depends on the motion (servo actuators): it is then integrated along
+    /// the rollout, to the horizon, instead of in closed form from the splines.
+    fn effort_by_rollout(&self) -> bool {
+        self.problem.model.has_servos()
+    }
+
+    /// The RK4 step where the last segment's simulation ends: its last sample, or the
+    /// horizon when the effort is integrated along the rollout.
+    fn last_step(&self) -> usize {
+        let last = *self.boundaries.last().expect("non-empty");
+        if self.effort_by_rollout() {
+            last.max((self.problem.horizon / self.problem.dt).round() as usize)
+        } else {
+            last
+        }
+    }
+
     /// Simulates segment `k` with variables `x` (scalar type `T`) and writes its rows via
     /// `write(row, value)`: the pose constraints it owns, then the continuity defects
-    /// `x(b_{k+1}) − s_{k+1}` unless it is the last segment.
+    /// `x(b_{k+1}) − s_{k+1}` unless it is the last segment. Returns the segment's actuator
+    /// effort `∫Σ τ² dt` (N²·s; the last segment's to [`Self::last_step`]).
     fn simulate_segment<T: Real>(
         &self,
         k: usize,
         x: &[T],
         mut write: impl FnMut(usize, &T),
-    ) -> Result<(), SimError> {
+    ) -> Result<T, SimError> {
         let p = self.problem;
         let m = &p.model;
         let h = p.dt;
@@ -326,8 +344,13 @@ impl<'p> Reduced<'p> {
             for (i, (a, b)) in ends.zip(next.q.iter().chain(&next.v)).enumerate() {
                 write(self.continuity_row(k + 1, i), &(*a - *b));
             }
+        } else {
+            while n < self.last_step() {
+                sim.step(n as f64 * h, h, &mut state, &controls)?;
+                n += 1;
+            }
         }
-        Ok(())
+        Ok(sim.effort)
     }
 
     /// Whether row `r` belongs to segment `k` (a pose row it samples, or the continuity defect
@@ -342,11 +365,19 @@ impl<'p> Reduced<'p> {
 
     /// Jacobian values (pattern order) by propagating variable directions: chunks of
     /// [`CHUNK`] variables seeded as dual directions through the segments they affect, in
-    /// parallel.
-    pub fn jacobian_by_parameter_duals(&self, x: &[f64], jac: &mut [f64]) -> Result<(), SimError> {
+    /// parallel. When the effort is integrated along the rollout (servos), its gradient is
+    /// written into `grad` too (else `grad` is untouched).
+    pub fn jacobian_by_parameter_duals(
+        &self,
+        x: &[f64],
+        jac: &mut [f64],
+        grad: &mut [f64],
+    ) -> Result<(), SimError> {
         let n = x.len();
         let m = self.dims().m;
-        let results: Vec<Result<Vec<(usize, f64)>, SimError>> = self
+        let by_rollout = self.effort_by_rollout();
+        type Entries = (Vec<(usize, f64)>, Vec<(usize, f64)>);
+        let results: Vec<Result<Entries, SimError>> = self
             .chunks
             .par_iter()
             .map(|cols| {
@@ -355,30 +386,40 @@ impl<'p> Reduced<'p> {
                 for (d, &j) in cols.iter().enumerate() {
                     params[j] = params[j].derivative(d);
                 }
-                let mut out = Vec::new();
+                let eps = |v: &DualSVec64<CHUNK>, d: usize| v.eps.0.as_ref().map_or(0.0, |e| e[d]);
+                let (mut out, mut effort) = (Vec::new(), vec![0.0; cols.len()]);
                 for k in 0..self.segments() {
-                    let needed = (0..m).any(|r| {
-                        self.row_in_segment(r, k)
-                            && cols.iter().any(|&j| self.slot[r * n + j].is_some())
-                    });
+                    let needed = by_rollout
+                        || (0..m).any(|r| {
+                            self.row_in_segment(r, k)
+                                && cols.iter().any(|&j| self.slot[r * n + j].is_some())
+                        });
                     if !needed {
                         continue;
                     }
-                    self.simulate_segment(k, &params, |r, v| {
+                    let e = self.simulate_segment(k, &params, |r, v| {
                         for (d, &j) in cols.iter().enumerate() {
                             if let Some(s) = self.slot[r * n + j] {
-                                let eps = v.eps.0.as_ref().map_or(0.0, |e| e[d]);
-                                out.push((s, eps));
+                                out.push((s, eps(v, d)));
                             }
                         }
                     })?;
+                    for (d, g) in effort.iter_mut().enumerate() {
+                        *g += eps(&e, d);
+                    }
                 }
-                Ok(out)
+                Ok((out, cols.iter().copied().zip(effort).collect()))
             })
             .collect();
         for r in results {
-            for (s, v) in r? {
+            let (entries, effort) = r?;
+            for (s, v) in entries {
                 jac[s] = v;
+            }
+            if by_rollout {
+                for (j, g) in effort {
+                    grad[j] = g;
+                }
             }
         }
         Ok(())
@@ -490,7 +531,15 @@ impl<'p> Reduced<'p> {
         Ok(())
     }
 
+    /// The closed-form effort of the force splines and its gradient (module header); zero,
+    /// with a zero gradient, when the effort is integrated along the rollout instead (servos).
     fn objective(&self, x: &[f64], grad: Option<&mut [f64]>) -> f64 {
+        if self.effort_by_rollout() {
+            if let Some(g) = grad {
+                g.fill(0.0);
+            }
+            return 0.0;
+        }
         let block = self.grid.per_actuator();
         let x = &x[..self.n_par];
         let mut f = 0.0;
@@ -550,8 +599,7 @@ impl Nlp for Reduced<'_> {
         xu.fill(f64::INFINITY);
         for (a, act) in self.problem.model.actuators.iter().enumerate() {
             for j in 0..k {
-                xl[a * block + j] = act.bounds[0];
-                xu[a * block + j] = act.bounds[1];
+                [xl[a * block + j], xu[a * block + j]] = act.control_range();
             }
         }
         if let Some((lo, hi)) = &self.problem.initial_box {
@@ -597,17 +645,22 @@ impl Nlp for Reduced<'_> {
 
     fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
         *f = self.objective(x, None);
-        let parts: Vec<Result<Vec<(usize, f64)>, SimError>> = (0..self.segments())
+        let parts: Vec<Result<(Vec<(usize, f64)>, f64), SimError>> = (0..self.segments())
             .into_par_iter()
             .map(|k| {
                 let mut out = Vec::new();
-                self.simulate_segment(k, x, |r, v| out.push((r, *v)))?;
-                Ok(out)
+                let effort = self.simulate_segment(k, x, |r, v| out.push((r, *v)))?;
+                Ok((out, effort))
             })
             .collect();
+        let by_rollout = self.effort_by_rollout();
         for part in parts {
-            for (r, v) in part.map_err(domain)? {
+            let (rows, effort) = part.map_err(domain)?;
+            for (r, v) in rows {
                 c[r] = v;
+            }
+            if by_rollout {
+                *f += effort;
             }
         }
         if f.is_finite() && c.iter().all(|v| v.is_finite()) {
@@ -627,8 +680,8 @@ impl Nlp for Reduced<'_> {
     ) -> Result<(), EvalError> {
         self.objective(x, Some(grad));
         jac.fill(0.0);
-        if !self.jacobian_by_sensitivities(x, jac).map_err(domain)? {
-            self.jacobian_by_parameter_duals(x, jac).map_err(domain)?;
+        if !self.jacobian_by_sensitivities(x, jac, grad).map_err(domain)? {
+            self.jacobian_by_parameter_duals(x, jac, grad).map_err(domain)?;
         }
         if grad.iter().chain(jac.iter()).all(|v| v.is_finite()) {
             Ok(())

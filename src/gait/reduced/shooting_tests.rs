@@ -34,7 +34,9 @@ fn jacobian_matching_the_oracle(nlp: &Reduced<'_>, x: &[f64], what: &str) -> Vec
     let (mut grad, mut fast, mut oracle) =
         (vec![0.0; d.n], vec![0.0; d.jac_nnz], vec![0.0; d.jac_nnz]);
     nlp.eval_derivatives(x, &mut grad, &mut fast).unwrap();
-    nlp.jacobian_by_parameter_duals(x, &mut oracle).unwrap();
+    let mut oracle_grad = vec![0.0; d.n];
+    nlp.jacobian_by_parameter_duals(x, &mut oracle, &mut oracle_grad)
+        .unwrap();
     let gap = gap_to_oracle(&fast, &oracle);
     assert!(gap < 1e-9, "{what}: sensitivities vs duals {gap}");
     fast
