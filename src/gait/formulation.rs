@@ -10,10 +10,13 @@
 //! `F(t) ∈ [lo, hi]` for all `t`, tightly (`y₀ = y₁ = hi − δ`, `s₀ = S`, `s₁ = −S` reach `hi` at
 //! mid-segment).
 //! `δ = margin·(hi − lo)/2` (`[trials] slope_margin`). Box bounds only: no extra constraints.
+//! For a servo actuator the spline is its set-point offset and `[lo, hi]` the joint's limits
+//! less its rest angle ([`crate::gait::character::Actuator::control_range`]); the servo law
+//! itself keeps the force within its bounds.
 //!
 //! **Scaling.** Variable `z_j = x_j / σ_j` with `σ = (hi − lo)/2` for knot values and `σ = S`
 //! for slopes, so every variable ranges over about `[−1, 1]`; the objective `∫ΣF²dt` (N²·s) is
-//! divided by `Σₐ σₐ²·T`. Constraints keep their units (m, rad, m/s). With multiple shooting
+//! divided by `Σₐ fₐ²·T`, `fₐ` half the actuator's force range. Constraints keep their units (m, rad, m/s). With multiple shooting
 //! the segment start states follow the spline parameters as variables, unscaled (m, rad, m/s,
 //! rad/s) and unbounded; they start at the rollout of the start forces.
 

@@ -30,7 +30,11 @@
 //! ordered by knot. A knot's basis vanishes outside `(t_{k−1}, t_{k+1})`, so a row whose segment
 //! lies outside that interval cannot depend on it: that Jacobian entry is structurally zero and
 //! absent from the pattern. Chunks run in parallel (rayon); each chunk's result is independent
-//! of scheduling. The objective and its gradient are closed-form and need no simulation.
+//! of scheduling. With force controls the objective and its gradient are closed-form and need
+//! no simulation; with servo actuators ([`crate::gait::character::Servo`]) the splines are
+//! set points, the force depends on the state, and the effort `∫₀ᵀ Σ τ² dt` is integrated along
+//! the rollout (to the horizon) with the RK4 weights, its gradient propagated with the
+//! sensitivities (or the dual numbers) like a constraint row.
 
 use nalgebra::DMatrix;
 use num_dual::DualSVec64;

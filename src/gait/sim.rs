@@ -58,9 +58,10 @@ pub fn poll(interrupt: Option<&Interrupt>, step: usize, t: f64) -> Result<(), Si
     }
 }
 
-/// Actuator forces as functions of time: fills `out` (one per actuator, N·m or N) at `t` (s).
+/// Actuator controls as functions of time: fills `out` (one per actuator: the force, N·m or N,
+/// or a servo's set-point offset, rad or m) at `t` (s).
 pub trait Controls<T> {
-    /// Actuator forces at time `t`.
+    /// Actuator controls at time `t`.
     fn forces(&self, t: f64, out: &mut [T]);
 }
 

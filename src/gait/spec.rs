@@ -1822,6 +1822,30 @@ min = 0.1
         assert_eq!(p.model.links[1].inertia.com.0, [0.15, 0.0, 0.0]);
     }
 
+    /// A servo's set point at zero control is the joint's initial angle and its controls span
+    /// the joint's limits less that; a servo needs limits and positive gains.
+    #[test]
+    fn servos_load_relative_to_the_initial_pose() {
+        let servo = "bounds = [-2.0, 2.0]\nservo = { stiffness = 10.0, damping = 0.5 }";
+        let p = load(&BASE.replacen("bounds = [-2.0, 2.0]", servo, 1)).unwrap();
+        let s = p.model.actuators[0].servo.unwrap();
+        assert_eq!((s.stiffness, s.damping, s.rest), (10.0, 0.5, 0.2));
+        assert_eq!(p.model.actuators[0].control_range(), [-1.2, 0.8]);
+        assert!(p.model.has_servos());
+        let no_limits = BASE
+            .replacen("bounds = [-2.0, 2.0]", servo, 1)
+            .replacen(" limits = [-1.0, 1.0],", "", 1);
+        let (message, line) = error_and_line(&no_limits);
+        assert!(message.contains("a servo needs limits"), "{message}");
+        assert!(line.starts_with("servo"), "{line}");
+        let negative = BASE.replacen(
+            "bounds = [-2.0, 2.0]",
+            "bounds = [-2.0, 2.0]\nservo = { stiffness = -1.0, damping = 0.5 }",
+            1,
+        );
+        assert!(load(&negative).is_err());
+    }
+
     #[test]
     fn shaping_rows_are_kept_apart_and_merged_in_time_order() {
         let text = BASE.to_string()
