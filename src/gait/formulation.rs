@@ -236,7 +236,8 @@ mod tests {
     /// the actuator bounds at any time, and the corners come within 1% of reaching them.
     #[test]
     fn box_bounds_keep_forces_within_limits_between_knots() {
-        let p = load("luxo_leap");
+        // Force controls (the shipped luxo_leap has servos, whose controls are set points).
+        let p = load("luxo_leap_soft");
         let f = Formulation::new(&p);
         let d = f.dims();
         let (lo, hi) = f.physical_bounds();

@@ -84,8 +84,9 @@ fn one_segment_is_a_plain_rollout() {
     assert_eq!(c, expected);
 }
 
-/// Segments started on the rollout of the same forces have zero continuity defects and the
-/// single-shooting constraint values, exactly (the same arithmetic, step for step).
+/// Segments started on the rollout of the same controls have zero continuity defects and the
+/// single-shooting constraint values, exactly (the same arithmetic, step for step), and the
+/// same effort to round-off.
 #[test]
 fn segments_on_the_rollout_reproduce_single_shooting() {
     let p = shortened("luxo_leap", 0.3);
@@ -105,7 +106,8 @@ fn segments_on_the_rollout_reproduce_single_shooting() {
         nlp.fill_states(&mut z);
         let (mut f, mut c) = (0.0, vec![0.0; d.m]);
         nlp.eval(&z, &mut f, &mut c).unwrap();
-        assert_eq!(f, f1);
+        // The servo effort is summed per segment: the same terms, another summation order.
+        assert!((f - f1).abs() <= 1e-12 * f1.abs(), "S = {s}: {f} vs {f1}");
         assert_eq!(c[..c1.len()], c1[..], "S = {s}");
         assert!(c[c1.len()..].iter().all(|&v| v == 0.0), "S = {s}");
     }
@@ -215,7 +217,8 @@ fn segments_at_given_steps_reproduce_single_shooting_from_a_free_initial_state()
     nlp.fill_states(&mut z);
     let (mut f, mut c) = (0.0, vec![0.0; d.m]);
     nlp.eval(&z, &mut f, &mut c).unwrap();
-    assert_eq!(f, f1);
+    // The servo effort is summed per segment: the same terms, another summation order.
+    assert!((f - f1).abs() <= 1e-12 * f1.abs(), "{f} vs {f1}");
     assert_eq!(c[..c1.len()], c1[..]);
     assert!(c[c1.len()..].iter().all(|&v| v == 0.0));
 }
