@@ -45,6 +45,7 @@ use super::mesh::{Mesh, Point};
 use super::tangential::{Motion, Smoothing, relax, vertex_normal};
 use super::variables::{HessianPattern, Variables};
 use super::volume::{Region, chord, cone_volume_hessian_row};
+use crate::solver::global::WithStart;
 use crate::solver::log::ObjectiveUnit;
 use crate::solver::{Dims, EvalError, Nlp, Options, Solution};
 
@@ -125,6 +126,14 @@ pub const RELAXATION_SWEEPS: usize = 3;
 /// The rounds end when the relaxation after a round lowers the energy by at most this
 /// fraction of the area.
 pub const RELAXATION_GAIN: f64 = 1e-5;
+
+/// Scaled optimality tolerance of a normal-coordinate round that another round may follow
+/// (the solver's own tolerance when that is looser): the relaxation after it moves the film
+/// tangentially and the next round starts at an optimality of ~1e-3 again, so digits beyond
+/// this are undone; and a stationarity error ε leaves an energy error of order ε², far below
+/// the [`RELAXATION_GAIN`] that decides whether another round follows. The round whose answer
+/// is returned is then solved on to the solver's tolerance ([`CmcNlp::solve`]).
+pub const ROUND_OPTIMALITY: f64 = 1e-4;
 
 /// A first normal-coordinate round still unconverged after this many iterations is abandoned
 /// for the area formulation ([`CmcNlp::solve`]).
@@ -380,7 +389,9 @@ impl CmcNlp {
     /// vertex by more than [`ROUND_TOLERANCE`], or after [`MAX_ROUNDS`] rounds (both settable,
     /// [`CmcNlp::with_rounds`]). `self` becomes the last round's problem, the returned solution
     /// its solution, with the iterations, evaluations and logs of every round; a round that
-    /// fails leaves the previous round's result. A first round that does not converge within
+    /// fails leaves the previous round's result. Every round but the last possible one stops
+    /// at [`ROUND_OPTIMALITY`], and the returned round, when it stopped there, is solved on
+    /// from its answer to the solver's tolerance. A first round that does not converge within
     /// [`ROUND_ITERATIONS`] is abandoned and the solve repeated in the area formulation
     /// (`CmcNlp::fall_back`).
     pub fn solve(&mut self, options: &Options, stage: &str) -> Solution {
@@ -392,10 +403,15 @@ impl CmcNlp {
         }
         let mut round_options = options.clone();
         round_options.max_iterations = options.max_iterations.min(ROUND_ITERATIONS);
+        if self.max_rounds > 1 {
+            round_options.tolerance = options.tolerance.max(ROUND_OPTIMALITY);
+        }
         let mut solution = crate::solver::solve(&*self, &round_options);
         if !solution.status.is_success() {
             return self.fall_back(solution, &options, stage);
         }
+        // Whether `solution` stopped at ROUND_OPTIMALITY rather than the solver's tolerance.
+        let mut loose = round_options.tolerance > options.tolerance;
         for round in 2..=self.max_rounds {
             let moved = self.largest_displacement(&solution.x) > ROUND_TOLERANCE;
             let Ok(mut mesh) = self.mesh_at(&solution.x) else {
@@ -433,12 +449,28 @@ impl CmcNlp {
                 _ => format!("{stage} round {round}"),
             };
             round_options.log.objective = ObjectiveUnit::new("area", "m²", next.scale * next.scale);
+            if round == self.max_rounds {
+                round_options.tolerance = options.tolerance;
+            }
             let next_solution = crate::solver::solve(&next, &round_options);
             if !next_solution.status.is_success() {
                 break;
             }
             *self = next;
             solution = merged(solution, next_solution);
+            loose = round_options.tolerance > options.tolerance;
+        }
+        if loose {
+            // The returned round stopped at ROUND_OPTIMALITY: on to the solver's tolerance
+            // from its answer (its status is the solve's).
+            round_options.tolerance = options.tolerance;
+            round_options.log.stage = match stage {
+                "" => "final tolerance".to_string(),
+                _ => format!("{stage} final tolerance"),
+            };
+            let finished =
+                crate::solver::solve(&WithStart::new(&*self, solution.x.clone()), &round_options);
+            solution = merged(solution, finished);
         }
         solution
     }
