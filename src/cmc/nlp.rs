@@ -41,7 +41,7 @@ use rayon::prelude::*;
 use super::area::{TriangleAreaForm, total_area, total_area_gradient};
 use super::curvature::{mean_curvature, mean_curvature_gradient};
 use super::curvature_hessian::mean_curvature_hessian;
-use super::mesh::{Mesh, Point};
+use super::mesh::{Mesh, Point, orthonormal_pair};
 use super::tangential::{Motion, Smoothing, relax, vertex_normal};
 use super::variables::{HessianPattern, Variables};
 use super::volume::{Region, chord, cone_volume_hessian_row};
@@ -134,6 +134,14 @@ pub const RELAXATION_GAIN: f64 = 1e-5;
 /// the [`RELAXATION_GAIN`] that decides whether another round follows. The round whose answer
 /// is returned is then solved on to the solver's tolerance ([`CmcNlp::solve`]).
 pub const ROUND_OPTIMALITY: f64 = 1e-4;
+
+/// Largest turn of a junction curve at a vertex (degrees, between its two junction edges) for
+/// which the vertex moves in the plane normal to the curve in normal coordinates
+/// ([`junction_planes`]); where the curve turns more it is not resolved at the mesh's scale and
+/// the vertex keeps its three coordinates. Without this limit the tetrahedral cluster's coarse
+/// level (three edges per junction curve) stalled in its second round: 203 iterations instead of
+/// 30 (docs/notes/cmc.md).
+pub const JUNCTION_TURN: f64 = 30.0;
 
 /// A first normal-coordinate round still unconverged after this many iterations is abandoned
 /// for the area formulation ([`CmcNlp::solve`]).
@@ -235,6 +243,10 @@ impl CmcNlp {
             }
         }
         let n = mesh.vertex_count();
+        let junction_planes = match formulation {
+            Formulation::Normal => junction_planes(&mesh, &chords),
+            _ => vec![None; n],
+        };
         let vars = Variables::new(
             |v| mesh.flags()[v].fixed,
             |v| {
@@ -244,6 +256,7 @@ impl CmcNlp {
                     && normal != Point::zeros())
                 .then_some(normal)
             },
+            |v| junction_planes[v],
             n,
         );
         if vars.count() == 0 {
@@ -302,12 +315,14 @@ impl CmcNlp {
         }
         let smoothing = if tangential_weight > 0.0 {
             // A vertex moving along its normal has no tangential motion to regularize, unless
-            // its ring holds a vertex with three coordinates (a junction's neighbour): the term
-            // then keeps that vertex from sliding tangentially over the film.
+            // its ring holds a vertex with two or three coordinates (a junction's neighbour):
+            // the term then keeps that vertex from sliding tangentially over the film. A
+            // junction vertex moving in the plane normal to its curve cannot slide along it,
+            // which its own term (along the curve) regularizes.
             smoothing_terms(&mesh, &vars)
                 .into_iter()
                 .filter(|term| {
-                    !vars.is_normal(term.vertex) || term.ring.iter().any(|&w| vars.width(w) == 3)
+                    !vars.is_normal(term.vertex) || term.ring.iter().any(|&w| vars.width(w) >= 2)
                 })
                 .collect()
         } else {
@@ -517,7 +532,7 @@ impl CmcNlp {
         let chord_end = self.chords.iter().any(|c| c.a == v || c.b == v);
         if self.vars.is_normal(v) {
             Motion::Tangential
-        } else if self.vars.width(v) == 3 && self.start.flags()[v].guide.is_none() && !chord_end {
+        } else if self.vars.width(v) >= 2 && self.start.flags()[v].guide.is_none() && !chord_end {
             Motion::Free
         } else {
             Motion::Held
@@ -801,6 +816,39 @@ fn smoothing_terms(mesh: &Mesh, vars: &Variables) -> Vec<Smoothing> {
         .collect();
     terms.extend(junction_smoothing(mesh, vars));
     terms
+}
+
+/// The plane each free vertex inside a junction curve moves in, in normal coordinates (two
+/// orthonormal vectors normal to the curve's direction between its two junction neighbours at
+/// the start; Surface Evolver's `hessian_normal` on a triple line): sliding along the curve
+/// only reparametrizes it (zero curvature but for the regularization, a nearly singular reduced
+/// Hessian whose long steps cost the SQP iterations), and the tangential relaxation between
+/// rounds moves such a vertex in space. `None` for other vertices: those with another number of
+/// junction edges (where curves meet or end), guided, excluded or fixed ones, chord ends, and
+/// vertices where the curve turns by more than [`JUNCTION_TURN`].
+fn junction_planes(mesh: &Mesh, chords: &[Chord]) -> Vec<Option<(Point, Point)>> {
+    let mut along: Vec<Vec<usize>> = vec![Vec::new(); mesh.vertex_count()];
+    for e in mesh.edges().iter().filter(|e| e.triangles.len() >= 3) {
+        let [a, b] = e.vertices;
+        along[a].push(b);
+        along[b].push(a);
+    }
+    along
+        .iter()
+        .enumerate()
+        .map(|(v, ring)| {
+            let f = mesh.flags()[v];
+            let chord_end = chords.iter().any(|c| c.a == v || c.b == v);
+            if ring.len() != 2 || f.fixed || f.excluded || f.guide.is_some() || chord_end {
+                return None;
+            }
+            let p = mesh.positions();
+            let t = (p[ring[1]] - p[ring[0]]).try_normalize(0.0)?;
+            let before = (p[v] - p[ring[0]]).try_normalize(0.0)?;
+            let after = (p[ring[1]] - p[v]).try_normalize(0.0)?;
+            (before.dot(&after) >= JUNCTION_TURN.to_radians().cos()).then(|| orthonormal_pair(&t))
+        })
+        .collect()
 }
 
 /// Regularization terms for free vertices inside a junction curve (exactly two junction
