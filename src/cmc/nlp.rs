@@ -475,9 +475,12 @@ impl CmcNlp {
             solution = merged(solution, next_solution);
             loose = round_options.tolerance > options.tolerance;
         }
+        // A round that stopped at ROUND_OPTIMALITY may already meet the solver's tests
+        // (optimality and violation, `Status::Optimal`); else it is solved on to them from its
+        // answer (the status is then that solve's).
+        loose &= solution.optimality > options.tolerance
+            || solution.max_violation > options.constraint_tolerance;
         if loose {
-            // The returned round stopped at ROUND_OPTIMALITY: on to the solver's tolerance
-            // from its answer (its status is the solve's).
             round_options.tolerance = options.tolerance;
             round_options.log.stage = match stage {
                 "" => "final tolerance".to_string(),
