@@ -1464,9 +1464,14 @@ mod tests {
             .filter(|&v| mesh.curvature_surface(v).is_some())
             .count();
         let others = mesh.vertex_count() - interior;
+        // The others are the junction circle's 24 vertices (two junction edges, 15° turns):
+        // each moves in the plane normal to the circle.
+        assert_eq!(others, 24);
+        assert_eq!(nlp.dims().n, interior + 2 * others);
         // Two volume rows and the translation gauge (no rotation rows in normal coordinates).
-        assert_eq!(nlp.dims().n, interior + 3 * others);
         assert_eq!(nlp.dims().m, 2 + 3);
+        assert_derivatives(&nlp, "double bubble, junction planes");
+        assert_hessian(&nlp, "double bubble, junction planes");
         let options = Options {
             verbosity: 0,
             ..Options::default()
