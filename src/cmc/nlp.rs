@@ -821,6 +821,17 @@ fn smoothing_terms(mesh: &Mesh, vars: &Variables) -> Vec<Smoothing> {
     terms
 }
 
+/// Each vertex's neighbours across junction edges (edges of three or more triangles).
+fn junction_neighbours(mesh: &Mesh) -> Vec<Vec<usize>> {
+    let mut along: Vec<Vec<usize>> = vec![Vec::new(); mesh.vertex_count()];
+    for e in mesh.edges().iter().filter(|e| e.triangles.len() >= 3) {
+        let [a, b] = e.vertices;
+        along[a].push(b);
+        along[b].push(a);
+    }
+    along
+}
+
 /// The plane each free vertex inside a junction curve moves in, in normal coordinates (two
 /// orthonormal vectors normal to the curve's direction between its two junction neighbours at
 /// the start; Surface Evolver's `hessian_normal` on a triple line): sliding along the curve
@@ -830,13 +841,7 @@ fn smoothing_terms(mesh: &Mesh, vars: &Variables) -> Vec<Smoothing> {
 /// junction edges (where curves meet or end), guided, excluded or fixed ones, chord ends, and
 /// vertices where the curve turns by more than [`JUNCTION_TURN`].
 fn junction_planes(mesh: &Mesh, chords: &[Chord]) -> Vec<Option<(Point, Point)>> {
-    let mut along: Vec<Vec<usize>> = vec![Vec::new(); mesh.vertex_count()];
-    for e in mesh.edges().iter().filter(|e| e.triangles.len() >= 3) {
-        let [a, b] = e.vertices;
-        along[a].push(b);
-        along[b].push(a);
-    }
-    along
+    junction_neighbours(mesh)
         .iter()
         .enumerate()
         .map(|(v, ring)| {
@@ -859,13 +864,7 @@ fn junction_planes(mesh: &Mesh, chords: &[Chord]) -> Vec<Option<(Point, Point)>>
 /// start, ring = those neighbours. Without it a vertex slides along a straight junction at no
 /// cost (an exactly singular reduced Hessian); films' normal balance is untouched.
 fn junction_smoothing(mesh: &Mesh, vars: &Variables) -> Vec<Smoothing> {
-    let mut along: Vec<Vec<usize>> = vec![Vec::new(); mesh.vertex_count()];
-    for e in mesh.edges().iter().filter(|e| e.triangles.len() >= 3) {
-        let [a, b] = e.vertices;
-        along[a].push(b);
-        along[b].push(a);
-    }
-    along
+    junction_neighbours(mesh)
         .into_iter()
         .enumerate()
         .filter(|(v, ring)| {
