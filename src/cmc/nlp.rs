@@ -104,8 +104,10 @@ pub enum Formulation {
     Area,
     /// The area formulation in normal coordinates (Surface Evolver's `hessian_normal`; the
     /// default): a vertex inside one surface moves along its normal frozen at the start of a
-    /// round (one variable instead of three, [`super::variables`]); junction, guided and
-    /// excluded vertices keep their three coordinates. [`CmcNlp::solve`] repeats rounds with a
+    /// round (one variable instead of three, [`super::variables`]); a vertex inside a junction
+    /// curve moves in the plane normal to the curve (two variables);
+    /// other junction, guided and excluded vertices keep their three coordinates.
+    /// [`CmcNlp::solve`] repeats rounds with a
     /// tangential relaxation between them ([`super::tangential`]), which reach the `Area`
     /// minimum; a first round that does not converge falls back to `Area`. On problems/cmc
     /// 2.5× less CPU than `Area` over the set, every file Optimal (docs/notes/cmc.md).
@@ -137,7 +139,7 @@ pub const ROUND_OPTIMALITY: f64 = 1e-4;
 
 /// Largest turn of a junction curve at a vertex (degrees, between its two junction edges) for
 /// which the vertex moves in the plane normal to the curve in normal coordinates
-/// ([`junction_planes`]); where the curve turns more it is not resolved at the mesh's scale and
+/// (`junction_planes`); where the curve turns more it is not resolved at the mesh's scale and
 /// the vertex keeps its three coordinates. Without this limit the tetrahedral cluster's coarse
 /// level (three edges per junction curve) stalled in its second round: 203 iterations instead of
 /// 30 (docs/notes/cmc.md).
@@ -529,8 +531,8 @@ impl CmcNlp {
     }
 
     /// How [`relax`] may move vertex `v` between rounds: in its tangent plane when the rounds
-    /// move it along its normal; in space when they move its three coordinates and no guide or
-    /// chord holds it; else not at all.
+    /// move it along its normal; in space when they move its three coordinates or a plane
+    /// normal to its junction curve and no guide or chord holds it; else not at all.
     fn motion(&self, v: usize) -> Motion {
         let chord_end = self.chords.iter().any(|c| c.a == v || c.b == v);
         if self.vars.is_normal(v) {
