@@ -41,10 +41,11 @@ use rayon::prelude::*;
 use super::area::{TriangleAreaForm, total_area, total_area_gradient};
 use super::curvature::{mean_curvature, mean_curvature_gradient};
 use super::curvature_hessian::mean_curvature_hessian;
-use super::mesh::{Mesh, Point};
+use super::mesh::{Mesh, Point, orthonormal_pair};
 use super::tangential::{Motion, Smoothing, relax, vertex_normal};
 use super::variables::{HessianPattern, Variables};
 use super::volume::{Region, chord, cone_volume_hessian_row};
+use crate::solver::global::WithStart;
 use crate::solver::log::ObjectiveUnit;
 use crate::solver::{Dims, EvalError, Nlp, Options, Solution};
 
@@ -103,8 +104,10 @@ pub enum Formulation {
     Area,
     /// The area formulation in normal coordinates (Surface Evolver's `hessian_normal`; the
     /// default): a vertex inside one surface moves along its normal frozen at the start of a
-    /// round (one variable instead of three, [`super::variables`]); junction, guided and
-    /// excluded vertices keep their three coordinates. [`CmcNlp::solve`] repeats rounds with a
+    /// round (one variable instead of three, [`super::variables`]); a vertex inside a junction
+    /// curve moves in the plane normal to the curve (two variables);
+    /// other junction, guided and excluded vertices keep their three coordinates.
+    /// [`CmcNlp::solve`] repeats rounds with a
     /// tangential relaxation between them ([`super::tangential`]), which reach the `Area`
     /// minimum; a first round that does not converge falls back to `Area`. On problems/cmc
     /// 2.5× less CPU than `Area` over the set, every file Optimal (docs/notes/cmc.md).
@@ -125,6 +128,22 @@ pub const RELAXATION_SWEEPS: usize = 3;
 /// The rounds end when the relaxation after a round lowers the energy by at most this
 /// fraction of the area.
 pub const RELAXATION_GAIN: f64 = 1e-5;
+
+/// Scaled optimality tolerance of a normal-coordinate round that another round may follow
+/// (the solver's own tolerance when that is looser): the relaxation after it moves the film
+/// tangentially and the next round starts at an optimality of ~1e-3 again, so digits beyond
+/// this are undone; and a stationarity error ε leaves an energy error of order ε², far below
+/// the [`RELAXATION_GAIN`] that decides whether another round follows. The round whose answer
+/// is returned is then solved on to the solver's tolerance ([`CmcNlp::solve`]).
+pub const ROUND_OPTIMALITY: f64 = 1e-4;
+
+/// Largest turn of a junction curve at a vertex (degrees, between its two junction edges) for
+/// which the vertex moves in the plane normal to the curve in normal coordinates
+/// (`junction_planes`); where the curve turns more it is not resolved at the mesh's scale and
+/// the vertex keeps its three coordinates. Without this limit the tetrahedral cluster's coarse
+/// level (three edges per junction curve) stalled in its second round: 203 iterations instead of
+/// 30 (docs/notes/cmc.md).
+pub const JUNCTION_TURN: f64 = 30.0;
 
 /// A first normal-coordinate round still unconverged after this many iterations is abandoned
 /// for the area formulation ([`CmcNlp::solve`]).
@@ -226,6 +245,10 @@ impl CmcNlp {
             }
         }
         let n = mesh.vertex_count();
+        let junction_planes = match formulation {
+            Formulation::Normal => junction_planes(&mesh, &chords),
+            _ => vec![None; n],
+        };
         let vars = Variables::new(
             |v| mesh.flags()[v].fixed,
             |v| {
@@ -235,6 +258,7 @@ impl CmcNlp {
                     && normal != Point::zeros())
                 .then_some(normal)
             },
+            |v| junction_planes[v],
             n,
         );
         if vars.count() == 0 {
@@ -293,12 +317,14 @@ impl CmcNlp {
         }
         let smoothing = if tangential_weight > 0.0 {
             // A vertex moving along its normal has no tangential motion to regularize, unless
-            // its ring holds a vertex with three coordinates (a junction's neighbour): the term
-            // then keeps that vertex from sliding tangentially over the film.
+            // its ring holds a vertex with two or three coordinates (a junction's neighbour):
+            // the term then keeps that vertex from sliding tangentially over the film. A
+            // junction vertex moving in the plane normal to its curve cannot slide along it,
+            // which its own term (along the curve) regularizes.
             smoothing_terms(&mesh, &vars)
                 .into_iter()
                 .filter(|term| {
-                    !vars.is_normal(term.vertex) || term.ring.iter().any(|&w| vars.width(w) == 3)
+                    !vars.is_normal(term.vertex) || term.ring.iter().any(|&w| vars.width(w) >= 2)
                 })
                 .collect()
         } else {
@@ -380,7 +406,9 @@ impl CmcNlp {
     /// vertex by more than [`ROUND_TOLERANCE`], or after [`MAX_ROUNDS`] rounds (both settable,
     /// [`CmcNlp::with_rounds`]). `self` becomes the last round's problem, the returned solution
     /// its solution, with the iterations, evaluations and logs of every round; a round that
-    /// fails leaves the previous round's result. A first round that does not converge within
+    /// fails leaves the previous round's result. Every round but the last possible one stops
+    /// at [`ROUND_OPTIMALITY`], and the returned round, when it stopped there, is solved on
+    /// from its answer to the solver's tolerance. A first round that does not converge within
     /// [`ROUND_ITERATIONS`] is abandoned and the solve repeated in the area formulation
     /// (`CmcNlp::fall_back`).
     pub fn solve(&mut self, options: &Options, stage: &str) -> Solution {
@@ -392,10 +420,15 @@ impl CmcNlp {
         }
         let mut round_options = options.clone();
         round_options.max_iterations = options.max_iterations.min(ROUND_ITERATIONS);
+        if self.max_rounds > 1 {
+            round_options.tolerance = options.tolerance.max(ROUND_OPTIMALITY);
+        }
         let mut solution = crate::solver::solve(&*self, &round_options);
         if !solution.status.is_success() {
             return self.fall_back(solution, &options, stage);
         }
+        // Whether `solution` stopped at ROUND_OPTIMALITY rather than the solver's tolerance.
+        let mut loose = round_options.tolerance > options.tolerance;
         for round in 2..=self.max_rounds {
             let moved = self.largest_displacement(&solution.x) > ROUND_TOLERANCE;
             let Ok(mut mesh) = self.mesh_at(&solution.x) else {
@@ -433,12 +466,31 @@ impl CmcNlp {
                 _ => format!("{stage} round {round}"),
             };
             round_options.log.objective = ObjectiveUnit::new("area", "m²", next.scale * next.scale);
+            if round == self.max_rounds {
+                round_options.tolerance = options.tolerance;
+            }
             let next_solution = crate::solver::solve(&next, &round_options);
             if !next_solution.status.is_success() {
                 break;
             }
             *self = next;
             solution = merged(solution, next_solution);
+            loose = round_options.tolerance > options.tolerance;
+        }
+        // A round that stopped at ROUND_OPTIMALITY may already meet the solver's tests
+        // (optimality and violation, `Status::Optimal`); else it is solved on to them from its
+        // answer (the status is then that solve's).
+        loose &= solution.optimality > options.tolerance
+            || solution.max_violation > options.constraint_tolerance;
+        if loose {
+            round_options.tolerance = options.tolerance;
+            round_options.log.stage = match stage {
+                "" => "final tolerance".to_string(),
+                _ => format!("{stage} final tolerance"),
+            };
+            let finished =
+                crate::solver::solve(&WithStart::new(&*self, solution.x.clone()), &round_options);
+            solution = merged(solution, finished);
         }
         solution
     }
@@ -479,13 +531,13 @@ impl CmcNlp {
     }
 
     /// How [`relax`] may move vertex `v` between rounds: in its tangent plane when the rounds
-    /// move it along its normal; in space when they move its three coordinates and no guide or
-    /// chord holds it; else not at all.
+    /// move it along its normal; in space when they move its three coordinates or a plane
+    /// normal to its junction curve and no guide or chord holds it; else not at all.
     fn motion(&self, v: usize) -> Motion {
         let chord_end = self.chords.iter().any(|c| c.a == v || c.b == v);
         if self.vars.is_normal(v) {
             Motion::Tangential
-        } else if self.vars.width(v) == 3 && self.start.flags()[v].guide.is_none() && !chord_end {
+        } else if self.vars.width(v) >= 2 && self.start.flags()[v].guide.is_none() && !chord_end {
             Motion::Free
         } else {
             Motion::Held
@@ -771,11 +823,8 @@ fn smoothing_terms(mesh: &Mesh, vars: &Variables) -> Vec<Smoothing> {
     terms
 }
 
-/// Regularization terms for free vertices inside a junction curve (exactly two junction
-/// edges): `P = t tᵀ` with `t` the curve's direction between the two junction neighbours at the
-/// start, ring = those neighbours. Without it a vertex slides along a straight junction at no
-/// cost (an exactly singular reduced Hessian); films' normal balance is untouched.
-fn junction_smoothing(mesh: &Mesh, vars: &Variables) -> Vec<Smoothing> {
+/// Each vertex's neighbours across junction edges (edges of three or more triangles).
+fn junction_neighbours(mesh: &Mesh) -> Vec<Vec<usize>> {
     let mut along: Vec<Vec<usize>> = vec![Vec::new(); mesh.vertex_count()];
     for e in mesh.edges().iter().filter(|e| e.triangles.len() >= 3) {
         let [a, b] = e.vertices;
@@ -783,6 +832,41 @@ fn junction_smoothing(mesh: &Mesh, vars: &Variables) -> Vec<Smoothing> {
         along[b].push(a);
     }
     along
+}
+
+/// The plane each free vertex inside a junction curve moves in, in normal coordinates (two
+/// orthonormal vectors normal to the curve's direction between its two junction neighbours at
+/// the start; Surface Evolver's `hessian_normal` on a triple line): sliding along the curve
+/// only reparametrizes it (zero curvature but for the regularization, a nearly singular reduced
+/// Hessian whose long steps cost the SQP iterations), and the tangential relaxation between
+/// rounds moves such a vertex in space. `None` for other vertices: those with another number of
+/// junction edges (where curves meet or end), guided, excluded or fixed ones, chord ends, and
+/// vertices where the curve turns by more than [`JUNCTION_TURN`].
+fn junction_planes(mesh: &Mesh, chords: &[Chord]) -> Vec<Option<(Point, Point)>> {
+    junction_neighbours(mesh)
+        .iter()
+        .enumerate()
+        .map(|(v, ring)| {
+            let f = mesh.flags()[v];
+            let chord_end = chords.iter().any(|c| c.a == v || c.b == v);
+            if ring.len() != 2 || f.fixed || f.excluded || f.guide.is_some() || chord_end {
+                return None;
+            }
+            let p = mesh.positions();
+            let t = (p[ring[1]] - p[ring[0]]).try_normalize(0.0)?;
+            let before = (p[v] - p[ring[0]]).try_normalize(0.0)?;
+            let after = (p[ring[1]] - p[v]).try_normalize(0.0)?;
+            (before.dot(&after) >= JUNCTION_TURN.to_radians().cos()).then(|| orthonormal_pair(&t))
+        })
+        .collect()
+}
+
+/// Regularization terms for free vertices inside a junction curve (exactly two junction
+/// edges): `P = t tᵀ` with `t` the curve's direction between the two junction neighbours at the
+/// start, ring = those neighbours. Without it a vertex slides along a straight junction at no
+/// cost (an exactly singular reduced Hessian); films' normal balance is untouched.
+fn junction_smoothing(mesh: &Mesh, vars: &Variables) -> Vec<Smoothing> {
+    junction_neighbours(mesh)
         .into_iter()
         .enumerate()
         .filter(|(v, ring)| {
@@ -1381,9 +1465,14 @@ mod tests {
             .filter(|&v| mesh.curvature_surface(v).is_some())
             .count();
         let others = mesh.vertex_count() - interior;
+        // The others are the junction circle's 24 vertices (two junction edges, 15° turns):
+        // each moves in the plane normal to the circle.
+        assert_eq!(others, 24);
+        assert_eq!(nlp.dims().n, interior + 2 * others);
         // Two volume rows and the translation gauge (no rotation rows in normal coordinates).
-        assert_eq!(nlp.dims().n, interior + 3 * others);
         assert_eq!(nlp.dims().m, 2 + 3);
+        assert_derivatives(&nlp, "double bubble, junction planes");
+        assert_hessian(&nlp, "double bubble, junction planes");
         let options = Options {
             verbosity: 0,
             ..Options::default()

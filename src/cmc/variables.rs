@@ -2,15 +2,17 @@
 //! in per-vertex blocks.
 //!
 //! ```text
-//!   Cartesian vertex:  x_v = y_v              (3 columns, the scaled position)
-//!   normal vertex:     x_v = x⁰_v + t_v n_v   (1 column, t_v the displacement along n_v)
-//!   fixed vertex:      x_v = x⁰_v             (no column)
+//!   Cartesian vertex:  x_v = y_v                      (3 columns, the scaled position)
+//!   plane vertex:      x_v = x⁰_v + s_v a_v + t_v b_v   (2 columns, a_v ⊥ b_v unit vectors)
+//!   normal vertex:     x_v = x⁰_v + t_v n_v           (1 column, t_v the displacement along n_v)
+//!   fixed vertex:      x_v = x⁰_v                     (no column)
 //! ```
-//! in scaled units (positions over the characteristic length L), `n_v` a unit normal frozen
-//! when the problem is built (Surface Evolver's `hessian_normal`). The map is linear with
-//! `∂x_v/∂y_v = B_v` (`I` or `n_v`), so derivatives follow by the chain rule without second-order
-//! terms: a gradient `g_v` becomes `B_vᵀ g_v`, a Hessian block `M_uw = ∂²/∂x_u∂x_w` becomes
-//! `B_uᵀ M_uw B_w` (1×1, 1×3, 3×1 or 3×3).
+//! in scaled units (positions over the characteristic length L), `n_v` a unit normal and
+//! `(a_v, b_v)` the plane normal to a junction curve, frozen when the problem is built (Surface
+//! Evolver's `hessian_normal`, which moves a vertex of a triple line normal to the line). The map
+//! is linear with `∂x_v/∂y_v = B_v` (`I`, `[a_v b_v]` or `n_v`), so derivatives follow by the
+//! chain rule without second-order terms: a gradient `g_v` becomes `B_vᵀ g_v`, a Hessian block
+//! `M_uw = ∂²/∂x_u∂x_w` becomes `B_uᵀ M_uw B_w` (width(u) × width(w)).
 //!
 //! Hessian pattern: block `(u, w)` with `column(u) > column(w)` holds all `width(u)·width(w)`
 //! entries (row-major), a diagonal block `(u, u)` its lower triangle. Stars (a triangle's
@@ -27,8 +29,25 @@ enum Basis {
     Fixed,
     /// Three columns from this one: the scaled position.
     Cartesian(usize),
+    /// Two columns from this one: the displacements along two orthonormal directions.
+    Plane(usize, Point, Point),
     /// One column: the displacement along the unit normal.
     Normal(usize, Point),
+}
+
+impl Basis {
+    /// The columns of `B_v` (unit vectors; the coordinate axes for a Cartesian vertex), in
+    /// column order, and how many there are.
+    #[inline]
+    fn directions(self) -> ([Point; 3], usize) {
+        let z = Point::zeros();
+        match self {
+            Basis::Fixed => ([z; 3], 0),
+            Basis::Cartesian(_) => ([Point::x(), Point::y(), Point::z()], 3),
+            Basis::Plane(_, a, b) => ([a, b, z], 2),
+            Basis::Normal(_, n) => ([n, z, z], 1),
+        }
+    }
 }
 
 /// The vertex → column map of a problem (see the module header).
@@ -40,10 +59,12 @@ pub struct Variables {
 
 impl Variables {
     /// Columns from 0 on, in vertex order: none for a fixed vertex, one for a vertex with a
-    /// frozen unit normal (`normal(v)` is `Some`), three otherwise.
+    /// frozen unit normal (`normal(v)` is `Some`), two for a vertex moving in a frozen plane
+    /// (`plane(v)` is `Some`: two orthonormal vectors), three otherwise.
     pub fn new(
         fixed: impl Fn(usize) -> bool,
         normal: impl Fn(usize) -> Option<Point>,
+        plane: impl Fn(usize) -> Option<(Point, Point)>,
         n: usize,
     ) -> Self {
         let mut count = 0;
@@ -58,10 +79,16 @@ impl Variables {
                         count += 1;
                         Basis::Normal(column, n)
                     }
-                    None => {
-                        count += 3;
-                        Basis::Cartesian(column)
-                    }
+                    None => match plane(v) {
+                        Some((a, b)) => {
+                            count += 2;
+                            Basis::Plane(column, a, b)
+                        }
+                        None => {
+                            count += 3;
+                            Basis::Cartesian(column)
+                        }
+                    },
                 }
             })
             .collect();
@@ -77,7 +104,7 @@ impl Variables {
     pub fn column(&self, v: usize) -> Option<usize> {
         match self.basis[v] {
             Basis::Fixed => None,
-            Basis::Cartesian(c) | Basis::Normal(c, _) => Some(c),
+            Basis::Cartesian(c) | Basis::Plane(c, ..) | Basis::Normal(c, _) => Some(c),
         }
     }
 
@@ -86,6 +113,7 @@ impl Variables {
         match self.basis[v] {
             Basis::Fixed => 0,
             Basis::Cartesian(_) => 3,
+            Basis::Plane(..) => 2,
             Basis::Normal(..) => 1,
         }
     }
@@ -100,6 +128,7 @@ impl Variables {
         match self.basis[v] {
             Basis::Fixed => start,
             Basis::Cartesian(c) => Point::new(x[c], x[c + 1], x[c + 2]),
+            Basis::Plane(c, a, b) => start + x[c] * a + x[c + 1] * b,
             Basis::Normal(c, n) => start + x[c] * n,
         }
     }
@@ -109,6 +138,7 @@ impl Variables {
         match self.basis[v] {
             Basis::Fixed => {}
             Basis::Cartesian(c) => x[c..c + 3].copy_from_slice(start.as_slice()),
+            Basis::Plane(c, ..) => x[c..c + 2].fill(0.0),
             Basis::Normal(c, _) => x[c] = 0.0,
         }
     }
@@ -122,6 +152,10 @@ impl Variables {
                 grad[c + 1] += g.y;
                 grad[c + 2] += g.z;
             }
+            Basis::Plane(c, a, b) => {
+                grad[c] += a.dot(&g);
+                grad[c + 1] += b.dot(&g);
+            }
             Basis::Normal(c, n) => grad[c] += n.dot(&g),
         }
     }
@@ -134,6 +168,11 @@ impl Variables {
                 jac[*k..*k + 3].copy_from_slice(g.as_slice());
                 *k += 3;
             }
+            Basis::Plane(_, a, b) => {
+                jac[*k] = a.dot(&g);
+                jac[*k + 1] = b.dot(&g);
+                *k += 2;
+            }
             Basis::Normal(_, n) => {
                 jac[*k] = n.dot(&g);
                 *k += 1;
@@ -144,13 +183,29 @@ impl Variables {
     /// `B_uᵀ m B_w` in the top-left `width(u) × width(w)` corner of a 3×3 matrix.
     fn project(&self, u: usize, w: usize, m: &Matrix3<f64>) -> Matrix3<f64> {
         let mut p = *m;
-        if let Basis::Normal(_, n) = self.basis[u] {
-            let row = n.transpose() * p;
-            p.set_row(0, &row);
+        match self.basis[u] {
+            Basis::Normal(_, n) => {
+                let row = n.transpose() * p;
+                p.set_row(0, &row);
+            }
+            Basis::Plane(_, a, b) => {
+                let (ra, rb) = (a.transpose() * p, b.transpose() * p);
+                p.set_row(0, &ra);
+                p.set_row(1, &rb);
+            }
+            _ => {}
         }
-        if let Basis::Normal(_, n) = self.basis[w] {
-            let col = p * n;
-            p.set_column(0, &col);
+        match self.basis[w] {
+            Basis::Normal(_, n) => {
+                let col = p * n;
+                p.set_column(0, &col);
+            }
+            Basis::Plane(_, a, b) => {
+                let (ca, cb) = (p * a, p * b);
+                p.set_column(0, &ca);
+                p.set_column(1, &cb);
+            }
+            _ => {}
         }
         p
     }
@@ -296,7 +351,7 @@ impl HessianPattern {
                     values[slot + c] += factor * g[c];
                 }
             }
-            (Basis::Cartesian(_), _) => {
+            (Basis::Cartesian(_), Basis::Normal(..) | Basis::Cartesian(_)) => {
                 let mut k = slot;
                 for r in 0..3 {
                     let g = row(&Point::ith(r, 1.0));
@@ -308,6 +363,22 @@ impl HessianPattern {
                     for c in 0..3 {
                         if !diagonal || c <= r {
                             values[k] += factor * g[c];
+                            k += 1;
+                        }
+                    }
+                }
+            }
+            (basis, _) => {
+                // A plane vertex on either side: one row per direction of u, contracted with
+                // each direction of w.
+                let (rows, nr) = basis.directions();
+                let (cols, nc) = column.directions();
+                let mut k = slot;
+                for (r, d) in rows.iter().enumerate().take(nr) {
+                    let g = row(d);
+                    for (c, e) in cols.iter().enumerate().take(nc) {
+                        if !diagonal || c <= r {
+                            values[k] += factor * g.dot(e);
                             k += 1;
                         }
                     }

@@ -207,15 +207,39 @@ fn admissible_violators(
     growth: &Growth,
     violation: &dyn Fn(Beam) -> f64,
 ) -> Vec<(f64, Beam)> {
+    let mut found = admissible_where(structure, growth, |b| {
+        let v = violation(b);
+        (v > ADD_TOLERANCE).then_some(v)
+    });
+    found.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    found
+}
+
+/// Every admissible pair of joints not in the structure (module header), in pair order: the
+/// members that member adding may price.
+pub fn admissible_pairs(structure: &Structure, growth: &Growth) -> Vec<Beam> {
+    (admissible_where(structure, growth, |_| Some(())).into_iter())
+        .map(|(_, b)| b)
+        .collect()
+}
+
+/// The pairs p < q not in the structure for which `value` is some, that `growth` admits and
+/// whose q is the nearest joint to p in its direction, with their values, in pair order.
+/// `value` is tested first: it may be the cheaper filter.
+fn admissible_where<T>(
+    structure: &Structure,
+    growth: &Growth,
+    value: impl Fn(Beam) -> Option<T>,
+) -> Vec<(T, Beam)> {
     let joints = &structure.joints;
     let present: HashSet<Beam> = structure.beams.iter().copied().collect();
     let mut found = Vec::new();
     for p in 0..joints.len() {
-        let mine: Vec<(f64, Beam)> = (p + 1..joints.len())
+        let mine: Vec<(T, Beam)> = (p + 1..joints.len())
             .map(|q| Beam::new(p, q))
             .filter(|b| !present.contains(b))
-            .map(|b| (violation(b), b))
-            .filter(|&(v, b)| v > ADD_TOLERANCE && (growth.admits)(b))
+            .filter_map(|b| value(b).map(|v| (v, b)))
+            .filter(|&(_, b)| (growth.admits)(b))
             .collect();
         if mine.is_empty() {
             continue;
@@ -226,7 +250,6 @@ fn admissible_violators(
             nearest.get(&direction_key(structure, p, q)) == Some(&q)
         }));
     }
-    found.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
     found
 }
 
@@ -370,5 +393,56 @@ mod tests {
         for b in &grown.beams {
             assert!(full.beams.contains(b), "{b:?} passes through a joint");
         }
+    }
+
+    #[test]
+    fn the_admissible_pairs_complete_the_ground_structure_whose_lp_member_adding_solves() {
+        let (nx, ny) = (6, 4);
+        let full = cantilever(nx, ny, nx * ny);
+        let sparse = cantilever(nx, ny, 4);
+        let admits = |b: Beam| {
+            let [a, c] = b.ends;
+            !(sparse.joints[a].is_anchor() && sparse.joints[c].is_anchor())
+        };
+        let close = |beams: Vec<Beam>| beams;
+        let growth = Growth {
+            admits: &admits,
+            close: &close,
+        };
+        let added = admissible_pairs(&sparse, &growth);
+        let mut whole = sparse.clone();
+        whole.beams.extend(&added);
+        let distinct: HashSet<Beam> = whole.beams.iter().copied().collect();
+        assert_eq!(distinct.len(), whole.beams.len(), "a pair listed twice");
+        for b in &added {
+            assert!(!sparse.beams.contains(b) && admits(*b), "{b:?}");
+            assert!(full.beams.contains(b), "{b:?} passes through a joint");
+        }
+        // Every pair of the full ground structure that the rule admits is there.
+        let admitted = (full.beams.iter()).filter(|b| admits(**b)).count();
+        assert_eq!(distinct.len(), admitted);
+        let interrupt = Interrupt::new();
+        let volume = |s: &Structure| {
+            let costs: Vec<(f64, f64)> = (0..s.beams.len())
+                .map(|j| unit_price(s.length(j)).cost)
+                .collect();
+            plastic::layout_with_costs(s, 0, 2, &costs, None, LpMethod::Simplex, &interrupt)
+                .unwrap()
+                .volume
+        };
+        let grown = solve(
+            &sparse,
+            2,
+            &unit_price,
+            Some(&growth),
+            LpMethod::InteriorPoint,
+            &interrupt,
+        )
+        .unwrap();
+        let (whole_lp, adding) = (volume(&whole), grown.cases[0].volume);
+        assert!(
+            (whole_lp - adding).abs() < 1e-7 * whole_lp,
+            "{whole_lp} vs {adding}"
+        );
     }
 }

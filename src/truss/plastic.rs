@@ -102,6 +102,49 @@ pub fn layout_with_costs(
     interrupt: &Interrupt,
 ) -> Result<PlasticLayout, LpError> {
     let beams = structure.beams.len();
+    let LayoutLp { a, b, cost } = layout_lp(structure, case, axes, costs, self_weight);
+    let s = match method {
+        LpMethod::Simplex => lp::solve(&DMatrix::from(&a), &b, &cost, interrupt)?,
+        LpMethod::InteriorPoint => {
+            lp::solve_sparse(&CsrMatrix::from(&a), &b, &cost, true, interrupt)?
+        }
+        LpMethod::InteriorFace => {
+            lp::solve_sparse(&CsrMatrix::from(&a), &b, &cost, false, interrupt)?
+        }
+    };
+    let forces = (0..beams).map(|j| s.x[j] - s.x[beams + j]).collect();
+    let dual_volume = s.y.iter().zip(&b).map(|(y, b)| y * b).sum();
+    Ok(PlasticLayout {
+        volume: s.objective,
+        forces,
+        duals: s.y,
+        dual_volume,
+        primal_residual: s.primal_residual,
+        dual_infeasibility: s.dual_infeasibility,
+    })
+}
+
+/// The layout LP in standard form `min costᵀx s.t. A x = b, x ≥ 0` (module header).
+#[derive(Debug, Clone)]
+pub struct LayoutLp {
+    /// Balance rows (each joint's balance directions in joint order) by columns: column j is
+    /// beam j's compression c_j, column `beams + j` its tension t_j.
+    pub a: CooMatrix<f64>,
+    /// Minus the loads along each row's direction, N.
+    pub b: Vec<f64>,
+    /// Cost per newton of each column (the unit of `costs`).
+    pub cost: Vec<f64>,
+}
+
+/// The LP that [`layout_with_costs`] solves (same arguments), without solving it.
+pub fn layout_lp(
+    structure: &Structure,
+    case: usize,
+    axes: usize,
+    costs: &[(f64, f64)],
+    self_weight: Option<&[(f64, f64)]>,
+) -> LayoutLp {
+    let beams = structure.beams.len();
     let mut rows: Vec<(usize, nalgebra::Vector3<f64>)> = Vec::new();
     let mut first_row = Vec::with_capacity(structure.joints.len());
     for (i, joint) in structure.joints.iter().enumerate() {
@@ -140,25 +183,7 @@ pub fn layout_with_costs(
         .iter()
         .map(|(i, r)| -r.dot(&structure.joints[*i].loads[case]))
         .collect();
-    let s = match method {
-        LpMethod::Simplex => lp::solve(&DMatrix::from(&a), &b, &cost, interrupt)?,
-        LpMethod::InteriorPoint => {
-            lp::solve_sparse(&CsrMatrix::from(&a), &b, &cost, true, interrupt)?
-        }
-        LpMethod::InteriorFace => {
-            lp::solve_sparse(&CsrMatrix::from(&a), &b, &cost, false, interrupt)?
-        }
-    };
-    let forces = (0..beams).map(|j| s.x[j] - s.x[beams + j]).collect();
-    let dual_volume = s.y.iter().zip(&b).map(|(y, b)| y * b).sum();
-    Ok(PlasticLayout {
-        volume: s.objective,
-        forces,
-        duals: s.y,
-        dual_volume,
-        primal_residual: s.primal_residual,
-        dual_infeasibility: s.dual_infeasibility,
-    })
+    LayoutLp { a, b, cost }
 }
 
 /// Virtual displacements of the joints from the duals of [`layout_with_costs`] (same `axes`):

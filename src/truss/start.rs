@@ -72,7 +72,7 @@ use super::mass::Compression;
 use super::member_adding::{self, Growth, MemberPrice};
 use super::model::{Beam, Mirror, Objective, Obstacle, Settings, Structure};
 use super::nlp::ForceParts;
-use super::plastic::LpMethod;
+use super::plastic::{self, LayoutLp, LpMethod};
 use crate::solver::Interrupt;
 
 /// Beams carrying at most this fraction of the largest |λ| in every case are idle.
@@ -240,47 +240,13 @@ fn lp_forces(
     grow: Option<(&FullConnectivity, bool)>,
     interrupt: &Interrupt,
 ) -> Result<(Structure, Vec<Vec<f64>>, LpReport), LpError> {
-    let force_scale = (structure.joints.iter())
-        .flat_map(|j| j.loads.iter())
-        .map(|f| f.norm())
-        .fold(0.0, f64::max)
-        .max(f64::MIN_POSITIVE);
-    // Loads scaled to O(1) for the solver's tolerances.
-    let sub = Structure {
-        joints: (structure.joints.iter())
-            .map(|j| {
-                let mut j = j.clone();
-                for f in j.loads.iter_mut() {
-                    *f /= force_scale;
-                }
-                j
-            })
-            .collect(),
-        beams: (structure.beams.iter().zip(usable))
-            .filter_map(|(b, &u)| u.then_some(*b))
-            .collect(),
-    };
-    let cost_scale = (0..sub.beams.len())
-        .map(|j| {
-            let c = cost_per_newton(sub.length(j), settings, force_scale);
-            c.0.max(c.1)
-        })
-        .fold(0.0, f64::max)
-        .max(f64::MIN_POSITIVE);
-    let price = |length: f64| {
-        let (t, c) = cost_per_newton(length, settings, force_scale);
-        MemberPrice {
-            cost: (t / cost_scale, c / cost_scale),
-            weight: self_weight.then(|| mass_per_newton(length, settings, force_scale)),
-        }
-    };
-    let sub_ref = &sub;
+    let scaled = Scaled::new(structure, settings, usable);
+    let (sub, force_scale, cost_scale) = (&scaled.structure, scaled.force_scale, scaled.cost_scale);
+    let price = |length: f64| scaled.price(length, settings, self_weight);
+    let scaled_ref = &scaled;
     let growth = grow.map(|(full, must_clear)| {
-        let admits = move |beam: Beam| {
-            full.admits_ends(&sub_ref.joints, beam, &settings.obstacles)
-                && (!must_clear || clears_spheres(sub_ref, &beam, &settings.obstacles))
-        };
-        let close = move |beams: Vec<Beam>| full.close(&sub_ref.joints, beams, settings);
+        let admits = move |beam: Beam| scaled_ref.admits(full, must_clear, settings, beam);
+        let close = move |beams: Vec<Beam>| full.close(&sub.joints, beams, settings);
         (admits, close)
     });
     let growth = growth
@@ -292,7 +258,7 @@ fn lp_forces(
         Some(_) => LpMethod::InteriorFace,
         None => LpMethod::InteriorPoint,
     };
-    let layouts = member_adding::solve(&sub, axes, &price, growth.as_ref(), method, interrupt)?;
+    let layouts = member_adding::solve(sub, axes, &price, growth.as_ref(), method, interrupt)?;
     let mut ground = structure.clone();
     let mut index: std::collections::HashMap<Beam, usize> = (ground.beams.iter().enumerate())
         .map(|(j, b)| (*b, j))
@@ -332,6 +298,108 @@ fn lp_forces(
         solves: layouts.iterations,
     };
     Ok((ground, forces, report))
+}
+
+/// The ground structure of the start's LPs in O(1) numbers: the usable beams, the loads divided
+/// by the largest load `force_scale` (N), and the per-newton costs by the largest usable beam's
+/// `cost_scale`; an LP objective times `force_scale·cost_scale` is in the cost's unit (kg, or m
+/// for the length objective).
+struct Scaled {
+    structure: Structure,
+    force_scale: f64,
+    cost_scale: f64,
+}
+
+impl Scaled {
+    fn new(structure: &Structure, settings: &Settings, usable: &[bool]) -> Self {
+        let force_scale = (structure.joints.iter())
+            .flat_map(|j| j.loads.iter())
+            .map(|f| f.norm())
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let sub = Structure {
+            joints: (structure.joints.iter())
+                .map(|j| {
+                    let mut j = j.clone();
+                    for f in j.loads.iter_mut() {
+                        *f /= force_scale;
+                    }
+                    j
+                })
+                .collect(),
+            beams: (structure.beams.iter().zip(usable))
+                .filter_map(|(b, &u)| u.then_some(*b))
+                .collect(),
+        };
+        let cost_scale = (0..sub.beams.len())
+            .map(|j| {
+                let c = cost_per_newton(sub.length(j), settings, force_scale);
+                c.0.max(c.1)
+            })
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        Scaled {
+            structure: sub,
+            force_scale,
+            cost_scale,
+        }
+    }
+
+    /// The scaled LP price of a member of `length` m, with its self-weight if `self_weight`.
+    fn price(&self, length: f64, settings: &Settings, self_weight: bool) -> MemberPrice {
+        let (t, c) = cost_per_newton(length, settings, self.force_scale);
+        MemberPrice {
+            cost: (t / self.cost_scale, c / self.cost_scale),
+            weight: self_weight.then(|| mass_per_newton(length, settings, self.force_scale)),
+        }
+    }
+
+    /// Whether member adding may add `beam`: `full`'s rules for its ends and, if `must_clear`,
+    /// clear of the sphere obstacles.
+    fn admits(
+        &self,
+        full: &FullConnectivity,
+        must_clear: bool,
+        settings: &Settings,
+        beam: Beam,
+    ) -> bool {
+        full.admits_ends(&self.structure.joints, beam, &settings.obstacles)
+            && (!must_clear || clears_spheres(&self.structure, &beam, &settings.obstacles))
+    }
+}
+
+/// The layout LP of load case `case` over the whole ground structure that the start's member
+/// adding prices (the beams clear of the sphere obstacles and every admissible pair of joints,
+/// see [`member_adding::admissible_pairs`]), with the start's scaling and self-weight setting,
+/// and the factor that turns its objective into kg (m for the length objective): the same LP
+/// for other LP solvers. The start's first LP on a structure; its later LPs, after tension runs
+/// are merged, have other members.
+pub fn full_layout_lp(
+    structure: &Structure,
+    settings: &Settings,
+    full: &FullConnectivity,
+    case: usize,
+) -> (LayoutLp, f64) {
+    let clear: Vec<bool> = (structure.beams.iter())
+        .map(|b| clears_spheres(structure, b, &settings.obstacles))
+        .collect();
+    let mut scaled = Scaled::new(structure, settings, &clear);
+    let admits = |beam: Beam| scaled.admits(full, true, settings, beam);
+    let close = |beams: Vec<Beam>| beams;
+    let growth = Growth {
+        admits: &admits,
+        close: &close,
+    };
+    let added = member_adding::admissible_pairs(&scaled.structure, &growth);
+    scaled.structure.beams.extend(added);
+    let prices: Vec<MemberPrice> = (0..scaled.structure.beams.len())
+        .map(|j| scaled.price(scaled.structure.length(j), settings, settings.self_weight))
+        .collect();
+    let costs: Vec<(f64, f64)> = prices.iter().map(|p| p.cost).collect();
+    let weights: Option<Vec<(f64, f64)>> = prices.iter().map(|p| p.weight).collect();
+    let axes = settings.balance_axes();
+    let lp = plastic::layout_lp(&scaled.structure, case, axes, &costs, weights.as_deref());
+    (lp, scaled.force_scale * scaled.cost_scale)
 }
 
 /// Replaces every tension run through a free joint by one member (module header, "Tension

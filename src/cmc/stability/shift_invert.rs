@@ -100,50 +100,38 @@ pub(super) fn smallest(
     let k = CsrMatrix::from(&coo);
     let block = (wanted + GUARD).min(free);
     // A deterministic spread start (Weyl sequence), projected.
-    let start: Vec<DVector<f64>> = (0..block)
-        .map(|j| {
+    let start: Vec<f64> = (0..block)
+        .flat_map(|j| {
             let mut x = DVector::from_fn(n, |i, _| {
                 ((i * block + j + 1) as f64 * 0.618_033_988_749_895).fract() - 0.5
             });
             project(&mut x, basis);
-            x
+            Vec::from(x.data)
         })
         .collect();
     // The basis V and K V, column-major n×m, grown a block at a time.
     let mut v: Vec<f64> = Vec::new();
     let mut kv: Vec<f64> = Vec::new();
     let mut h = DMatrix::zeros(0, 0);
-    // The directions T is applied to: the start, then the residuals not yet converged.
+    // The directions T is applied to (column-major n×·): the start, then the residuals not yet
+    // converged.
     let mut directions = start;
     for _ in 0..FILTER_STEPS {
-        let mut applied: Vec<f64> = directions.iter().flat_map(|x| x.iter().copied()).collect();
-        bordered.solve(&mut applied);
-        directions = orthonormal(applied.chunks_exact(n), basis);
+        bordered.solve(&mut directions);
+        let mut filtered = Vec::with_capacity(directions.len());
+        append_orthonormal(n, &directions, basis, &mut filtered, free);
+        directions = filtered;
     }
     for _ in 0..MAX_STEPS {
-        let mut applied: Vec<f64> = directions.iter().flat_map(|x| x.iter().copied()).collect();
-        bordered.solve(&mut applied);
+        bordered.solve(&mut directions);
         let old = v.len() / n;
-        for column in applied.chunks_exact(n) {
-            let mut x = DVector::from_column_slice(column);
-            project(&mut x, basis);
-            let before = x.norm();
-            let m = v.len() / n;
-            let basis_v = DMatrixView::from_slice(&v, n, m);
-            for _ in 0..2 {
-                let c = basis_v.tr_mul(&x);
-                x.gemv(-1.0, &basis_v, &c, 1.0);
-            }
-            let after = x.norm();
-            if after > 1e-8 * before && m < free {
-                x /= after;
-                kv.extend((&k * &x).iter());
-                v.extend(x.iter());
-            }
-        }
+        append_orthonormal(n, &directions, basis, &mut v, free);
         let m = v.len() / n;
         if m == old {
             return Ok(None);
+        }
+        for column in v[old * n..].chunks_exact(n) {
+            kv.extend((&k * DVector::from_column_slice(column)).iter());
         }
         let (all_v, all_kv) = (
             DMatrixView::from_slice(&v, n, m),
@@ -194,35 +182,41 @@ pub(super) fn smallest(
             }));
         }
         directions = residuals
-            .into_iter()
+            .iter()
             .zip(done)
             .filter(|(_, d)| !d)
-            .map(|(r, _)| r)
+            .flat_map(|(r, _)| r.iter().copied())
             .collect();
     }
     Ok(None)
 }
 
-/// The columns, projected (P) and orthonormalized in turn (Gram–Schmidt twice); a column that
-/// loses all but 1e-8 of its norm is dropped.
-fn orthonormal<'a>(
-    columns: impl Iterator<Item = &'a [f64]>,
+/// Appends each column of `columns` (column-major, n rows) to the orthonormal column-major
+/// n×m `v`: projected (P), orthogonalized against `v` by classical Gram–Schmidt twice and
+/// normalized. A column that loses all but 1e-8 of its norm is dropped, and so is every column
+/// once `v` has `limit` columns.
+fn append_orthonormal(
+    n: usize,
+    columns: &[f64],
     basis: &[DVector<f64>],
-) -> Vec<DVector<f64>> {
-    let mut kept: Vec<DVector<f64>> = Vec::new();
-    for column in columns {
+    v: &mut Vec<f64>,
+    limit: usize,
+) {
+    for column in columns.chunks_exact(n) {
         let mut x = DVector::from_column_slice(column);
         project(&mut x, basis);
         let before = x.norm();
+        let m = v.len() / n;
+        let basis_v = DMatrixView::from_slice(v, n, m);
         for _ in 0..2 {
-            project(&mut x, &kept);
+            let c = basis_v.tr_mul(&x);
+            x.gemv(-1.0, &basis_v, &c, 1.0);
         }
         let after = x.norm();
-        if after > 1e-8 * before {
-            kept.push(x / after);
+        if after > 1e-8 * before && m < limit {
+            v.extend(x.iter().map(|e| e / after));
         }
     }
-    kept
 }
 
 /// Error bounds of the ascending Ritz values `theta` (residual norms `norms`; `beyond` the next
