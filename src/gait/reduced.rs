@@ -684,8 +684,12 @@ impl Nlp for Reduced<'_> {
     ) -> Result<(), EvalError> {
         self.objective(x, Some(grad));
         jac.fill(0.0);
-        if !self.jacobian_by_sensitivities(x, jac, grad).map_err(domain)? {
-            self.jacobian_by_parameter_duals(x, jac, grad).map_err(domain)?;
+        if !self
+            .jacobian_by_sensitivities(x, jac, grad)
+            .map_err(domain)?
+        {
+            self.jacobian_by_parameter_duals(x, jac, grad)
+                .map_err(domain)?;
         }
         if grad.iter().chain(jac.iter()).all(|v| v.is_finite()) {
             Ok(())

@@ -1832,9 +1832,11 @@ min = 0.1
         assert_eq!((s.stiffness, s.damping, s.rest), (10.0, 0.5, 0.2));
         assert_eq!(p.model.actuators[0].control_range(), [-1.2, 0.8]);
         assert!(p.model.has_servos());
-        let no_limits = BASE
-            .replacen("bounds = [-2.0, 2.0]", servo, 1)
-            .replacen(" limits = [-1.0, 1.0],", "", 1);
+        let no_limits = BASE.replacen("bounds = [-2.0, 2.0]", servo, 1).replacen(
+            " limits = [-1.0, 1.0],",
+            "",
+            1,
+        );
         let (message, line) = error_and_line(&no_limits);
         assert!(message.contains("a servo needs limits"), "{message}");
         assert!(line.starts_with("servo"), "{line}");

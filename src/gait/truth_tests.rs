@@ -315,19 +315,30 @@ fn servo_pendulum_settles_at_the_balance_of_servo_and_gravity() {
         assert!(balance(lo) < 0.0 && balance(hi) < 0.0 || balance(lo) * balance(hi) < 0.0);
         for _ in 0..200 {
             let mid = 0.5 * (lo + hi);
-            if balance(mid) > 0.0 { lo = mid } else { hi = mid }
+            if balance(mid) > 0.0 {
+                lo = mid
+            } else {
+                hi = mid
+            }
         }
         let exact = 0.5 * (lo + hi);
         let controls = |_: f64, out: &mut [f64]| out.fill(u);
         let dt = 1e-4;
         let mut sim = Simulator::<f64>::new(&m);
-        let mut x = State { q: vec![rest], v: vec![0.0] };
+        let mut x = State {
+            q: vec![rest],
+            v: vec![0.0],
+        };
         let mut largest: f64 = 0.0;
         for n in 0..100_000 {
             sim.step(n as f64 * dt, dt, &mut x, &controls).unwrap();
             largest = largest.max(actuator.force(u, x.q[0], x.v[0]).abs());
         }
-        assert!((x.q[0] - exact).abs() < 1e-9, "settled at {} vs {exact}", x.q[0]);
+        assert!(
+            (x.q[0] - exact).abs() < 1e-9,
+            "settled at {} vs {exact}",
+            x.q[0]
+        );
         assert!(x.v[0].abs() < 1e-9, "rate {}", x.v[0]);
         assert!(largest < bound, "force {largest} beyond the bound {bound}");
         let before = sim.effort;
@@ -336,7 +347,11 @@ fn servo_pendulum_settles_at_the_balance_of_servo_and_gravity() {
         }
         let tau = actuator.force(u, exact, 0.0);
         let rate = sim.effort - before;
-        assert!((rate - tau * tau).abs() < 1e-8 * tau * tau, "effort {rate} vs τ² {}", tau * tau);
+        assert!(
+            (rate - tau * tau).abs() < 1e-8 * tau * tau,
+            "effort {rate} vs τ² {}",
+            tau * tau
+        );
     }
 }
 

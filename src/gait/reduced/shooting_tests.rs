@@ -311,6 +311,9 @@ fn servo_effort_gradient_matches_the_oracle_and_central_differences() {
             worst = worst.max((fd - grad[j]).abs() / grad[j].abs().max(1.0));
         }
         println!("{segments} segments: effort {f:.4} N²·s, gradient vs central {worst:.2e}");
-        assert!(worst < 1e-6, "{segments} segments: gradient vs central {worst}");
+        assert!(
+            worst < 1e-6,
+            "{segments} segments: gradient vs central {worst}"
+        );
     }
 }
