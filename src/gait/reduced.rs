@@ -649,7 +649,8 @@ impl Nlp for Reduced<'_> {
 
     fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
         *f = self.objective(x, None);
-        let parts: Vec<Result<(Vec<(usize, f64)>, f64), SimError>> = (0..self.segments())
+        type Part = (Vec<(usize, f64)>, f64);
+        let parts: Vec<Result<Part, SimError>> = (0..self.segments())
             .into_par_iter()
             .map(|k| {
                 let mut out = Vec::new();
