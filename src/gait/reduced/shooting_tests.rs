@@ -3,7 +3,7 @@
 //! the continuity rows) matches the dual-number oracle and extrapolated central differences.
 
 use super::Reduced;
-use super::tests::{gap_to_oracle, shortened};
+use super::tests::{central_difference, gap_to_oracle, shortened};
 use crate::gait::sim::Simulator;
 use crate::gait::spline::SplineControls;
 use crate::solver::Nlp;
@@ -300,14 +300,7 @@ fn servo_effort_gradient_matches_the_oracle_and_central_differences() {
         nlp.eval(&x, &mut f, &mut c).unwrap();
         let mut worst: f64 = 0.0;
         for j in 0..d.n {
-            let h = 1e-6 * x[j].abs().max(1.0);
-            let (mut xp, mut xm) = (x.clone(), x.clone());
-            xp[j] += h;
-            xm[j] -= h;
-            let (mut fp, mut fm, mut cp, mut cm) = (0.0, 0.0, vec![0.0; d.m], vec![0.0; d.m]);
-            nlp.eval(&xp, &mut fp, &mut cp).unwrap();
-            nlp.eval(&xm, &mut fm, &mut cm).unwrap();
-            let fd = (fp - fm) / (2.0 * h);
+            let (fd, _) = central_difference(&nlp, &x, j);
             worst = worst.max((fd - grad[j]).abs() / grad[j].abs().max(1.0));
         }
         println!("{segments} segments: effort {f:.4} N²·s, gradient vs central {worst:.2e}");
