@@ -119,7 +119,7 @@ fn benches(c: &mut Criterion) {
             mg / ms
         );
     }
-    let mut jac1 = vec![0.0; d.jac_nnz];
+    let (mut jac1, mut grad1) = (vec![0.0; d.jac_nnz], vec![0.0; d.n]);
     let one = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
@@ -127,7 +127,7 @@ fn benches(c: &mut Criterion) {
     group.bench_function("dual_oracle_1thread", |b| {
         b.iter(|| {
             one.install(|| {
-                nlp.jacobian_by_parameter_duals(&x, &mut jac1)
+                nlp.jacobian_by_parameter_duals(&x, &mut jac1, &mut grad1)
                     .expect("finite")
             })
         })

@@ -236,7 +236,8 @@ pub struct Link {
     pub v_index: usize,
 }
 
-/// An actuator: a bounded generalized force on one scalar joint.
+/// An actuator: a bounded generalized force on one scalar joint, either commanded directly
+/// (its control is the force) or by a position servo (its control is a set-point offset).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Actuator {
     /// Name.
@@ -245,6 +246,91 @@ pub struct Actuator {
     pub link: usize,
     /// Lower and upper force bounds (N·m or N).
     pub bounds: [f64; 2],
+    /// Position servo: the control is the set-point offset and the force follows the joint.
+    pub servo: Option<Servo>,
+}
+
+/// A position servo on a scalar joint with coordinate `q` and rate `q̇`: for control `u` (the
+/// set-point's offset from `rest`, rad or m) the actuator force is
+/// ```text
+///   τ = sat(e),  e = kp·(rest + u − q) − kd·q̇,
+///   sat(e) = mid + half·tanh((e − mid)/half),  mid, half = centre and half-width of the bounds
+/// ```
+/// so `τ` never leaves the actuator's bounds, `sat(e) ≈ e` for small `e − mid`, and
+/// `sat′(e) = 1 − tanh²((e − mid)/half) ∈ (0, 1]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Servo {
+    /// Proportional gain kp (N·m/rad or N/m).
+    pub stiffness: f64,
+    /// Rate gain kd (N·m·s/rad or N·s/m).
+    pub damping: f64,
+    /// Set point at zero control (rad or m): the joint's coordinate in the file's initial state.
+    pub rest: f64,
+    /// Range of the control `u` (rad or m): the joint's limits less `rest`.
+    pub offsets: [f64; 2],
+}
+
+/// An actuator's force and its partial derivatives at one state (see [`Servo`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ForcePartials {
+    /// Force (N·m or N).
+    pub force: f64,
+    /// `∂τ/∂u`.
+    pub d_control: f64,
+    /// `∂τ/∂q` of the driven joint's coordinate.
+    pub d_position: f64,
+    /// `∂τ/∂q̇` of the driven joint's rate.
+    pub d_rate: f64,
+}
+
+impl Actuator {
+    /// Range `[lower, upper]` of the control: the force bounds (N·m or N), or for a servo the
+    /// set-point offsets (rad or m).
+    pub fn control_range(&self) -> [f64; 2] {
+        self.servo.map_or(self.bounds, |s| s.offsets)
+    }
+
+    /// The force for control `u` at joint coordinate `q` and rate `qd` (see [`Servo`]).
+    pub fn force<T: Real>(&self, u: T, q: T, qd: T) -> T {
+        match &self.servo {
+            None => u,
+            Some(s) => {
+                let (mid, half) = self.saturation();
+                let e = (u + s.rest - q) * s.stiffness - qd * s.damping;
+                ((e - mid) / half).tanh() * half + mid
+            }
+        }
+    }
+
+    /// [`Actuator::force`] and its partial derivatives.
+    pub fn force_partials(&self, u: f64, q: f64, qd: f64) -> ForcePartials {
+        match &self.servo {
+            None => ForcePartials {
+                force: u,
+                d_control: 1.0,
+                d_position: 0.0,
+                d_rate: 0.0,
+            },
+            Some(s) => {
+                let (mid, half) = self.saturation();
+                let e = s.stiffness * (u + s.rest - q) - s.damping * qd;
+                let th = ((e - mid) / half).tanh();
+                let slope = 1.0 - th * th;
+                ForcePartials {
+                    force: mid + half * th,
+                    d_control: slope * s.stiffness,
+                    d_position: -slope * s.stiffness,
+                    d_rate: -slope * s.damping,
+                }
+            }
+        }
+    }
+
+    /// Centre and half-width of the force bounds.
+    fn saturation(&self) -> (f64, f64) {
+        let [lo, hi] = self.bounds;
+        (0.5 * (lo + hi), 0.5 * (hi - lo))
+    }
 }
 
 /// The ground contact law's constants (seed eq. 3.26–3.27 plus friction); see
@@ -388,6 +474,25 @@ impl Model {
             };
             out.push(x);
         }
+    }
+
+    /// Whether an actuator is a position servo: the controls are then set points and the effort
+    /// `∫Σ τ² dt` depends on the motion.
+    pub fn has_servos(&self) -> bool {
+        self.actuators.iter().any(|a| a.servo.is_some())
+    }
+
+    /// Actuator forces for controls `u` (one per actuator) at state `(q, v)`, added into `tau`
+    /// (length nv); returns `Σ τ²` (N²·m² or N²).
+    pub fn add_actuators<T: Real>(&self, u: &[T], q: &[T], v: &[T], tau: &mut [T]) -> T {
+        let mut square = T::zero();
+        for (a, ua) in self.actuators.iter().zip(u) {
+            let l = &self.links[a.link];
+            let f = a.force(*ua, q[l.q_index], v[l.v_index]);
+            tau[l.v_index] += f;
+            square += f * f;
+        }
+        square
     }
 
     /// Passive generalized forces of springs, dampers and limits, added into `tau` (length nv).

@@ -46,7 +46,7 @@ pub struct Sampled {
     pub states: Vec<State<f64>>,
     /// World-to-link transforms per sample and link.
     pub poses: Vec<Vec<Xform<f64>>>,
-    /// Actuator forces per sample (N or N·m).
+    /// Actuator forces per sample (N or N·m; a servo's force at the sampled state).
     pub forces: Vec<Vec<f64>>,
 }
 
@@ -76,8 +76,12 @@ pub fn sample(problem: &Problem, x: &[f64], interval: f64) -> Result<Sampled, St
     let na = problem.model.actuators.len();
     sim.rollout(&mut state, problem.dt, &steps, &controls, |k, s, sim| {
         let t = steps[k] as f64 * problem.dt;
-        let mut f = vec![0.0; na];
-        controls.forces(t, &mut f);
+        let (mut u, mut f) = (vec![0.0; na], vec![0.0; problem.model.nv]);
+        controls.forces(t, &mut u);
+        problem.model.add_actuators(&u, &s.q, &s.v, &mut f);
+        let f = (problem.model.actuators.iter())
+            .map(|a| f[problem.model.links[a.link].v_index])
+            .collect();
         out.times.push(t);
         out.states.push(s.clone());
         out.poses.push(sim.dynamics.world.clone());

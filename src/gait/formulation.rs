@@ -10,10 +10,13 @@
 //! `F(t) ∈ [lo, hi]` for all `t`, tightly (`y₀ = y₁ = hi − δ`, `s₀ = S`, `s₁ = −S` reach `hi` at
 //! mid-segment).
 //! `δ = margin·(hi − lo)/2` (`[trials] slope_margin`). Box bounds only: no extra constraints.
+//! For a servo actuator the spline is its set-point offset and `[lo, hi]` the joint's limits
+//! less its rest angle ([`crate::gait::character::Actuator::control_range`]); the servo law
+//! itself keeps the force within its bounds.
 //!
 //! **Scaling.** Variable `z_j = x_j / σ_j` with `σ = (hi − lo)/2` for knot values and `σ = S`
 //! for slopes, so every variable ranges over about `[−1, 1]`; the objective `∫ΣF²dt` (N²·s) is
-//! divided by `Σₐ σₐ²·T`. Constraints keep their units (m, rad, m/s). With multiple shooting
+//! divided by `Σₐ fₐ²·T`, `fₐ` half the actuator's force range. Constraints keep their units (m, rad, m/s). With multiple shooting
 //! the segment start states follow the spline parameters as variables, unscaled (m, rad, m/s,
 //! rad/s) and unbounded; they start at the rollout of the start forces.
 
@@ -59,11 +62,12 @@ impl<'p> Formulation<'p> {
         );
         let mut objective_scale = 0.0;
         for (a, act) in problem.model.actuators.iter().enumerate() {
-            let [lo, hi] = act.bounds;
+            let [lo, hi] = act.control_range();
             let half = 0.5 * (hi - lo);
             let delta = margin * half;
             let slope = 4.0 * delta / grid.spacing();
-            objective_scale += half * half * grid.horizon;
+            let force = 0.5 * (act.bounds[1] - act.bounds[0]);
+            objective_scale += force * force * grid.horizon;
             for j in 0..block {
                 let i = a * block + j;
                 if j < k {
@@ -232,7 +236,8 @@ mod tests {
     /// the actuator bounds at any time, and the corners come within 1% of reaching them.
     #[test]
     fn box_bounds_keep_forces_within_limits_between_knots() {
-        let p = load("luxo_leap");
+        // Force controls (the shipped luxo_leap has servos, whose controls are set points).
+        let p = load("luxo_leap_soft");
         let f = Formulation::new(&p);
         let d = f.dims();
         let (lo, hi) = f.physical_bounds();

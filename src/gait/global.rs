@@ -128,7 +128,8 @@ pub fn search(
     for (a, act) in problem.model.actuators.iter().enumerate() {
         for i in 0..k {
             index.push(a * block + i);
-            scale.push(0.5 * (act.bounds[1] - act.bounds[0]));
+            let [lo, hi] = act.control_range();
+            scale.push(0.5 * (hi - lo));
         }
     }
     let fitness = |u: &[f64]| -> f64 {

@@ -30,7 +30,11 @@
 //! ordered by knot. A knot's basis vanishes outside `(t_{k−1}, t_{k+1})`, so a row whose segment
 //! lies outside that interval cannot depend on it: that Jacobian entry is structurally zero and
 //! absent from the pattern. Chunks run in parallel (rayon); each chunk's result is independent
-//! of scheduling. The objective and its gradient are closed-form and need no simulation.
+//! of scheduling. With force controls the objective and its gradient are closed-form and need
+//! no simulation; with servo actuators ([`crate::gait::character::Servo`]) the splines are
+//! set points, the force depends on the state, and the effort `∫₀ᵀ Σ τ² dt` is integrated along
+//! the rollout (to the horizon) with the RK4 weights, its gradient propagated with the
+//! sensitivities (or the dual numbers) like a constraint row.
 
 use nalgebra::DMatrix;
 use num_dual::DualSVec64;
@@ -285,15 +289,33 @@ impl<'p> Reduced<'p> {
         Ok(out)
     }
 
+    /// Whether the effort depends on the motion (servo actuators): it is then integrated along
+    /// the rollout, to the horizon, instead of in closed form from the splines.
+    fn effort_by_rollout(&self) -> bool {
+        self.problem.model.has_servos()
+    }
+
+    /// The RK4 step where the last segment's simulation ends: its last sample, or the
+    /// horizon when the effort is integrated along the rollout.
+    fn last_step(&self) -> usize {
+        let last = *self.boundaries.last().expect("non-empty");
+        if self.effort_by_rollout() {
+            last.max((self.problem.horizon / self.problem.dt).round() as usize)
+        } else {
+            last
+        }
+    }
+
     /// Simulates segment `k` with variables `x` (scalar type `T`) and writes its rows via
     /// `write(row, value)`: the pose constraints it owns, then the continuity defects
-    /// `x(b_{k+1}) − s_{k+1}` unless it is the last segment.
+    /// `x(b_{k+1}) − s_{k+1}` unless it is the last segment. Returns the segment's actuator
+    /// effort `∫Σ τ² dt` (N²·s; the last segment's to [`Self::last_step`]).
     fn simulate_segment<T: Real>(
         &self,
         k: usize,
         x: &[T],
         mut write: impl FnMut(usize, &T),
-    ) -> Result<(), SimError> {
+    ) -> Result<T, SimError> {
         let p = self.problem;
         let m = &p.model;
         let h = p.dt;
@@ -326,8 +348,13 @@ impl<'p> Reduced<'p> {
             for (i, (a, b)) in ends.zip(next.q.iter().chain(&next.v)).enumerate() {
                 write(self.continuity_row(k + 1, i), &(*a - *b));
             }
+        } else {
+            while n < self.last_step() {
+                sim.step(n as f64 * h, h, &mut state, &controls)?;
+                n += 1;
+            }
         }
-        Ok(())
+        Ok(sim.effort)
     }
 
     /// Whether row `r` belongs to segment `k` (a pose row it samples, or the continuity defect
@@ -342,11 +369,19 @@ impl<'p> Reduced<'p> {
 
     /// Jacobian values (pattern order) by propagating variable directions: chunks of
     /// [`CHUNK`] variables seeded as dual directions through the segments they affect, in
-    /// parallel.
-    pub fn jacobian_by_parameter_duals(&self, x: &[f64], jac: &mut [f64]) -> Result<(), SimError> {
+    /// parallel. When the effort is integrated along the rollout (servos), its gradient is
+    /// written into `grad` too (else `grad` is untouched).
+    pub fn jacobian_by_parameter_duals(
+        &self,
+        x: &[f64],
+        jac: &mut [f64],
+        grad: &mut [f64],
+    ) -> Result<(), SimError> {
         let n = x.len();
         let m = self.dims().m;
-        let results: Vec<Result<Vec<(usize, f64)>, SimError>> = self
+        let by_rollout = self.effort_by_rollout();
+        type Entries = (Vec<(usize, f64)>, Vec<(usize, f64)>);
+        let results: Vec<Result<Entries, SimError>> = self
             .chunks
             .par_iter()
             .map(|cols| {
@@ -355,30 +390,40 @@ impl<'p> Reduced<'p> {
                 for (d, &j) in cols.iter().enumerate() {
                     params[j] = params[j].derivative(d);
                 }
-                let mut out = Vec::new();
+                let eps = |v: &DualSVec64<CHUNK>, d: usize| v.eps.0.as_ref().map_or(0.0, |e| e[d]);
+                let (mut out, mut effort) = (Vec::new(), vec![0.0; cols.len()]);
                 for k in 0..self.segments() {
-                    let needed = (0..m).any(|r| {
-                        self.row_in_segment(r, k)
-                            && cols.iter().any(|&j| self.slot[r * n + j].is_some())
-                    });
+                    let needed = by_rollout
+                        || (0..m).any(|r| {
+                            self.row_in_segment(r, k)
+                                && cols.iter().any(|&j| self.slot[r * n + j].is_some())
+                        });
                     if !needed {
                         continue;
                     }
-                    self.simulate_segment(k, &params, |r, v| {
+                    let e = self.simulate_segment(k, &params, |r, v| {
                         for (d, &j) in cols.iter().enumerate() {
                             if let Some(s) = self.slot[r * n + j] {
-                                let eps = v.eps.0.as_ref().map_or(0.0, |e| e[d]);
-                                out.push((s, eps));
+                                out.push((s, eps(v, d)));
                             }
                         }
                     })?;
+                    for (d, g) in effort.iter_mut().enumerate() {
+                        *g += eps(&e, d);
+                    }
                 }
-                Ok(out)
+                Ok((out, cols.iter().copied().zip(effort).collect()))
             })
             .collect();
         for r in results {
-            for (s, v) in r? {
+            let (entries, effort) = r?;
+            for (s, v) in entries {
                 jac[s] = v;
+            }
+            if by_rollout {
+                for (j, g) in effort {
+                    grad[j] = g;
+                }
             }
         }
         Ok(())
@@ -490,7 +535,15 @@ impl<'p> Reduced<'p> {
         Ok(())
     }
 
+    /// The closed-form effort of the force splines and its gradient (module header); zero,
+    /// with a zero gradient, when the effort is integrated along the rollout instead (servos).
     fn objective(&self, x: &[f64], grad: Option<&mut [f64]>) -> f64 {
+        if self.effort_by_rollout() {
+            if let Some(g) = grad {
+                g.fill(0.0);
+            }
+            return 0.0;
+        }
         let block = self.grid.per_actuator();
         let x = &x[..self.n_par];
         let mut f = 0.0;
@@ -550,8 +603,7 @@ impl Nlp for Reduced<'_> {
         xu.fill(f64::INFINITY);
         for (a, act) in self.problem.model.actuators.iter().enumerate() {
             for j in 0..k {
-                xl[a * block + j] = act.bounds[0];
-                xu[a * block + j] = act.bounds[1];
+                [xl[a * block + j], xu[a * block + j]] = act.control_range();
             }
         }
         if let Some((lo, hi)) = &self.problem.initial_box {
@@ -597,17 +649,23 @@ impl Nlp for Reduced<'_> {
 
     fn eval(&self, x: &[f64], f: &mut f64, c: &mut [f64]) -> Result<(), EvalError> {
         *f = self.objective(x, None);
-        let parts: Vec<Result<Vec<(usize, f64)>, SimError>> = (0..self.segments())
+        type Part = (Vec<(usize, f64)>, f64);
+        let parts: Vec<Result<Part, SimError>> = (0..self.segments())
             .into_par_iter()
             .map(|k| {
                 let mut out = Vec::new();
-                self.simulate_segment(k, x, |r, v| out.push((r, *v)))?;
-                Ok(out)
+                let effort = self.simulate_segment(k, x, |r, v| out.push((r, *v)))?;
+                Ok((out, effort))
             })
             .collect();
+        let by_rollout = self.effort_by_rollout();
         for part in parts {
-            for (r, v) in part.map_err(domain)? {
+            let (rows, effort) = part.map_err(domain)?;
+            for (r, v) in rows {
                 c[r] = v;
+            }
+            if by_rollout {
+                *f += effort;
             }
         }
         if f.is_finite() && c.iter().all(|v| v.is_finite()) {
@@ -627,8 +685,12 @@ impl Nlp for Reduced<'_> {
     ) -> Result<(), EvalError> {
         self.objective(x, Some(grad));
         jac.fill(0.0);
-        if !self.jacobian_by_sensitivities(x, jac).map_err(domain)? {
-            self.jacobian_by_parameter_duals(x, jac).map_err(domain)?;
+        if !self
+            .jacobian_by_sensitivities(x, jac, grad)
+            .map_err(domain)?
+        {
+            self.jacobian_by_parameter_duals(x, jac, grad)
+                .map_err(domain)?;
         }
         if grad.iter().chain(jac.iter()).all(|v| v.is_finite()) {
             Ok(())
@@ -682,6 +744,24 @@ mod tests {
             .fold(0.0, f64::max)
     }
 
+    /// Central differences `(∂f/∂x_j, ∂c/∂x_j)` with the step `1e-6·max(|x_j|, 1)`.
+    pub(super) fn central_difference(nlp: &Reduced<'_>, x: &[f64], j: usize) -> (f64, Vec<f64>) {
+        let m = nlp.dims().m;
+        let h = 1e-6 * x[j].abs().max(1.0);
+        let (mut xp, mut xm) = (x.to_vec(), x.to_vec());
+        xp[j] += h;
+        xm[j] -= h;
+        let (mut fp, mut fm, mut cp, mut cm) = (0.0, 0.0, vec![0.0; m], vec![0.0; m]);
+        nlp.eval(&xp, &mut fp, &mut cp).unwrap();
+        nlp.eval(&xm, &mut fm, &mut cm).unwrap();
+        let dc = cp
+            .iter()
+            .zip(&cm)
+            .map(|(a, b)| (a - b) / (2.0 * h))
+            .collect();
+        ((fp - fm) / (2.0 * h), dc)
+    }
+
     #[test]
     fn exact_derivatives_match_central_differences() {
         for (name, factor) in [("luxo_leap", 0.1), ("pogo_jump", 0.1), ("biped_hop", 0.05)] {
@@ -722,17 +802,10 @@ mod tests {
             }
             let (mut worst, mut worst_g): (f64, f64) = (0.0, 0.0);
             for j in 0..d.n {
-                let h = 1e-6 * x[j].abs().max(1.0);
-                let (mut xp, mut xm) = (x.clone(), x.clone());
-                xp[j] += h;
-                xm[j] -= h;
-                let (mut fp, mut fm, mut cp, mut cm) = (0.0, 0.0, vec![0.0; d.m], vec![0.0; d.m]);
-                nlp.eval(&xp, &mut fp, &mut cp).unwrap();
-                nlp.eval(&xm, &mut fm, &mut cm).unwrap();
-                let g = (fp - fm) / (2.0 * h);
+                let (g, dc) = central_difference(&nlp, &x, j);
                 worst_g = worst_g.max((g - grad[j]).abs() / grad[j].abs().max(1.0));
                 for r in 0..d.m {
-                    let fd = (cp[r] - cm[r]) / (2.0 * h);
+                    let fd = dc[r];
                     let ad = dense[r * d.n + j];
                     if nlp.slot[r * d.n + j].is_none() {
                         assert_eq!(

@@ -4,7 +4,10 @@
 //! One RK4 step of size `h` from `(t, x)`: `k₁ = f(t, x)`, `k₂ = f(t + h/2, x + h/2·k₁)`,
 //! `k₃ = f(t + h/2, x + h/2·k₂)`, `k₄ = f(t + h, x + h·k₃)`,
 //! `x ← x + h/6·(k₁ + 2k₂ + 2k₃ + k₄)`, then a floating base's quaternion is renormalized.
-//! Controls are actuator forces (N·m or N) as functions of time, evaluated at the stage times.
+//! Controls are actuator forces (N·m or N), or a servo's set-point offsets (rad or m; see
+//! [`crate::gait::character::Servo`]), as functions of time, evaluated at the stage times. The
+//! actuator effort `∫ Σ τ² dt` is integrated alongside with the same weights
+//! ([`Simulator::effort`]).
 //! A step whose state is not finite (e.g. a contact point driven far below the ground, where the
 //! contact spring's exponential overflows) is reported as a [`SimError`], as is a raised
 //! interrupt flag ([`Simulator::interruptible`], polled every
@@ -55,9 +58,10 @@ pub fn poll(interrupt: Option<&Interrupt>, step: usize, t: f64) -> Result<(), Si
     }
 }
 
-/// Actuator forces as functions of time: fills `out` (one per actuator, N·m or N) at `t` (s).
+/// Actuator controls as functions of time: fills `out` (one per actuator: the force, N·m or N,
+/// or a servo's set-point offset, rad or m) at `t` (s).
 pub trait Controls<T> {
-    /// Actuator forces at time `t`.
+    /// Actuator controls at time `t`.
     fn forces(&self, t: f64, out: &mut [T]);
 }
 
@@ -92,6 +96,11 @@ pub struct Simulator<'m, T> {
     interrupt: Option<Interrupt>,
     /// Steps taken.
     steps: usize,
+    /// `Σ τ²` of the actuator forces at the last [`Simulator::derivative`] (N²·m² or N²).
+    stage_effort: T,
+    /// The actuator effort `∫ Σ τ² dt` over the steps taken (N²·s), by the RK4 quadrature of
+    /// the step (the effort as a state `ė = Σ τ²` integrated with the motion).
+    pub effort: T,
 }
 
 impl<'m, T: Real> Simulator<'m, T> {
@@ -112,6 +121,8 @@ impl<'m, T: Real> Simulator<'m, T> {
             },
             interrupt: None,
             steps: 0,
+            stage_effort: T::zero(),
+            effort: T::zero(),
         }
     }
 
@@ -143,9 +154,7 @@ impl<'m, T: Real> Simulator<'m, T> {
         self.tau.fill(T::zero());
         m.add_passive(&x.q, &x.v, &mut self.tau);
         controls.forces(t, &mut self.act);
-        for (a, f) in m.actuators.iter().zip(&self.act) {
-            self.tau[m.links[a.link].v_index] += *f;
-        }
+        self.stage_effort = m.add_actuators(&self.act, &x.q, &x.v, &mut self.tau);
         m.qdot(&x.q, &x.v, qd);
         self.dynamics.accelerations(m, &self.tau, &self.f_ext, vd);
     }
@@ -170,6 +179,7 @@ impl<'m, T: Real> Simulator<'m, T> {
             },
         );
         let stages = [(0.0, 0.0), (0.5, 0.5), (0.5, 0.5), (1.0, 1.0)];
+        let mut effort = T::zero();
         for (s, &(dt_frac, x_frac)) in stages.iter().enumerate() {
             if s == 0 {
                 tmp.q.copy_from_slice(&x.q);
@@ -185,8 +195,10 @@ impl<'m, T: Real> Simulator<'m, T> {
             }
             let (qd, vd) = (&mut kq[s], &mut kv[s]);
             self.derivative(t + dt_frac * h, &tmp, controls, qd, vd);
+            effort += self.stage_effort * if s == 1 || s == 2 { 2.0 } else { 1.0 };
         }
         let w = h / 6.0;
+        self.effort += effort * w;
         let combine = |x: &mut [T], k: &[Vec<T>; 4]| {
             for (j, xj) in x.iter_mut().enumerate() {
                 *xj += (k[0][j] + (k[1][j] + k[2][j]) * 2.0 + k[3][j]) * w;

@@ -34,7 +34,7 @@ use serde::Deserialize;
 
 use super::aba::Dynamics;
 use super::character::{
-    Actuator, ContactParams, JointKind, Limits, Link, Model, Shape, Spring, shape_center,
+    Actuator, ContactParams, JointKind, Limits, Link, Model, Servo, Shape, Spring, shape_center,
     shape_inertia,
 };
 use super::sim::State;
@@ -362,8 +362,24 @@ pub struct ActuatorSpec {
     /// Force bounds `[lower, upper]` (N·m for revolute, N for prismatic joints).
     #[serde(deserialize_with = "crate::spec::arrays::exact")]
     pub bounds: [f64; 2],
-    /// Starting guess: force at each control knot (N·m or N); default zeros.
+    /// Starting guess: control at each knot (force, N·m or N; for a servo the set-point offset,
+    /// rad or m); default zeros.
     pub start: Option<Vec<f64>>,
+    /// A position servo (`{ stiffness = kp, damping = kd }`, N·m/rad and N·m·s/rad, or N/m
+    /// and N·s/m): the actuator's controls are then set-point offsets from the joint's initial
+    /// coordinate, boxed by the joint's limits (required), and its force is the saturated servo
+    /// law of [`crate::gait::character::Servo`]. Default: none (the controls are the forces).
+    pub servo: Option<ServoSpec>,
+}
+
+/// A position servo's gains.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ServoSpec {
+    /// Proportional gain kp > 0 (N·m/rad or N/m).
+    pub stiffness: f64,
+    /// Rate gain kd ≥ 0 (N·m·s/rad or N·s/m).
+    pub damping: f64,
 }
 
 /// Contact law constants; see [`crate::gait::contact`]. All optional, seed values by default.
@@ -642,8 +658,9 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
     let (links, index) = build_links(source, &file.link)?;
     let contact = build_contact(source, &file.contact)?;
     let actuators = build_actuators(source, &file.actuator, &index, &links)?;
-    let model = Model::new(links, actuators, file.gravity, contact);
+    let mut model = Model::new(links, actuators, file.gravity, contact);
     let initial = build_initial(source, &file, &model)?;
+    set_servo_rests(&mut model, &initial);
     check_contacts_above_ground(source, &model, &initial)?;
 
     let knots = file.controls.knots.unwrap_or(6);
@@ -977,13 +994,50 @@ fn build_actuators(
             || format!("joint `{}` already has an actuator", spec.joint),
         )?;
         source.ordered_pair(&at("bounds"), spec.bounds)?;
+        let servo = match &spec.servo {
+            None => None,
+            Some(sv) => {
+                let mut key = at("servo");
+                key.push(Key::Name("stiffness"));
+                source.positive(&key, sv.stiffness)?;
+                key.pop();
+                key.push(Key::Name("damping"));
+                source.non_negative(&key, sv.damping)?;
+                let limits = links[link].limits.ok_or_else(|| {
+                    source.error_at(
+                        &at("servo"),
+                        format!("a servo needs limits on joint `{}`", spec.joint),
+                    )
+                })?;
+                // The rest and offsets are set from the initial state ([`set_servo_rests`]).
+                Some(Servo {
+                    stiffness: sv.stiffness,
+                    damping: sv.damping,
+                    rest: 0.0,
+                    offsets: [limits.lower, limits.upper],
+                })
+            }
+        };
         actuators.push(Actuator {
             name: spec.name.clone(),
             link,
             bounds: spec.bounds,
+            servo,
         });
     }
     Ok(actuators)
+}
+
+/// Each servo's set point at zero control is its joint's initial coordinate; its control range
+/// is the joint's limits less that.
+fn set_servo_rests(model: &mut Model, initial: &State<f64>) {
+    for a in &mut model.actuators {
+        if let Some(s) = &mut a.servo {
+            let rest = initial.q[model.links[a.link].q_index];
+            s.rest = rest;
+            s.offsets = [s.offsets[0] - rest, s.offsets[1] - rest];
+        }
+    }
 }
 
 /// Each actuator's start forces, one per knot (zero unless given).
@@ -1766,6 +1820,32 @@ min = 0.1
         );
         // Inertia from the capsule shape: centre of mass at its middle.
         assert_eq!(p.model.links[1].inertia.com.0, [0.15, 0.0, 0.0]);
+    }
+
+    /// A servo's set point at zero control is the joint's initial angle and its controls span
+    /// the joint's limits less that; a servo needs limits and positive gains.
+    #[test]
+    fn servos_load_relative_to_the_initial_pose() {
+        let servo = "bounds = [-2.0, 2.0]\nservo = { stiffness = 10.0, damping = 0.5 }";
+        let p = load(&BASE.replacen("bounds = [-2.0, 2.0]", servo, 1)).unwrap();
+        let s = p.model.actuators[0].servo.unwrap();
+        assert_eq!((s.stiffness, s.damping, s.rest), (10.0, 0.5, 0.2));
+        assert_eq!(p.model.actuators[0].control_range(), [-1.2, 0.8]);
+        assert!(p.model.has_servos());
+        let no_limits = BASE.replacen("bounds = [-2.0, 2.0]", servo, 1).replacen(
+            " limits = [-1.0, 1.0],",
+            "",
+            1,
+        );
+        let (message, line) = error_and_line(&no_limits);
+        assert!(message.contains("a servo needs limits"), "{message}");
+        assert!(line.starts_with("servo"), "{line}");
+        let negative = BASE.replacen(
+            "bounds = [-2.0, 2.0]",
+            "bounds = [-2.0, 2.0]\nservo = { stiffness = -1.0, damping = 0.5 }",
+            1,
+        );
+        assert!(load(&negative).is_err());
     }
 
     #[test]

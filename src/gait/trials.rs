@@ -226,7 +226,8 @@ pub fn starts(problem: &Problem, f: &Formulation<'_>, seed: u64) -> Vec<TrialSta
     };
     let mut draw = |x: &mut [f64], amplitude: f64| {
         for (a, act) in problem.model.actuators.iter().enumerate() {
-            let half = 0.5 * (act.bounds[1] - act.bounds[0]);
+            let [low, high] = act.control_range();
+            let half = 0.5 * (high - low);
             for i in 0..k {
                 let j = a * block + i;
                 let r: f64 = rng.random_range(-1.0..=1.0);

@@ -271,6 +271,90 @@ fn pendulum_half_period_matches_elliptic_integral() {
     }
 }
 
+/// A servo-held pendulum (link along +x at zero angle, gravity −y) settles where the servo law
+/// balances gravity: `sat(kp·(rest + u − θ)) = m·g·L·cos θ`, solved here by bisection
+/// independently of the simulator; in the settled state the integrated effort grows at
+/// `τ²` per second. With bounds below `m·g·L` the saturated servo settles where the bound's
+/// smooth saturation balances the weight, and the force never leaves the bounds.
+#[test]
+fn servo_pendulum_settles_at_the_balance_of_servo_and_gravity() {
+    use super::character::{Actuator, Servo};
+    let (mass, len) = (1.0, 0.5);
+    for (bound, u) in [(20.0, 0.1), (6.0, 0.0)] {
+        let (kp, kd, rest) = (40.0, 3.0, 0.2);
+        let servo = Servo {
+            stiffness: kp,
+            damping: kd,
+            rest,
+            offsets: [-1.0, 1.0],
+        };
+        let actuator = Actuator {
+            name: "motor".into(),
+            link: 0,
+            bounds: [-bound, bound],
+            servo: Some(servo),
+        };
+        let m = Model::new(
+            vec![body(
+                "arm",
+                None,
+                JointKind::Revolute { axis: Z },
+                [0.0; 3],
+                mass,
+                [len, 0.0, 0.0],
+                [1e-3; 3],
+            )],
+            vec![actuator.clone()],
+            [0.0, -9.81, 0.0],
+            ContactParams::default(),
+        );
+        // Bisection on the balance g(θ) = sat(kp·(rest + u − θ)) − m·g·L·cos θ, decreasing
+        // in θ on [−0.5, rest + u].
+        let balance = |th: f64| actuator.force(u, th, 0.0) - mass * 9.81 * len * th.cos();
+        let (mut lo, mut hi) = (-0.5, rest + u);
+        assert!(balance(lo) < 0.0 && balance(hi) < 0.0 || balance(lo) * balance(hi) < 0.0);
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if balance(mid) > 0.0 {
+                lo = mid
+            } else {
+                hi = mid
+            }
+        }
+        let exact = 0.5 * (lo + hi);
+        let controls = |_: f64, out: &mut [f64]| out.fill(u);
+        let dt = 1e-4;
+        let mut sim = Simulator::<f64>::new(&m);
+        let mut x = State {
+            q: vec![rest],
+            v: vec![0.0],
+        };
+        let mut largest: f64 = 0.0;
+        for n in 0..100_000 {
+            sim.step(n as f64 * dt, dt, &mut x, &controls).unwrap();
+            largest = largest.max(actuator.force(u, x.q[0], x.v[0]).abs());
+        }
+        assert!(
+            (x.q[0] - exact).abs() < 1e-9,
+            "settled at {} vs {exact}",
+            x.q[0]
+        );
+        assert!(x.v[0].abs() < 1e-9, "rate {}", x.v[0]);
+        assert!(largest < bound, "force {largest} beyond the bound {bound}");
+        let before = sim.effort;
+        for n in 100_000..110_000 {
+            sim.step(n as f64 * dt, dt, &mut x, &controls).unwrap();
+        }
+        let tau = actuator.force(u, exact, 0.0);
+        let rate = sim.effort - before;
+        assert!(
+            (rate - tau * tau).abs() < 1e-8 * tau * tau,
+            "effort {rate} vs τ² {}",
+            tau * tau
+        );
+    }
+}
+
 fn total_energy(model: &Model, x: &State<f64>, dynamics: &mut Dynamics<f64>) -> (f64, f64) {
     dynamics.kinematics(model, &x.q, &x.v);
     let ke = dynamics.kinetic_energy(model);

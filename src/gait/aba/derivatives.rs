@@ -33,7 +33,9 @@
 //! ```
 //! so the `2·nv` right-hand-side columns cost one dot product per pair after an O(n) set-up,
 //! and the mass matrix is `M_cd = S_dᵀ·Iᶜ_{L(c)}·S_c` (CRBA in world coordinates). Passive
-//! springs, dampers and limit springs add `∂τ_p/∂q`, `∂τ_p/∂q̇` on their scalar joints.
+//! springs, dampers and limit springs add `∂τ_p/∂q`, `∂τ_p/∂q̇` on their scalar joints, and a
+//! position servo ([`crate::gait::character::Servo`]) its `∂τ/∂q`, `∂τ/∂q̇` likewise, its
+//! actuator column being `∂τ/∂u` instead of 1.
 //!
 //! The tangent directions are per velocity coordinate; a planar base `q = (x, y, θ)` with body
 //! velocities `v = (ω, v_x, v_y)` maps coordinates to tangents by
@@ -47,7 +49,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::Dynamics;
-use crate::gait::character::{JointKind, Model};
+use crate::gait::character::{ForcePartials, JointKind, Model};
 use crate::gait::spatial::{ArticulatedInertia, Force, Mat3, Motion, Vec3};
 
 /// A spatial vector `[angular; linear]` in world coordinates.
@@ -88,6 +90,8 @@ pub struct StageLinearizer<'m> {
     columns: Vec<(usize, Motion<f64>)>,
     /// `below[j·n + i]`: link `j` is `i` or one of its descendants.
     below: Vec<bool>,
+    /// Per actuator, its force and partials at the last [`StageLinearizer::evaluate`].
+    pub forces: Vec<ForcePartials>,
 }
 
 impl<'m> StageLinearizer<'m> {
@@ -140,6 +144,15 @@ impl<'m> StageLinearizer<'m> {
                 .flat_map(|(i, l)| (0..l.joint.nv()).map(move |k| (i, l.joint.subspace(k))))
                 .collect(),
             below,
+            forces: vec![
+                ForcePartials {
+                    force: 0.0,
+                    d_control: 1.0,
+                    d_position: 0.0,
+                    d_rate: 0.0,
+                };
+                model.actuators.len()
+            ],
         })
     }
 
@@ -166,8 +179,10 @@ impl<'m> StageLinearizer<'m> {
         self.contacts();
         self.tau.fill(0.0);
         m.add_passive(q, v, &mut self.tau);
-        for (a, f) in m.actuators.iter().zip(act) {
-            self.tau[m.links[a.link].v_index] += *f;
+        for ((a, u), out) in m.actuators.iter().zip(act).zip(&mut self.forces) {
+            let l = &m.links[a.link];
+            *out = a.force_partials(*u, q[l.q_index], v[l.v_index]);
+            self.tau[l.v_index] += out.force;
         }
         m.qdot(q, v, qd);
         self.dynamics.accelerations(m, &self.tau, &self.f_ext, vd);
@@ -194,8 +209,11 @@ impl<'m> StageLinearizer<'m> {
                 }
             }
         }
-        for (a, act) in m.actuators.iter().enumerate() {
-            cols[m.links[act.link].v_index * nc + 2 * nv + a] = 1.0;
+        for (a, (act, f)) in m.actuators.iter().zip(&self.forces).enumerate() {
+            let c = m.links[act.link].v_index;
+            cols[c * nc + 2 * nv + a] = f.d_control;
+            cols[c * nc + c] += f.d_position;
+            cols[c * nc + nv + c] += f.d_rate;
         }
         cholesky_solve(nv, nc, &self.chol, &self.inv_diag, &mut cols);
 

@@ -23,6 +23,7 @@ use rayon::prelude::*;
 
 use super::Reduced;
 use crate::gait::aba::derivatives::StageLinearizer;
+use crate::gait::character::{ForcePartials, Model};
 use crate::gait::sim::{Controls, SimError, Simulator, State, poll};
 use crate::gait::spline::SplineControls;
 
@@ -31,28 +32,43 @@ const LANES: usize = 8;
 
 impl Reduced<'_> {
     /// Jacobian values (pattern order) by forward sensitivities through RK4 with analytical
-    /// stage Jacobians, one segment per task (rayon). Returns `Ok(false)` without touching
-    /// `jac` if the model has a joint the analytical path does not cover (a floating base).
-    pub fn jacobian_by_sensitivities(&self, x: &[f64], jac: &mut [f64]) -> Result<bool, SimError> {
+    /// stage Jacobians, one segment per task (rayon). When the effort is integrated along the
+    /// rollout (servos), its gradient is written into `grad` too (else `grad` is untouched).
+    /// Returns `Ok(false)` without touching `jac` or `grad` if the model has a joint the
+    /// analytical path does not cover (a floating base).
+    pub fn jacobian_by_sensitivities(
+        &self,
+        x: &[f64],
+        jac: &mut [f64],
+        grad: &mut [f64],
+    ) -> Result<bool, SimError> {
         if StageLinearizer::new(&self.problem.model).is_none() {
             return Ok(false);
         }
-        let parts: Vec<Result<Vec<(usize, f64)>, SimError>> = (0..self.segments())
+        let parts: Vec<Result<SegmentEntries, SimError>> = (0..self.segments())
             .into_par_iter()
             .map(|k| self.segment_sensitivities(k, x))
             .collect();
+        if self.effort_by_rollout() {
+            grad.fill(0.0);
+        }
         for part in parts {
-            for (slot, v) in part? {
+            let (entries, effort) = part?;
+            for (slot, v) in entries {
                 jac[slot] = v;
+            }
+            for (j, g) in effort {
+                grad[j] += g;
             }
         }
         Ok(true)
     }
 
-    /// The Jacobian entries `(slot, value)` of the rows segment `k` owns. The sensitivity
-    /// columns are the spline parameters and, when it is a variable, the segment's start state (seeded
-    /// with the identity).
-    fn segment_sensitivities(&self, k: usize, x: &[f64]) -> Result<Vec<(usize, f64)>, SimError> {
+    /// The Jacobian entries `(slot, value)` of the rows segment `k` owns, and (servos) the
+    /// gradient entries `(variable, value)` of its effort. The sensitivity columns are the
+    /// spline parameters and, when it is a variable, the segment's start state (seeded with the
+    /// identity).
+    fn segment_sensitivities(&self, k: usize, x: &[f64]) -> Result<SegmentEntries, SimError> {
         let p = self.problem;
         let m = &p.model;
         let mut lin = StageLinearizer::new(m).expect("checked by the caller");
@@ -61,7 +77,7 @@ impl Reduced<'_> {
             params: x[..self.n_par].to_vec(),
         };
         let mut state = self.start_state(k, x);
-        let mut step = StepTangent::new(m.nq, m.nv, m.actuators.len(), p.dt);
+        let mut step = StepTangent::new(m, p.dt, self.effort_by_rollout());
         let mut sens = Sensitivities::new(self, k, x.len());
         let mut observer = Simulator::<DualSVec64<LANES>>::new(m);
         let mut out = Vec::new();
@@ -86,7 +102,25 @@ impl Reduced<'_> {
                 }
             }
         }
-        Ok(out)
+        if !step.effort {
+            return Ok((out, Vec::new()));
+        }
+        if k + 1 == self.segments() {
+            while n < self.last_step() {
+                let t0 = n as f64 * p.dt;
+                poll(Some(&self.problem.interrupt), n, t0)?;
+                step.advance(&mut lin, &spline, &mut state, t0)?;
+                self.propagate(&mut sens, &step, t0);
+                n += 1;
+            }
+        }
+        let effort = (0..sens.n_par)
+            .map(|c| {
+                let g = sens.effort[self.sensitivity_column(c)];
+                (self.sensitivity_variable(k, c), g)
+            })
+            .collect();
+        Ok((out, effort))
     }
 
     /// `S⁺ = Φ·S + Σ G_s·W_s` for the step from `t0` over the columns of knots whose support
@@ -115,6 +149,21 @@ impl Reduced<'_> {
             }
         }
         let step_t = &step.step_t;
+        if step.effort {
+            // e⁺ = e + ∂e⁺/∂x·S + Σ ∂e⁺/∂u_s·W_s.
+            let e_t = &step.effort_t;
+            for i in 0..nx {
+                if e_t[i] != 0.0 {
+                    let src = &sens.s[i * n_par..i * n_par + live];
+                    for (o, v) in sens.effort[..live].iter_mut().zip(src) {
+                        *o += e_t[i] * v;
+                    }
+                }
+            }
+            for &(col, g, wc) in &sens.hermite {
+                sens.effort[col] += e_t[g] * wc;
+            }
+        }
         for r in 0..nx {
             let row = &mut sens.next[r * n_par..r * n_par + live];
             row.fill(0.0);
@@ -226,10 +275,15 @@ impl Reduced<'_> {
     }
 }
 
+/// A segment's Jacobian entries `(slot, value)` and effort gradient entries `(variable, value)`.
+type SegmentEntries = (Vec<(usize, f64)>, Vec<(usize, f64)>);
+
 /// The sensitivities `S = ∂x/∂p` of one segment (row-major `nx × n_par`, knot-major columns),
-/// their update buffer, and the Hermite terms of the current step.
+/// their update buffer, the effort's sensitivities (servos; same columns), and the Hermite terms
+/// of the current step.
 struct Sensitivities {
     s: Vec<f64>,
+    effort: Vec<f64>,
     next: Vec<f64>,
     n_par: usize,
     /// Variables of the whole problem (Jacobian columns).
@@ -252,6 +306,7 @@ impl Sensitivities {
         }
         Sensitivities {
             s,
+            effort: vec![0.0; n_par],
             next: vec![0.0; nx * n_par],
             n_par,
             n_var,
@@ -265,7 +320,18 @@ const STAGES: [(f64, f64, usize); 4] = [(0.0, 0.0, 0), (0.5, 0.5, 1), (0.5, 0.5,
 
 /// One RK4 step with its tangent `T = [Φ | G₀ | G½ | G₁]` (row-major `nx × ncol`, ncol =
 /// nx + 3·na): the stage derivatives `k_s`, stage Jacobians `J_s`, `B_s` and their tangents `dk_s`.
+/// With the effort integrated along the rollout (servos), also the tangent of its step
+/// `e⁺ = e + h/6·Σ_s w_s·Σ_a τ_a(x_s, u_s)²` (`w = 1, 2, 2, 1`, `x_s` the stage states):
+/// `∂e⁺ = h/6·Σ_s w_s·Σ_a 2τ_a·(∂τ_a/∂x·dx_s + ∂τ_a/∂u·E_s)` with `dx_s = D + c_s·dk_{s−1}`.
 struct StepTangent {
+    /// Whether the effort's tangent is computed.
+    effort: bool,
+    /// Per actuator, the state rows of its joint's coordinate and rate.
+    joints: Vec<(usize, usize)>,
+    /// Per stage and actuator, the force and its partials.
+    partials: Vec<Vec<ForcePartials>>,
+    /// `∂e⁺/∂(x, u₀, u½, u₁)` (length ncol).
+    effort_t: Vec<f64>,
     na: usize,
     ncol: usize,
     /// Step, s.
@@ -281,10 +347,29 @@ struct StepTangent {
 }
 
 impl StepTangent {
-    fn new(nq: usize, nv: usize, na: usize, h: f64) -> Self {
+    fn new(model: &Model, h: f64, effort: bool) -> Self {
+        let (nq, nv, na) = (model.nq, model.nv, model.actuators.len());
         let nx = nq + nv;
         let ncol = nx + 3 * na;
+        let joints = model
+            .actuators
+            .iter()
+            .map(|a| {
+                let l = &model.links[a.link];
+                (l.q_index, nq + l.v_index)
+            })
+            .collect();
+        let unit = ForcePartials {
+            force: 0.0,
+            d_control: 1.0,
+            d_position: 0.0,
+            d_rate: 0.0,
+        };
         StepTangent {
+            effort,
+            joints,
+            partials: vec![vec![unit; na]; 4],
+            effort_t: vec![0.0; ncol],
             na,
             ncol,
             h,
@@ -339,6 +424,7 @@ impl StepTangent {
                 &mut self.jx[s],
                 &mut self.ju[s],
             );
+            self.partials[s].copy_from_slice(&lin.forces);
         }
         let w = h / 6.0;
         let kq = &self.kq;
@@ -353,7 +439,40 @@ impl StepTangent {
             return Err(SimError::not_finite(t0 + h));
         }
         self.tangent();
+        if self.effort {
+            self.effort_tangent();
+        }
         Ok(())
+    }
+
+    /// `∂e⁺/∂(x, u)` of the effort's step (type header), from the stage tangents `dk_s`.
+    fn effort_tangent(&mut self) {
+        let (nx, na, ncol, h) = (self.nx(), self.na, self.ncol, self.h);
+        self.effort_t.fill(0.0);
+        for (s, &(_, x_frac, block)) in STAGES.iter().enumerate() {
+            let w = h / 6.0 * if s == 1 || s == 2 { 2.0 } else { 1.0 };
+            for (a, (f, &(qi, vi))) in self.partials[s].iter().zip(&self.joints).enumerate() {
+                let g = 2.0 * f.force * w;
+                if g == 0.0 {
+                    continue;
+                }
+                let (gq, gv) = (g * f.d_position, g * f.d_rate);
+                self.effort_t[qi] += gq;
+                self.effort_t[vi] += gv;
+                self.effort_t[nx + block * na + a] += g * f.d_control;
+                if s > 0 {
+                    let c = h * x_frac;
+                    let prev = &self.dk[s - 1];
+                    let (row_q, row_v) = (
+                        &prev[qi * ncol..(qi + 1) * ncol],
+                        &prev[vi * ncol..(vi + 1) * ncol],
+                    );
+                    for ((o, dq), dv) in self.effort_t.iter_mut().zip(row_q).zip(row_v) {
+                        *o += c * (gq * dq + gv * dv);
+                    }
+                }
+            }
+        }
     }
 
     /// `dk_s = J_s·(D + c_s·dk_{s−1}) + B_s·E_s` and `T = D + h/6·(dk₁ + 2dk₂ + 2dk₃ + dk₄)`.
@@ -438,8 +557,13 @@ mod tests {
                 })
                 .collect();
             let (mut fast, mut oracle) = (vec![0.0; d.jac_nnz], vec![0.0; d.jac_nnz]);
-            assert!(nlp.jacobian_by_sensitivities(&x, &mut fast).unwrap());
-            nlp.jacobian_by_parameter_duals(&x, &mut oracle).unwrap();
+            let mut grad = vec![0.0; d.n];
+            assert!(
+                nlp.jacobian_by_sensitivities(&x, &mut fast, &mut grad)
+                    .unwrap()
+            );
+            nlp.jacobian_by_parameter_duals(&x, &mut oracle, &mut grad)
+                .unwrap();
             assert!(fast.iter().all(|v| v.is_finite()), "{name}: not finite");
             let largest = oracle.iter().fold(0.0f64, |s, v| s.max(v.abs()));
             let gap = gap_to_oracle(&fast, &oracle);

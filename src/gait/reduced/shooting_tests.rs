@@ -3,7 +3,7 @@
 //! the continuity rows) matches the dual-number oracle and extrapolated central differences.
 
 use super::Reduced;
-use super::tests::{gap_to_oracle, shortened};
+use super::tests::{central_difference, gap_to_oracle, shortened};
 use crate::gait::sim::Simulator;
 use crate::gait::spline::SplineControls;
 use crate::solver::Nlp;
@@ -34,7 +34,9 @@ fn jacobian_matching_the_oracle(nlp: &Reduced<'_>, x: &[f64], what: &str) -> Vec
     let (mut grad, mut fast, mut oracle) =
         (vec![0.0; d.n], vec![0.0; d.jac_nnz], vec![0.0; d.jac_nnz]);
     nlp.eval_derivatives(x, &mut grad, &mut fast).unwrap();
-    nlp.jacobian_by_parameter_duals(x, &mut oracle).unwrap();
+    let mut oracle_grad = vec![0.0; d.n];
+    nlp.jacobian_by_parameter_duals(x, &mut oracle, &mut oracle_grad)
+        .unwrap();
     let gap = gap_to_oracle(&fast, &oracle);
     assert!(gap < 1e-9, "{what}: sensitivities vs duals {gap}");
     fast
@@ -82,8 +84,9 @@ fn one_segment_is_a_plain_rollout() {
     assert_eq!(c, expected);
 }
 
-/// Segments started on the rollout of the same forces have zero continuity defects and the
-/// single-shooting constraint values, exactly (the same arithmetic, step for step).
+/// Segments started on the rollout of the same controls have zero continuity defects and the
+/// single-shooting constraint values, exactly (the same arithmetic, step for step), and the
+/// same effort to round-off.
 #[test]
 fn segments_on_the_rollout_reproduce_single_shooting() {
     let p = shortened("luxo_leap", 0.3);
@@ -103,7 +106,8 @@ fn segments_on_the_rollout_reproduce_single_shooting() {
         nlp.fill_states(&mut z);
         let (mut f, mut c) = (0.0, vec![0.0; d.m]);
         nlp.eval(&z, &mut f, &mut c).unwrap();
-        assert_eq!(f, f1);
+        // The servo effort is summed per segment: the same terms, another summation order.
+        assert!((f - f1).abs() <= 1e-12 * f1.abs(), "S = {s}: {f} vs {f1}");
         assert_eq!(c[..c1.len()], c1[..], "S = {s}");
         assert!(c[c1.len()..].iter().all(|&v| v == 0.0), "S = {s}");
     }
@@ -213,7 +217,8 @@ fn segments_at_given_steps_reproduce_single_shooting_from_a_free_initial_state()
     nlp.fill_states(&mut z);
     let (mut f, mut c) = (0.0, vec![0.0; d.m]);
     nlp.eval(&z, &mut f, &mut c).unwrap();
-    assert_eq!(f, f1);
+    // The servo effort is summed per segment: the same terms, another summation order.
+    assert!((f - f1).abs() <= 1e-12 * f1.abs(), "{f} vs {f1}");
     assert_eq!(c[..c1.len()], c1[..]);
     assert!(c[c1.len()..].iter().all(|&v| v == 0.0));
 }
@@ -265,5 +270,43 @@ fn initial_state_derivatives_match_central_differences() {
             d.m
         );
         assert!(worst < 1e-5, "{interior:?}: {worst}");
+    }
+}
+
+/// With servo actuators (the shipped Luxo) the effort is integrated along the rollout: its
+/// gradient from the forward sensitivities equals the dual-number oracle's, and both the
+/// gradient and the Jacobian match central differences, for one and for three segments
+/// (start-state columns included).
+#[test]
+fn servo_effort_gradient_matches_the_oracle_and_central_differences() {
+    let p = shortened("luxo_leap", 0.2);
+    assert!(p.model.has_servos());
+    for segments in [1, 3] {
+        let nlp = Reduced::with_segments(&p, segments);
+        let d = nlp.dims();
+        let mut x = vec![0.0; d.n];
+        x[..nlp.parameters()].copy_from_slice(&random_parameters(&nlp, 5));
+        nlp.fill_states(&mut x);
+        let (mut grad, mut jac) = (vec![0.0; d.n], vec![0.0; d.jac_nnz]);
+        nlp.eval_derivatives(&x, &mut grad, &mut jac).unwrap();
+        let (mut oracle_grad, mut oracle) = (vec![0.0; d.n], vec![0.0; d.jac_nnz]);
+        nlp.jacobian_by_parameter_duals(&x, &mut oracle, &mut oracle_grad)
+            .unwrap();
+        let gap = gap_to_oracle(&grad, &oracle_grad);
+        assert!(gap < 1e-9, "{segments} segments: gradient vs duals {gap}");
+        assert!(gap_to_oracle(&jac, &oracle) < 1e-9, "{segments} segments");
+        assert!(grad.iter().any(|g| g.abs() > 1e-3), "a zero gradient");
+        let (mut f, mut c) = (0.0, vec![0.0; d.m]);
+        nlp.eval(&x, &mut f, &mut c).unwrap();
+        let mut worst: f64 = 0.0;
+        for (j, g) in grad.iter().enumerate() {
+            let (fd, _) = central_difference(&nlp, &x, j);
+            worst = worst.max((fd - g).abs() / g.abs().max(1.0));
+        }
+        println!("{segments} segments: effort {f:.4} N²·s, gradient vs central {worst:.2e}");
+        assert!(
+            worst < 1e-6,
+            "{segments} segments: gradient vs central {worst}"
+        );
     }
 }
