@@ -202,27 +202,41 @@ fn cmc_problem_file_starts_from_a_shipped_glb() {
     // problems/cmc/double_bubble_gltf.toml imports double_bubble_start.glb (the generator's
     // resolution-3 double bubble written by benches/drivers/cmc_start_glb.rs): it must solve to the
     // same area as the generated start, tests/golden/problems/cmc/double_bubble_short.toml.
+    // The areas are compared in the area formulation, whose minimum is the discrete problem's
+    // own (every coordinate free): the default normal coordinates end their tangential
+    // relaxation when a round gains ≤ 1e-5 of the area, so their final area depends on the path
+    // at that level (measured: 1.4e-6 apart here), not only on the mesh.
     let scratch = Scratch::new("gltf");
-    let run = |file: &str, dir: &str| -> serde_json::Value {
+    let run = |file: &str, dir: &str, extra: &[&str]| -> serde_json::Value {
         let out_dir = scratch.0.join(dir);
-        let out = run_into("cmc", file, &out_dir, &["--json"]);
+        let out = run_into("cmc", file, &out_dir, &[&["--json"], extra].concat());
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(0), "{file}: {stderr}");
         assert!(out_dir.join("model.glb").is_file());
         serde_json::from_slice(&out.stdout).expect("--json prints the summary")
     };
-    let imported = run("problems/cmc/double_bubble_gltf.toml", "imported");
-    let generated = run(
-        "tests/golden/problems/cmc/double_bubble_short.toml",
-        "generated",
-    );
+    let imported = run("problems/cmc/double_bubble_gltf.toml", "imported", &[]);
     assert_eq!(imported["status"], "Optimal", "{imported}");
+    let area_formulation = ["--set", "formulation=\"area\""];
+    let imported_area = run(
+        "problems/cmc/double_bubble_gltf.toml",
+        "imported_area",
+        &area_formulation,
+    );
+    let generated_area = run(
+        "tests/golden/problems/cmc/double_bubble_short.toml",
+        "generated_area",
+        &area_formulation,
+    );
     let area = |v: &serde_json::Value| v["objective"].as_f64().unwrap();
-    let (a, b) = (area(&imported), area(&generated));
+    let (a, b) = (area(&imported_area), area(&generated_area));
     assert!(
-        (a / b - 1.0).abs() < 1e-6,
+        (a / b - 1.0).abs() < 1e-9,
         "imported {a} m², generated {b} m²"
     );
+    // The default formulation ends within its relaxation's 1e-5 of that minimum, above it.
+    let a = area(&imported);
+    assert!(a >= b * (1.0 - 1e-12) && a < b * (1.0 + 1e-5), "{a} vs {b}");
     // Above the exact standard double bubble (11.854293128 cm²) by the coarse mesh's excess.
     assert!(a > 11.854293128e-4 && a < 1.025 * 11.854293128e-4, "{a}");
     let f = &imported["figures"];
