@@ -34,10 +34,11 @@ struct Saved {
     parameters: Vec<f64>,
 }
 
-/// Trial 1 of `problem` solved from the previous result's parameters.
+/// Trial 1 of `problem` solved from the previous result's parameters, with the run's `seed`.
 pub fn trial_from(
     problem: &Problem,
     previous: &Previous,
+    seed: u64,
     options: &Options,
 ) -> Result<TrialResult, InputError> {
     let saved: Saved = serde_json::from_value(previous.figure("knots")?.clone())
@@ -58,7 +59,7 @@ pub fn trial_from(
             ours["knots"]
         )));
     }
-    let mut result = trials::solve_trial(problem, &f, 1, &saved.parameters, options);
+    let mut result = trials::solve_trial(problem, &f, 1, &saved.parameters, seed, options);
     result.origin = "result".into();
     Ok(result)
 }
