@@ -115,34 +115,18 @@ pub fn search(
     trial: usize,
     log: Option<&LogTarget>,
 ) -> GlobalReport {
-    let all: Vec<usize> = (0..problem.knot_grid().knots).collect();
-    search_knots(problem, settings, x0, &all, trial_seed(seed, trial), log)
-}
-
-/// The search of [`search`] over the values of knots `knots` (indices on the knot grid) of
-/// every actuator only, the other parameters staying at `x0`'s, seeded with `seed` (a trial's
-/// [`trial_seed`] or a stream of it); the rows are `problem`'s task and shaping rows.
-pub fn search_knots(
-    problem: &Problem,
-    settings: &GlobalSettings,
-    x0: &[f64],
-    knots: &[usize],
-    seed: u64,
-    log: Option<&LogTarget>,
-) -> GlobalReport {
     let clock = Instant::now();
     let shaped = problem.shaped();
     let steps = sample_steps(&shaped);
     let f = Formulation::new(problem);
     let (lower, upper) = f.physical_bounds();
     let grid = problem.knot_grid();
-    let block = grid.per_actuator();
-    // The searched coordinates: the chosen knot values of every actuator, with their scale
-    // and box.
+    let (k, block) = (grid.knots, grid.per_actuator());
+    // The searched coordinates: every actuator's knot values, with their scale and box.
     let mut index = Vec::new();
     let mut scale = Vec::new();
     for (a, act) in problem.model.actuators.iter().enumerate() {
-        for &i in knots {
+        for i in 0..k {
             index.push(a * block + i);
             let [lo, hi] = act.control_range();
             scale.push(0.5 * (hi - lo));
@@ -175,7 +159,7 @@ pub fn search_knots(
         settings.sigma,
         settings.population,
         budget,
-        seed,
+        trial_seed(seed, trial),
         |g| {
             if g.generation.is_multiple_of(PROGRESS_EVERY) {
                 say(format!(

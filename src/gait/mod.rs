@@ -187,7 +187,7 @@ pub fn solve_trials(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Err
                 "N²·s",
                 formulation::Formulation::new(&polled).objective_scale(),
             );
-            vec![restart::trial_from(&polled, previous, opts.seed, &options)?]
+            vec![restart::trial_from(&polled, previous, &options)?]
         }
         None => trials::run_trials(&polled, opts.seed, opts.trial, &options),
     };

@@ -34,11 +34,10 @@ struct Saved {
     parameters: Vec<f64>,
 }
 
-/// Trial 1 of `problem` solved from the previous result's parameters, with the run's `seed`.
+/// Trial 1 of `problem` solved from the previous result's parameters.
 pub fn trial_from(
     problem: &Problem,
     previous: &Previous,
-    seed: u64,
     options: &Options,
 ) -> Result<TrialResult, InputError> {
     let saved: Saved = serde_json::from_value(previous.figure("knots")?.clone())
@@ -59,7 +58,7 @@ pub fn trial_from(
             ours["knots"]
         )));
     }
-    let mut result = trials::solve_trial(problem, &f, 1, &saved.parameters, seed, options);
+    let mut result = trials::solve_trial(problem, &f, 1, &saved.parameters, options);
     result.origin = "result".into();
     Ok(result)
 }

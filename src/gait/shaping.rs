@@ -23,18 +23,8 @@
 //! point and the next stage starts from there. If the last stage is not met, the stages are
 //! run once more from the trial's start with `2N` steps per stage ([`ATTEMPTS`]), and the
 //! attempt with the lower violation sum over all rows is kept.
-//!
-//! With a `[global]` table, a stage after the first whose rows are not met at its start first
-//! runs the global phase's search ([`crate::gait::global::search_knots`]) over the knots that
-//! act after the previous stage's horizon and before this stage's (knot `k` with
-//! `t_{k−1} ∈ [t_{k−1}ˢᵗᵃᵍᵉ, t_k)`: the earlier rows do not depend on them), scored on the
-//! stage's rows; its best candidate (the stage's start unless a better one is found) starts
-//! the bound steps. A landing is a change of contact topology (which part touches down, how
-//! far the body has turned) that the SQP's linear model does not cross, while the
-//! derivative-free search over the flight's knots does.
 
 use super::formulation::Formulation;
-use super::global::{search_knots, trial_seed};
 use super::spec::Problem;
 use super::trials::{append_log, assess};
 use crate::solver::{Evaluations, IterationRecord, Nlp, Options, solve};
@@ -73,9 +63,8 @@ pub fn relaxed(problem: &Problem, values: &[f64], w: f64) -> Problem {
 pub const ATTEMPTS: usize = 2;
 
 /// Runs the shaping solves (module header) from spline parameters `x0` (physical units);
-/// `tol` is the trial's tolerance, by which a step's rows count as met, and `seed` seeds the
-/// stages' searches (the trial's [`trial_seed`]).
-pub fn shape(problem: &Problem, x0: &[f64], tol: f64, seed: u64, options: &Options) -> Shaped {
+/// `tol` is the trial's tolerance, by which a step's rows count as met.
+pub fn shape(problem: &Problem, x0: &[f64], tol: f64, options: &Options) -> Shaped {
     let mut out = Shaped {
         x: x0.to_vec(),
         ..Shaped::default()
@@ -92,7 +81,7 @@ pub fn shape(problem: &Problem, x0: &[f64], tol: f64, seed: u64, options: &Optio
         if problem.interrupt.is_raised() {
             break;
         }
-        let x = staged(problem, x0, steps << attempt, tol, seed, options, &mut out);
+        let x = staged(problem, x0, steps << attempt, tol, options, &mut out);
         let Some(a) = assess(&all, &x) else {
             continue;
         };
@@ -116,30 +105,16 @@ fn staged(
     x0: &[f64],
     steps: usize,
     tol: f64,
-    seed: u64,
     options: &Options,
     out: &mut Shaped,
 ) -> Vec<f64> {
     let mut x = x0.to_vec();
     let horizons = problem.shaping_horizons();
-    let mut previous = None;
-    for (i, horizon) in horizons.iter().copied().chain([f64::INFINITY]).enumerate() {
+    for horizon in horizons.iter().copied().chain([f64::INFINITY]) {
         if problem.interrupt.is_raised() {
             break;
         }
         let stage = problem.shaped_until(horizon);
-        if let Some(after) = previous {
-            x = stage_search(
-                problem,
-                &stage,
-                (after, horizon),
-                &x,
-                tol,
-                trial_seed(seed, i),
-                options,
-            );
-        }
-        previous = Some(horizon);
         let Some(values) = constraint_values(&Formulation::new(&stage), &x) else {
             x = solve_into(out, &stage, &x, false, options);
             continue;
@@ -164,39 +139,6 @@ fn staged(
         }
     }
     x
-}
-
-/// The stage's search (module header) over the knots acting within `window` = (previous
-/// horizon, this stage's horizon) (s), from spline parameters `x`, when the file has a
-/// `[global]` table and the stage's rows are not met at `x`; returns its best candidate, `x`
-/// itself otherwise.
-fn stage_search(
-    problem: &Problem,
-    stage: &Problem,
-    window: (f64, f64),
-    x: &[f64],
-    tol: f64,
-    seed: u64,
-    options: &Options,
-) -> Vec<f64> {
-    let Some(settings) = problem.global.as_ref() else {
-        return x.to_vec();
-    };
-    let grid = problem.knot_grid();
-    let knots: Vec<usize> = (1..grid.knots)
-        .filter(|&k| {
-            let t = grid.time(k - 1);
-            t >= window.0 - 1e-12 && t < window.1
-        })
-        .collect();
-    let met = assess(&Formulation::new(stage), x).is_some_and(|a| a.max() <= tol);
-    if knots.is_empty() || met {
-        return x.to_vec();
-    }
-    let log = (options.verbosity >= 1).then_some(&options.log);
-    let mut report = search_knots(stage, settings, x, &knots, seed, log);
-    report.x.truncate(x.len());
-    report.x
 }
 
 /// Solves `problem` (with the effort or without) from spline parameters `x0`, adding the work
@@ -315,7 +257,7 @@ mod tests {
             ..Options::default()
         };
         let tol = p.trials.tolerance;
-        let out = shape(&p, &x0, tol, 0, &options);
+        let out = shape(&p, &x0, tol, &options);
         let all = p.shaped();
         let a = assess(&Formulation::new(&all), &out.x).unwrap();
         assert!(a.max() <= tol, "{:?}", a.violations);

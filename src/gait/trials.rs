@@ -57,7 +57,7 @@ use serde::Serialize;
 use super::continuation::stage_problems;
 use super::feasibility::{Feasibility, FeasibilitySettings, restore};
 use super::formulation::Formulation;
-use super::global::{GlobalReport, search, trial_seed};
+use super::global::{GlobalReport, search};
 use super::shaping::shape;
 use super::spec::{Problem, StartKind};
 use super::step_check::confirm;
@@ -318,15 +318,13 @@ impl Kept {
 
 /// Solves one trial from physical start `x0`: the feasibility phase first when the problem asks
 /// for it ([`crate::gait::feasibility`]), then the shaping solves when the problem has shaping
-/// rows (their stage searches seeded with the run's `seed` and `trial`), then the SQP solve
-/// (and restarts) from their end point; the best point met (by `improves`) is the trial's
-/// result.
+/// rows, then the SQP solve (and restarts) from their end point; the best point met (by
+/// `improves`) is the trial's result.
 pub fn solve_trial(
     problem: &Problem,
     f: &Formulation<'_>,
     trial: usize,
     x0: &[f64],
-    seed: u64,
     options: &Options,
 ) -> TrialResult {
     let clock = Instant::now();
@@ -351,8 +349,7 @@ pub fn solve_trial(
     }
     let mut shaped_candidate = false;
     if !problem.shaping.is_empty() {
-        (nlp, shaped_candidate) =
-            shaping_phase(problem, f, trial_seed(seed, trial), options, &mut kept);
+        (nlp, shaped_candidate) = shaping_phase(problem, f, options, &mut kept);
     }
     let solves_start = nlp.hand_made_start().to_vec();
     let mut solution = effort_solves(
@@ -503,18 +500,11 @@ fn phase_solution(
 fn shaping_phase<'p>(
     problem: &Problem,
     f: &Formulation<'p>,
-    seed: u64,
     options: &Options,
     kept: &mut Kept,
 ) -> (Formulation<'p>, bool) {
     let tol = problem.trials.tolerance;
-    let shaped = shape(
-        problem,
-        &kept.x[..f.reduced().parameters()],
-        tol,
-        seed,
-        options,
-    );
+    let shaped = shape(problem, &kept.x[..f.reduced().parameters()], tol, options);
     kept.count_solves(shaped.iterations, &shaped.evaluations);
     kept.log = shaped.log;
     let nlp = f.starting_at(&shaped.x);
@@ -727,7 +717,7 @@ fn run_trial(
         search(problem, settings, &start.x, seed, trial, log)
     });
     let x0 = global.as_ref().map_or(&start.x, |g| &g.x);
-    let mut result = solve_trial(problem, f, trial, x0, seed, options);
+    let mut result = solve_trial(problem, f, trial, x0, options);
     result.origin = match &global {
         Some(_) => format!("{}+CMA", start.origin),
         None => start.origin.clone(),
@@ -1120,7 +1110,7 @@ mod tests {
         let short = kept.end.as_ref().unwrap().max();
         assert!(short > 10.0 * p.trials.tolerance, "{short}");
         assert!(needs_rescue(&p, &kept, &alone), "{:?}", alone.status);
-        let r = solve_trial(&p, &f, 4, &x0, 8, &options);
+        let r = solve_trial(&p, &f, 4, &x0, &options);
         assert_eq!(r.status, TrialStatus::Success, "{:?}", r.end);
     }
 
