@@ -183,7 +183,8 @@ mod tests {
             let reference = by_coo(n, &rows, &cols, &values);
             assert_eq!(planned.col_offsets(), reference.col_offsets());
             assert_eq!(planned.row_indices(), reference.row_indices());
-            let bits = |m: &CscMatrix<f64>| m.values().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            let bits =
+                |m: &CscMatrix<f64>| m.values().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&planned), bits(&reference));
         }
     }
