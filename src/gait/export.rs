@@ -413,7 +413,10 @@ mod tests {
         let motion = sample(&p, &x, 1.0 / FPS).unwrap();
         assert_eq!(motion.times.len(), 10, "0.3 s at 30 fps: frames 0..=9");
         let bytes = scene(&p, &motion).to_glb().unwrap();
-        let (doc, buffers, _) = gltf::import_slice(&bytes).expect("valid glb");
+        let crate::io::gltf_read::Loaded {
+            document: doc,
+            buffers,
+        } = crate::io::gltf_read::read_slice(&bytes, None).expect("valid glb");
         assert_eq!(doc.nodes().count(), p.model.links.len() + 1);
         let anim = doc.animations().next().unwrap();
         assert_eq!(anim.channels().count(), 2 * p.model.links.len());
@@ -423,7 +426,7 @@ mod tests {
             .channels()
             .filter(|c| c.target().node().index() == head)
         {
-            let reader = ch.reader(|b| Some(&buffers[b.index()]));
+            let reader = ch.reader(|b| Some(buffers[b.index()].as_slice()));
             let times: Vec<f32> = reader.read_inputs().unwrap().collect();
             assert_eq!(times.len(), motion.times.len());
             assert!((times[3] - 0.1).abs() < 1e-6);
