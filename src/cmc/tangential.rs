@@ -418,7 +418,7 @@ mod tests {
             assert_eq!(scratch.vectors.len(), mesh.vertex_triangles(v).len());
             let centre = pos[v];
             // The trial share from the start's offsets matches the share at the moved vertex.
-            let step = Point::new(1e-3, -2e-3, 5e-4);
+            let step = Point::new(1e-5, -2e-5, 5e-6);
             pos[v] = centre + step;
             let trial = star.unturned_share(&pos, v, step, &scratch);
             let moved = star.share(&pos, v);
