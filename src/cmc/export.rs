@@ -76,13 +76,16 @@ mod tests {
     fn one_primitive_per_surface_and_it_reads_back() {
         let shape = crate::cmc::generators::double_bubble([1.0, 2.0], 3).unwrap();
         let bytes = glb(&shape.mesh).unwrap();
-        let (doc, buffers, _) = ::gltf::import_slice(&bytes).unwrap();
+        let crate::io::gltf_read::Loaded {
+            document: doc,
+            buffers,
+        } = crate::io::gltf_read::read_slice(&bytes, None).unwrap();
         assert_eq!(doc.meshes().count(), 3);
         assert_eq!(doc.materials().count(), 3);
         let mut triangles = 0;
         for m in doc.meshes() {
             for p in m.primitives() {
-                let reader = p.reader(|b| Some(&buffers[b.index()]));
+                let reader = p.reader(|b| Some(buffers[b.index()].as_slice()));
                 let normals: Vec<[f32; 3]> = reader.read_normals().unwrap().collect();
                 assert!(normals.iter().all(|n| {
                     let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();

@@ -22,19 +22,19 @@ use nalgebra::Matrix4;
 
 use super::import::{ImportError, assemble};
 use super::mesh::{Mesh, Point};
+use crate::io::gltf_read;
 
 /// Reads a `.glb` or `.gltf` file (external buffers relative to it).
 pub fn read_gltf_file(path: &Path) -> Result<Mesh, ImportError> {
-    let (document, buffers, _) =
-        gltf::import(path).map_err(|e| ImportError::Gltf(format!("glTF: {e}")))?;
-    read_document(&document, &buffers)
+    let loaded = gltf_read::read_file(path).map_err(|e| ImportError::Gltf(format!("glTF: {e}")))?;
+    read_document(&loaded.document, &loaded.buffers)
 }
 
 /// Reads a GLB (or self-contained glTF JSON) held in memory.
 pub fn read_gltf_bytes(bytes: &[u8]) -> Result<Mesh, ImportError> {
-    let (document, buffers, _) =
-        gltf::import_slice(bytes).map_err(|e| ImportError::Gltf(format!("glTF: {e}")))?;
-    read_document(&document, &buffers)
+    let loaded =
+        gltf_read::read_slice(bytes, None).map_err(|e| ImportError::Gltf(format!("glTF: {e}")))?;
+    read_document(&loaded.document, &loaded.buffers)
 }
 
 /// One primitive in world coordinates.
@@ -45,10 +45,7 @@ struct Part {
     indices: Vec<usize>,
 }
 
-fn read_document(
-    document: &gltf::Document,
-    buffers: &[gltf::buffer::Data],
-) -> Result<Mesh, ImportError> {
+fn read_document(document: &gltf::Document, buffers: &[Vec<u8>]) -> Result<Mesh, ImportError> {
     let mut parts = Vec::new();
     let scenes: Vec<gltf::Scene> = match document.default_scene() {
         Some(s) => vec![s],
@@ -73,7 +70,7 @@ fn read_document(
 fn walk(
     node: &gltf::Node,
     parent: &Matrix4<f64>,
-    buffers: &[gltf::buffer::Data],
+    buffers: &[Vec<u8>],
     parts: &mut Vec<Part>,
 ) -> Result<(), ImportError> {
     let local = node.transform().matrix();
@@ -92,11 +89,11 @@ fn read_mesh(
     mesh: &gltf::Mesh,
     node_name: Option<&str>,
     world: &Matrix4<f64>,
-    buffers: &[gltf::buffer::Data],
+    buffers: &[Vec<u8>],
     parts: &mut Vec<Part>,
 ) -> Result<(), ImportError> {
     for primitive in mesh.primitives() {
-        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let positions: Vec<Point> = reader
             .read_positions()
             .ok_or_else(|| {

@@ -250,6 +250,24 @@ pub fn flight_events(problem: &Problem, motion: &Sampled) -> Option<(usize, usiz
     Some((off, apex))
 }
 
+/// Adds an event frame (take-off, apex) to the filmstrip's frames; an event within half a
+/// sample (`0.5/FPS`) of a frame already there names that frame instead of repeating it.
+fn add_event<'a>(
+    frames: &mut Vec<(f64, &'a Vec<Xform<f64>>, &'a str)>,
+    time: f64,
+    pose: &'a Vec<Xform<f64>>,
+    label: &'a str,
+) {
+    match frames
+        .iter_mut()
+        .find(|(t, _, _)| (t - time).abs() < 0.5 / FPS)
+    {
+        Some(frame) if frame.2.is_empty() => frame.2 = label,
+        Some(_) => {}
+        None => frames.push((time, pose, label)),
+    }
+}
+
 /// The filmstrip (module header): frames of `strip` (every 1/4 s) and the take-off and apex
 /// of `motion` (the 30 fps samples), in time order, under `caption`.
 pub fn filmstrip(problem: &Problem, strip: &Sampled, motion: &Sampled, caption: &str) -> String {
@@ -261,9 +279,14 @@ pub fn filmstrip(problem: &Problem, strip: &Sampled, motion: &Sampled, caption: 
         .map(|(&t, p)| (t, p, ""))
         .collect();
     if let Some((off, apex)) = flight_events(problem, motion) {
-        frames.push((motion.times[off], &motion.poses[off], "take-off"));
+        add_event(
+            &mut frames,
+            motion.times[off],
+            &motion.poses[off],
+            "take-off",
+        );
         if apex != off {
-            frames.push((motion.times[apex], &motion.poses[apex], "apex"));
+            add_event(&mut frames, motion.times[apex], &motion.poses[apex], "apex");
         }
     }
     frames.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -413,7 +436,10 @@ mod tests {
         let motion = sample(&p, &x, 1.0 / FPS).unwrap();
         assert_eq!(motion.times.len(), 10, "0.3 s at 30 fps: frames 0..=9");
         let bytes = scene(&p, &motion).to_glb().unwrap();
-        let (doc, buffers, _) = gltf::import_slice(&bytes).expect("valid glb");
+        let crate::io::gltf_read::Loaded {
+            document: doc,
+            buffers,
+        } = crate::io::gltf_read::read_slice(&bytes, None).expect("valid glb");
         assert_eq!(doc.nodes().count(), p.model.links.len() + 1);
         let anim = doc.animations().next().unwrap();
         assert_eq!(anim.channels().count(), 2 * p.model.links.len());
@@ -423,7 +449,7 @@ mod tests {
             .channels()
             .filter(|c| c.target().node().index() == head)
         {
-            let reader = ch.reader(|b| Some(&buffers[b.index()]));
+            let reader = ch.reader(|b| Some(buffers[b.index()].as_slice()));
             let times: Vec<f32> = reader.read_inputs().unwrap().collect();
             assert_eq!(times.len(), motion.times.len());
             assert!((times[3] - 0.1).abs() < 1e-6);
@@ -519,5 +545,17 @@ mod tests {
             svg.matches("t = ").count(),
             5 + 1 + usize::from(apex != off)
         );
+    }
+
+    /// An event at a strip frame's time names that frame instead of drawing it twice; an
+    /// event between strip frames is a frame of its own.
+    #[test]
+    fn an_event_at_a_strip_frame_names_it() {
+        let pose = Vec::new();
+        let mut frames = vec![(0.25, &pose, ""), (0.5, &pose, "")];
+        add_event(&mut frames, 0.5 + 0.1 / FPS, &pose, "apex");
+        add_event(&mut frames, 0.4, &pose, "take-off");
+        let labels: Vec<(f64, &str)> = frames.iter().map(|f| (f.0, f.2)).collect();
+        assert_eq!(labels, vec![(0.25, ""), (0.5, "apex"), (0.4, "take-off")]);
     }
 }

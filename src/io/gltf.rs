@@ -417,10 +417,13 @@ mod tests {
     fn glb_reads_back_with_the_gltf_crate() {
         let scene = scene();
         let bytes = scene.to_glb().unwrap();
-        let (doc, buffers, _) = gltf::import_slice(&bytes).expect("valid glb");
+        let crate::io::gltf_read::Loaded {
+            document: doc,
+            buffers,
+        } = crate::io::gltf_read::read_slice(&bytes, None).expect("valid glb");
         let mesh = doc.meshes().next().unwrap();
         let prim = mesh.primitives().next().unwrap();
-        let reader = prim.reader(|b| Some(&buffers[b.index()]));
+        let reader = prim.reader(|b| Some(buffers[b.index()].as_slice()));
         let positions: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
         assert_eq!(positions, scene.meshes[0].positions);
         let indices: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
@@ -429,7 +432,7 @@ mod tests {
         assert_eq!(anim.channels().count(), 2);
         let channel = anim.channels().next().unwrap();
         let times: Vec<f32> = channel
-            .reader(|b| Some(&buffers[b.index()]))
+            .reader(|b| Some(buffers[b.index()].as_slice()))
             .read_inputs()
             .unwrap()
             .collect();

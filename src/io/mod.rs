@@ -3,6 +3,7 @@
 
 pub mod atomic;
 pub mod gltf;
+pub mod gltf_read;
 pub mod plot;
 pub mod result;
 pub mod shapes;

@@ -460,7 +460,10 @@ mod tests {
     fn glb_holds_a_node_per_working_beam_and_the_joints() {
         let bytes = model_glb(&design()).unwrap();
         assert_eq!(&bytes[0..4], b"glTF");
-        let (doc, buffers, _) = gltf::import_slice(&bytes).unwrap();
+        let crate::io::gltf_read::Loaded {
+            document: doc,
+            buffers,
+        } = crate::io::gltf_read::read_slice(&bytes, None).unwrap();
         let names: Vec<String> = doc
             .meshes()
             .map(|m| m.name().unwrap_or_default().to_string())
