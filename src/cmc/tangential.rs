@@ -124,7 +124,7 @@ pub fn relax(
         .collect();
     let star = Star::new(mesh, terms, surface_pressure, weight);
     let mut pos = mesh.positions().to_vec();
-    let mut old_vectors = Vec::new();
+    let mut scratch = Scratch::default();
     let before = star.total(&pos);
     let mut relaxation = Relaxation {
         sweeps: 0,
@@ -135,7 +135,7 @@ pub fn relax(
         relaxation.sweeps += 1;
         relaxation.last_move = moving
             .iter()
-            .map(|&(v, normal)| star.step(&mut pos, v, normal, &mut old_vectors))
+            .map(|&(v, normal)| star.step(&mut pos, v, normal, &mut scratch))
             .fold(0.0, f64::max);
         if relaxation.last_move <= tolerance {
             break;
@@ -143,6 +143,14 @@ pub fn relax(
     }
     relaxation.energy.1 = star.total(&pos);
     (pos, relaxation)
+}
+
+/// Per-vertex work space of [`Star::step`]: the area vectors of the vertex's triangles and the
+/// offsets `x − mean of ring` of its smoothing terms at the step's start.
+#[derive(Default)]
+struct Scratch {
+    vectors: Vec<Point>,
+    offsets: Vec<Point>,
 }
 
 /// One vertex's share of the energy and its Newton step.
@@ -186,15 +194,15 @@ impl<'a> Star<'a> {
     }
 
     /// Moves vertex `v` by its damped Newton step, in the plane ⊥ `normal` when given;
-    /// returns the move, m. `old_vectors` is scratch space.
+    /// returns the move, m.
     fn step(
         &self,
         pos: &mut [Point],
         v: usize,
         normal: Option<Point>,
-        old_vectors: &mut Vec<Point>,
+        scratch: &mut Scratch,
     ) -> f64 {
-        let (mut gradient, mut hessian, old_share) = self.derivatives(pos, v, old_vectors);
+        let (mut gradient, mut hessian, old_share) = self.derivatives(pos, v, scratch);
         if let Some(n) = normal {
             let p = Matrix3::identity() - n * n.transpose();
             hessian = p * hessian * p + hessian.trace() * n * n.transpose();
@@ -209,7 +217,7 @@ impl<'a> Star<'a> {
         for _ in 0..=HALVINGS {
             pos[v] = start + step;
             if self
-                .unturned_share(pos, v, old_vectors)
+                .unturned_share(pos, v, step, scratch)
                 .is_some_and(|share| share < old_share)
             {
                 return step.norm();
@@ -220,11 +228,19 @@ impl<'a> Star<'a> {
         0.0
     }
 
-    /// The share of `v` ([`Star::share`]) when no triangle around `v` has turned over against
-    /// its area vector in `old_vectors` (in [`Mesh::vertex_triangles`] order), else None.
-    fn unturned_share(&self, pos: &[Point], v: usize, old_vectors: &[Point]) -> Option<f64> {
+    /// The share of `v` ([`Star::share`]) after it moved by `step` when no triangle around `v`
+    /// has turned over against its area vector in `scratch` (in [`Mesh::vertex_triangles`]
+    /// order), else None. A term's offset is linear in `x_v`: `o + c·step` from its offset `o`
+    /// at the start in `scratch`.
+    fn unturned_share(
+        &self,
+        pos: &[Point],
+        v: usize,
+        step: Point,
+        scratch: &Scratch,
+    ) -> Option<f64> {
         let mut triangles = 0.0;
-        for (&t, old) in self.mesh.vertex_triangles(v).iter().zip(old_vectors) {
+        for (&t, old) in self.mesh.vertex_triangles(v).iter().zip(&scratch.vectors) {
             let c = corners(self.mesh, pos, t);
             let vector = area_vector(&c);
             if vector.dot(old) <= 0.0 {
@@ -232,7 +248,14 @@ impl<'a> Star<'a> {
             }
             triangles += self.area_less_work(&c, t, vector);
         }
-        Some(triangles + self.terms_share(pos, v))
+        let terms: f64 = self.terms_of[v]
+            .iter()
+            .zip(&scratch.offsets)
+            .map(|(&k, &offset)| {
+                self.offset_energy(k, offset + self.terms[k].coefficient(v) * step)
+            })
+            .sum();
+        Some(triangles + terms)
     }
 
     /// `A_t − p_s V_t` of triangle t (m²).
@@ -249,8 +272,12 @@ impl<'a> Star<'a> {
 
     /// `(w/2)|P_k (x − mean)|²` of term k (m²).
     fn term_energy(&self, pos: &[Point], k: usize) -> f64 {
-        let term = &self.terms[k];
-        0.5 * self.weight * (term.projector * term.offset(pos)).norm_squared()
+        self.offset_energy(k, self.terms[k].offset(pos))
+    }
+
+    /// `(w/2)|P_k o|²` of term k at the offset `o = x − mean` (m²).
+    fn offset_energy(&self, k: usize, offset: Point) -> f64 {
+        0.5 * self.weight * (self.terms[k].projector * offset).norm_squared()
     }
 
     /// The terms of E that depend on `x_v`, m².
@@ -266,6 +293,7 @@ impl<'a> Star<'a> {
     }
 
     /// The smoothing terms' part of the share of `v`, m².
+    #[cfg(test)]
     fn terms_share(&self, pos: &[Point], v: usize) -> f64 {
         self.terms_of[v]
             .iter()
@@ -274,21 +302,22 @@ impl<'a> Star<'a> {
     }
 
     /// Gradient (m) and diagonal Hessian block (dimensionless) of the share w.r.t. `x_v`, and
-    /// the share (m²); `vectors` becomes the area vectors of the triangles around `v`.
+    /// the share (m²); `scratch` becomes the area vectors of the triangles around `v` and the
+    /// offsets of its terms.
     fn derivatives(
         &self,
         pos: &[Point],
         v: usize,
-        vectors: &mut Vec<Point>,
+        scratch: &mut Scratch,
     ) -> (Point, Matrix3<f64>, f64) {
         let mut gradient = Point::zeros();
         let mut hessian = Matrix3::zeros();
         let mut triangles = 0.0;
-        vectors.clear();
+        scratch.vectors.clear();
         for &t in self.mesh.vertex_triangles(v) {
             let c = corners(self.mesh, pos, t);
             let vector = area_vector(&c);
-            vectors.push(vector);
+            scratch.vectors.push(vector);
             triangles += self.area_less_work(&c, t, vector);
             let p = self.surface_pressure[self.mesh.triangle_surface()[t]];
             let Some(k) = self.mesh.triangles()[t].iter().position(|&u| u == v) else {
@@ -298,14 +327,22 @@ impl<'a> Star<'a> {
                 - p * cone_volume_corner_gradient(&c, &Point::zeros(), k);
             hessian += triangle_area_hessian_diagonal(&c, k);
         }
+        scratch.offsets.clear();
         for &k in &self.terms_of[v] {
             let term = &self.terms[k];
             let c = term.coefficient(v);
             let pp = self.gram[k];
-            gradient += self.weight * c * pp * term.offset(pos);
+            let offset = term.offset(pos);
+            scratch.offsets.push(offset);
+            gradient += self.weight * c * pp * offset;
             hessian += self.weight * c * c * pp;
         }
-        (gradient, hessian, triangles + self.terms_share(pos, v))
+        let terms: f64 = self.terms_of[v]
+            .iter()
+            .zip(&scratch.offsets)
+            .map(|(&k, &offset)| self.offset_energy(k, offset))
+            .sum();
+        (gradient, hessian, triangles + terms)
     }
 
     /// E at `pos` (the volumes' cones from the origin), m².
@@ -375,21 +412,31 @@ mod tests {
         let h = 1e-6;
         let mut pos = mesh.positions().to_vec();
         for v in (0..n).step_by(5) {
-            let mut vectors = Vec::new();
-            let (gradient, hessian, share) = star.derivatives(&pos, v, &mut vectors);
+            let mut scratch = Scratch::default();
+            let (gradient, hessian, share) = star.derivatives(&pos, v, &mut scratch);
             assert_eq!(share, star.share(&pos, v));
-            assert_eq!(vectors.len(), mesh.vertex_triangles(v).len());
+            assert_eq!(scratch.vectors.len(), mesh.vertex_triangles(v).len());
             let centre = pos[v];
+            // The trial share from the start's offsets matches the share at the moved vertex.
+            let step = Point::new(1e-5, -2e-5, 5e-6);
+            pos[v] = centre + step;
+            let trial = star.unturned_share(&pos, v, step, &scratch);
+            let moved = star.share(&pos, v);
+            pos[v] = centre;
+            assert!(
+                trial.is_some_and(|t| (t - moved).abs() <= 1e-12 * (1.0 + moved.abs())),
+                "vertex {v}: {trial:?} vs {moved}"
+            );
             for a in 0..3 {
                 pos[v][a] = centre[a] + h;
                 let (plus, g_plus) = (
                     star.share(&pos, v),
-                    star.derivatives(&pos, v, &mut vectors).0,
+                    star.derivatives(&pos, v, &mut Scratch::default()).0,
                 );
                 pos[v][a] = centre[a] - h;
                 let (minus, g_minus) = (
                     star.share(&pos, v),
-                    star.derivatives(&pos, v, &mut vectors).0,
+                    star.derivatives(&pos, v, &mut Scratch::default()).0,
                 );
                 pos[v][a] = centre[a];
                 let slope = (plus - minus) / (2.0 * h);

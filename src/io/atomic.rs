@@ -1,8 +1,9 @@
 //! Atomic output of a whole run: a run's files are all produced in memory first
 //! ([`crate::outcome::Artifact`]); [`write_run`] writes them into a fresh hidden folder next to
-//! the target (each file synced, `result.json` last) and then moves that folder into place as a
-//! whole, so a folder holding a `result.json` always holds exactly one complete run, whatever
-//! fails: a failed write leaves the older run untouched and no temporary behind.
+//! the target (every file written, `result.json` last, then every file synced) and then moves
+//! that folder into place as a whole, so a folder holding a `result.json` always holds exactly
+//! one complete run, whatever fails: a failed write leaves the older run untouched and no
+//! temporary behind.
 //!
 //! Replacing an existing run folder takes two renames (old folder aside, new folder in), then
 //! the old folder is removed; its `check/` subfolder (the last `--check` report) is carried
@@ -50,11 +51,11 @@ fn io_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
     }
 }
 
-/// Writes `bytes` to a new file at `path` and syncs it.
-fn create_synced(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+/// Writes `bytes` to a new file at `path`, returning it open for the sync.
+fn create_written(path: &Path, bytes: &[u8]) -> std::io::Result<fs::File> {
     let mut f = fs::File::create_new(path)?;
     f.write_all(bytes)?;
-    f.sync_all()
+    Ok(f)
 }
 
 /// A sibling of `dir` named `.{name}.{tag}-{pid}-{n}` that does not exist yet.
@@ -109,13 +110,20 @@ pub fn write_run(dir: &Path, artifacts: &[Artifact]) -> Result<Vec<PathBuf>, Err
     Ok(artifacts.iter().map(|a| dir.join(&a.name)).collect())
 }
 
-/// Writes every artifact into the new folder `staging`.
+/// Writes every artifact into the new folder `staging`, then syncs them all (one pass of
+/// writes, then one of syncs: the first sync commits the creation of every file at once,
+/// where syncing each file after its write committed one file at a time).
 fn stage(staging: &Path, artifacts: &[Artifact]) -> Result<(), Error> {
     fs::create_dir(staging).map_err(io_error(staging))?;
+    let mut written = Vec::with_capacity(artifacts.len());
     for (k, a) in artifacts.iter().enumerate() {
         let path = staging.join(&a.name);
         injected_failure(k, artifacts.len()).map_err(io_error(&path))?;
-        create_synced(&path, &a.bytes).map_err(io_error(&path))?;
+        let file = create_written(&path, &a.bytes).map_err(io_error(&path))?;
+        written.push((path, file));
+    }
+    for (path, file) in &written {
+        file.sync_all().map_err(io_error(path))?;
     }
     Ok(())
 }

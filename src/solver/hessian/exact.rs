@@ -62,7 +62,6 @@
 //! weights.
 
 use nalgebra::{DMatrix, DVector};
-use nalgebra_sparse::{CooMatrix, CscMatrix};
 
 /// Dense symmetric matrix from lower-triangle triplets (duplicates summed).
 pub fn assemble_dense(n: usize, rows: &[usize], cols: &[usize], values: &[f64]) -> DMatrix<f64> {
@@ -74,22 +73,6 @@ pub fn assemble_dense(n: usize, rows: &[usize], cols: &[usize], values: &[f64]) 
         }
     }
     h
-}
-
-/// Sparse lower triangle (row ≥ col) from triplets; entries given above the diagonal are
-/// mirrored below it.
-pub fn assemble_sparse_lower(
-    n: usize,
-    rows: &[usize],
-    cols: &[usize],
-    values: &[f64],
-) -> CscMatrix<f64> {
-    let mut coo = CooMatrix::new(n, n);
-    for ((&r, &c), &v) in rows.iter().zip(cols).zip(values) {
-        let (r, c) = if r >= c { (r, c) } else { (c, r) };
-        coo.push(r, c, v);
-    }
-    CscMatrix::from(&coo)
 }
 
 /// A convexified Hessian.
@@ -443,13 +426,5 @@ mod tests {
         let last = shift.last();
         assert!(least > 0.0);
         assert!(last >= least && last < 8.0 * least, "{last} vs {least}");
-    }
-
-    #[test]
-    fn sparse_lower_mirrors_upper_entries() {
-        let h = assemble_sparse_lower(3, &[0, 0, 2], &[0, 2, 2], &[1.0, 5.0, 2.0]);
-        let t: Vec<_> = h.triplet_iter().map(|(r, c, &v)| (r, c, v)).collect();
-        assert!(t.contains(&(2, 0, 5.0)));
-        assert!(t.iter().all(|&(r, c, _)| r >= c));
     }
 }

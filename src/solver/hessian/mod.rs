@@ -15,14 +15,14 @@ mod bfgs;
 mod exact;
 mod held;
 mod lbfgs;
+mod lower;
 mod model;
 
 pub use bfgs::DenseBfgs;
-pub use exact::{
-    Convexified, FALLBACK_GAMMA, InertiaShift, assemble_dense, assemble_sparse_lower, scale_of,
-};
+pub use exact::{Convexified, FALLBACK_GAMMA, InertiaShift, assemble_dense, scale_of};
 pub use held::{decouple_dense, decouple_triplets, held_at_bounds};
 pub use lbfgs::Lbfgs;
+pub use lower::assemble_sparse_lower;
 pub use model::Model;
 
 /// Powell's damping: replaces y by `θy + (1−θ)Bs` when `sᵀy < 0.2 sᵀBs`, so that the update
