@@ -73,6 +73,7 @@ mod nlp;
 mod noise;
 mod options;
 pub mod qp;
+mod remembered;
 mod solution;
 mod sqp;
 mod status;

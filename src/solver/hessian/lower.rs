@@ -13,10 +13,11 @@
 //! forgotten first), so nothing crosses threads and results do not depend on `--threads`.
 
 use std::cell::RefCell;
-use std::sync::Arc;
 
 use nalgebra_sparse::CscMatrix;
 use nalgebra_sparse::pattern::SparsityPattern;
+
+use crate::solver::remembered::Remembered;
 
 /// Triplet patterns remembered per thread: an SQP with variables held at bounds assembles two
 /// (with and without the held diagonal).
@@ -24,9 +25,6 @@ pub const REMEMBERED: usize = 2;
 
 /// How the triplets of one pattern make the compressed lower triangle.
 struct Plan {
-    n: usize,
-    rows: Vec<usize>,
-    cols: Vec<usize>,
     pattern: SparsityPattern,
     /// Triplet indices in summation order, entry after entry.
     order: Vec<usize>,
@@ -77,17 +75,10 @@ impl Plan {
         let pattern = SparsityPattern::try_from_offsets_and_indices(n, n, col_offsets, row_indices)
             .expect("columns are sorted and in bounds by construction");
         Plan {
-            n,
-            rows: rows.to_vec(),
-            cols: cols.to_vec(),
             pattern,
             order,
             starts,
         }
-    }
-
-    fn matches(&self, n: usize, rows: &[usize], cols: &[usize]) -> bool {
-        self.n == n && self.rows == rows && self.cols == cols
     }
 
     fn assemble(&self, values: &[f64]) -> CscMatrix<f64> {
@@ -106,9 +97,13 @@ impl Plan {
     }
 }
 
+/// A plan's key: the matrix order and the triplets' rows and columns.
+type Triplets = (usize, Vec<usize>, Vec<usize>);
+
 thread_local! {
-    /// This thread's plans, most recently used last.
-    static PLANS: RefCell<Vec<Arc<Plan>>> = const { RefCell::new(Vec::new()) };
+    /// This thread's plans.
+    static PLANS: RefCell<Remembered<Triplets, Plan>> =
+        const { RefCell::new(Remembered::new(REMEMBERED)) };
 }
 
 /// Sparse lower triangle (row ≥ col) of the symmetric n×n matrix with the triplets
@@ -131,18 +126,17 @@ pub fn assemble_sparse_lower(
         "triplet index out of bounds"
     );
     let plan = PLANS.with_borrow_mut(|plans| {
-        let plan = match plans.iter().position(|p| p.matches(n, rows, cols)) {
-            Some(k) => plans.remove(k),
-            None => {
-                if plans.len() == REMEMBERED {
-                    plans.remove(0);
-                }
-                Arc::new(Plan::new(n, rows, cols))
-            }
-        };
-        plans.push(Arc::clone(&plan));
-        plan
+        plans.get_or_make(
+            |(m, r, c)| *m == n && r == rows && c == cols,
+            || {
+                Ok::<_, std::convert::Infallible>((
+                    (n, rows.to_vec(), cols.to_vec()),
+                    Plan::new(n, rows, cols),
+                ))
+            },
+        )
     });
+    let Ok(plan) = plan;
     plan.assemble(values)
 }
 

@@ -17,22 +17,20 @@ use faer::sparse::linalg::cholesky::{
 };
 
 use super::KktError;
+use crate::solver::remembered::Remembered;
 
 /// Patterns remembered per thread: an SQP solve analyses up to three (least-squares
 /// multipliers, the QP's Newton system, the elastic or feasibility subproblem), and the cmc
 /// stability analysis one more.
 pub const REMEMBERED: usize = 4;
 
-/// One analysed pattern (lower triangle, compressed sparse columns).
-struct Analysed {
-    col_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
-    symbolic: Arc<SymbolicCholesky<usize>>,
-}
+/// An analysed pattern's key: the lower triangle in compressed sparse columns.
+type Pattern = (Vec<usize>, Vec<usize>);
 
 thread_local! {
-    /// This thread's analysed patterns, most recently used last.
-    static ANALYSED: RefCell<Vec<Analysed>> = const { RefCell::new(Vec::new()) };
+    /// This thread's analysed patterns.
+    static ANALYSED: RefCell<Remembered<Pattern, SymbolicCholesky<usize>>> =
+        const { RefCell::new(Remembered::new(REMEMBERED)) };
 }
 
 /// The symbolic LDLᵀ analysis of the `dim`-square lower-triangle pattern `(col_ptr, row_idx)`
@@ -43,12 +41,9 @@ pub fn analyse(
     row_idx: &[usize],
 ) -> Result<Arc<SymbolicCholesky<usize>>, KktError> {
     ANALYSED.with_borrow_mut(|analysed| {
-        let found = analysed
-            .iter()
-            .position(|a| a.col_ptr == col_ptr && a.row_idx == row_idx);
-        let entry = match found {
-            Some(k) => analysed.remove(k),
-            None => {
+        analysed.get_or_make(
+            |(c, r)| c == col_ptr && r == row_idx,
+            || {
                 let pattern =
                     SymbolicSparseColMatRef::new_checked(dim, dim, col_ptr, None, row_idx);
                 let symbolic = factorize_symbolic_cholesky(
@@ -58,18 +53,8 @@ pub fn analyse(
                     CholeskySymbolicParams::default(),
                 )
                 .map_err(|e| KktError::Symbolic(format!("{e:?}")))?;
-                if analysed.len() == REMEMBERED {
-                    analysed.remove(0);
-                }
-                Analysed {
-                    col_ptr: col_ptr.to_vec(),
-                    row_idx: row_idx.to_vec(),
-                    symbolic: Arc::new(symbolic),
-                }
-            }
-        };
-        let symbolic = Arc::clone(&entry.symbolic);
-        analysed.push(entry);
-        Ok(symbolic)
+                Ok(((col_ptr.to_vec(), row_idx.to_vec()), symbolic))
+            },
+        )
     })
 }
