@@ -18,7 +18,20 @@
 //! that reaches the task's height too early already scores better than none (a motion that
 //! never leaves the ground sees no change in the first sum, seed §6.1), and the first sum then
 //! moves it to the key time. The third keeps knot values `u` within the spline box of
-//! [`crate::gait::formulation`] (the rollout uses the clamped values). A rollout that fails
+//! [`crate::gait::formulation`] (the rollout uses the clamped values).
+//!
+//! **By stages** (`[global] staged = true`, with `[trials] shaping_stages`): the rows fall
+//! into the staged shaping's `S` stages ([`crate::gait::shaping`]: stage `s` holds the rows
+//! after horizon `t_{s−1}` up to `t_s`, the last stage the rest). With `k` the first stage
+//! having a row whose key-time violation exceeds the trial's tolerance (`k = S` when none),
+//! ```text
+//!   fitness = W·(S − k) + Σ_{r in stages ≤ k} (v_r(t_r) + min_{t ≤ t_r} v_r(t)) + box term
+//! ```
+//! with `W` = [`STAGE_WEIGHT`] above any stage's sum: a candidate that meets one more stage
+//! ranks above every candidate that does not, whatever their later rows (CMA-ES uses ranks
+//! only), so the search meets the take-off before it is scored on the landing, as the staged
+//! solves do. A sum over all rows lets a flailing motion that misses every row a little beat
+//! one that meets the early stage and misses a later one by much. A rollout that fails
 //! scores +∞. The search stops when the fitness is within the trial's tolerance (every row
 //! met), after `generations` generations or `evaluations` rollouts, when the distribution
 //! collapses, or on an interrupt; the best candidate seen starts the trial's solves.
@@ -38,12 +51,52 @@ use crate::solver::log::LogTarget;
 /// Generations between progress lines.
 pub const PROGRESS_EVERY: usize = 10;
 
+/// The weight of one unmet stage in the staged fitness (module header); the rows' units.
+pub const STAGE_WEIGHT: f64 = 1e3;
+
 /// Time between the samples of the time-relaxed term (s).
 pub const SAMPLE_INTERVAL: f64 = 0.01;
 
+/// The rows' stages for the staged fitness (module header): the stage of each row, the
+/// number of stages, and the tolerance by which a row is met.
+struct Stages {
+    of_row: Vec<usize>,
+    count: usize,
+    tol: f64,
+}
+
+impl Stages {
+    /// The stages of `shaped`'s rows under `problem`'s shaping horizons.
+    fn new(problem: &Problem, shaped: &Problem) -> Self {
+        let horizons = problem.shaping_horizons();
+        let of_row = shaped
+            .constraints
+            .iter()
+            .map(|c| horizons.iter().filter(|&&h| h < c.time).count())
+            .collect();
+        Stages {
+            of_row,
+            count: horizons.len() + 1,
+            tol: problem.trials.tolerance,
+        }
+    }
+
+    /// The staged fitness of rows with violations `at_key` at their key times and `least`
+    /// at any time up to them (module header).
+    fn fitness(&self, at_key: &[f64], least: &[f64]) -> f64 {
+        let unmet = |k: usize| (0..at_key.len()).any(|r| self.of_row[r] == k && at_key[r] > self.tol);
+        let first = (0..self.count).find(|&k| unmet(k)).unwrap_or(self.count);
+        let sum: f64 = (0..at_key.len())
+            .filter(|&r| self.of_row[r] <= first)
+            .map(|r| at_key[r] + least[r])
+            .sum();
+        STAGE_WEIGHT * (self.count - first) as f64 + sum
+    }
+}
+
 /// The rows' fitness of one rollout of motion parameters `x` (module header, without the box
-/// term); +∞ when the rollout fails.
-fn row_fitness(shaped: &Problem, steps: &[usize], x: &[f64]) -> f64 {
+/// term), by `stages` when given; +∞ when the rollout fails.
+fn row_fitness(shaped: &Problem, steps: &[usize], x: &[f64], stages: Option<&Stages>) -> f64 {
     let controls = SplineControls {
         grid: shaped.knot_grid(),
         params: x[..shaped.spline_parameters()].to_vec(),
@@ -65,7 +118,10 @@ fn row_fitness(shaped: &Problem, steps: &[usize], x: &[f64]) -> f64 {
         }
     });
     match rolled {
-        Ok(()) => at_key.iter().chain(&least).sum(),
+        Ok(()) => match stages {
+            Some(stages) => stages.fitness(&at_key, &least),
+            None => at_key.iter().chain(&least).sum(),
+        },
         Err(_) => f64::INFINITY,
     }
 }
@@ -118,6 +174,7 @@ pub fn search(
     let clock = Instant::now();
     let shaped = problem.shaped();
     let steps = sample_steps(&shaped);
+    let stages = settings.staged.then(|| Stages::new(problem, &shaped));
     let f = Formulation::new(problem);
     let (lower, upper) = f.physical_bounds();
     let grid = problem.knot_grid();
@@ -140,7 +197,7 @@ pub fn search(
             outside += (uj - v / s).powi(2);
             x[j] = v;
         }
-        row_fitness(&shaped, &steps, &x) + outside
+        row_fitness(&shaped, &steps, &x, stages.as_ref()) + outside
     };
     let u0: Vec<f64> = index.iter().zip(&scale).map(|(&j, &s)| x0[j] / s).collect();
     let budget = Budget {
@@ -208,6 +265,7 @@ mod tests {
             evaluations: 1000,
             population: Some(8),
             sigma: 0.5,
+            staged: false,
         };
         let x0 = vec![0.0; p.motion_parameters()];
         let run = |threads: usize| {
@@ -241,6 +299,30 @@ mod tests {
         assert_ne!(one.x, search(&p, &settings, &x0, 8, 2, None).x);
     }
 
+    /// The staged fitness ranks by the first unmet stage: meeting the early stage beats any
+    /// later rows, and among candidates failing the same stage the smaller sum wins.
+    #[test]
+    fn the_staged_fitness_ranks_the_first_unmet_stage_first() {
+        let stages = Stages {
+            of_row: vec![0, 1, 1, 2],
+            count: 3,
+            tol: 1e-3,
+        };
+        let zero = [0.0; 4];
+        // Stage 0 met, stage 1 missed by much; against stage 0 missed a little.
+        let early_met = stages.fitness(&[0.0, 2.0, 2.0, 5.0], &zero);
+        let early_missed = stages.fitness(&[0.01, 0.0, 0.0, 0.0], &zero);
+        assert!(early_met < early_missed, "{early_met} vs {early_missed}");
+        assert_eq!(early_met, STAGE_WEIGHT * 2.0 + 4.0);
+        // All met: the sum over every row, below the tolerance sum.
+        let all = stages.fitness(&[1e-4, 0.0, 2e-4, 0.0], &[1e-4, 0.0, 0.0, 0.0]);
+        assert!((all - 4e-4).abs() < 1e-15, "{all}");
+        // The time-relaxed term counts within the deciding stage.
+        let a = stages.fitness(&[0.5, 0.0, 0.0, 0.0], &[0.5, 0.0, 0.0, 0.0]);
+        let b = stages.fitness(&[0.5, 0.0, 0.0, 0.0], &[0.1, 0.0, 0.0, 0.0]);
+        assert!(b < a);
+    }
+
     /// A raised interrupt ends the search after its current generation, whose rollouts stop
     /// at once and score +∞: the start is returned.
     #[test]
@@ -252,6 +334,7 @@ mod tests {
             evaluations: 10_000,
             population: Some(8),
             sigma: 0.5,
+            staged: false,
         };
         let x0 = vec![0.0; p.motion_parameters()];
         let r = search(&p, &settings, &x0, 8, 1, None);

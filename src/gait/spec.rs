@@ -165,6 +165,8 @@ pub struct GlobalPhaseSpec {
     pub population: Option<usize>,
     /// Initial step size, a fraction of half the force range; default 0.3, in (0, 2].
     pub sigma: Option<f64>,
+    /// Whether the fitness ranks the shaping stages lexicographically; default false.
+    pub staged: Option<bool>,
 }
 
 /// Validated `[global]` settings.
@@ -178,6 +180,9 @@ pub struct GlobalSettings {
     pub population: Option<usize>,
     /// Initial step size (fraction of half the force range).
     pub sigma: f64,
+    /// Fitness by stages: the first shaping stage with a row unmet decides the rank
+    /// ([`crate::gait::global`]).
+    pub staged: bool,
 }
 
 /// Validated `[trials]` settings.
@@ -1323,6 +1328,7 @@ fn build_global(source: &Source, g: &GlobalPhaseSpec) -> Result<GlobalSettings, 
         evaluations,
         population: g.population,
         sigma,
+        staged: g.staged.unwrap_or(false),
     })
 }
 
@@ -1909,8 +1915,8 @@ min = 0.1
         );
         let g = p.global.unwrap();
         assert_eq!(
-            (g.generations, g.evaluations, g.population, g.sigma),
-            (300, 400, None, 0.3)
+            (g.generations, g.evaluations, g.population, g.sigma, g.staged),
+            (300, 400, None, 0.3, false)
         );
         for (table, says, key) in [
             (
