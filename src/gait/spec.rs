@@ -1915,9 +1915,17 @@ min = 0.1
         );
         let g = p.global.unwrap();
         assert_eq!(
-            (g.generations, g.evaluations, g.population, g.sigma, g.staged),
+            (
+                g.generations,
+                g.evaluations,
+                g.population,
+                g.sigma,
+                g.staged
+            ),
             (300, 400, None, 0.3, false)
         );
+        let staged = load(&(BASE.to_string() + "[global]\nstaged = true\n")).unwrap();
+        assert!(staged.global.unwrap().staged);
         for (table, says, key) in [
             (
                 "[start]\nkind = \"zero\"\namplitude = 0.5",
