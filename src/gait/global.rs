@@ -1,8 +1,8 @@
-//! The global phase (`[global]`): before a trial's solves, a derivative-free search over
-//! rollouts leads its low-knowledge start (`[start]`: zero forces, random splines or the
-//! hand-made guess) towards the kind of motion the task asks for, so that the SQP starts
-//! near it (seed chapter 6: "automatically generate better initial guesses", a global–local
-//! hybrid).
+//! The global phase (`[global]`): when a trial's solves from its low-knowledge start
+//! (`[start]`: zero forces, random splines or the hand-made guess) end short of Success, a
+//! derivative-free search over rollouts leads that start towards the kind of motion the task
+//! asks for, so that the SQP starts again near it (seed chapter 6: "automatically generate
+//! better initial guesses", a global–local hybrid; the order is [`crate::gait::trials`]').
 //!
 //! The search is CMA-ES ([`crate::gait::cmaes`]) over the knot values of every actuator
 //! (slopes stay at the start's), in units of half each actuator's force range, from the
@@ -21,7 +21,8 @@
 //! [`crate::gait::formulation`] (the rollout uses the clamped values). A rollout that fails
 //! scores +∞. The search stops when the fitness is within the trial's tolerance (every row
 //! met), after `generations` generations or `evaluations` rollouts, when the distribution
-//! collapses, or on an interrupt; the best candidate seen starts the trial's solves.
+//! collapses, or on an interrupt; the best candidate seen (the start itself, bit for bit, if
+//! none beat it) is returned.
 //!
 //! Deterministic: trial `k`'s search is seeded with the run's seed and `k`, each generation
 //! on its own stream, and its candidates are rolled out in parallel into their own slots.
@@ -85,7 +86,8 @@ fn sample_steps(shaped: &Problem) -> Vec<usize> {
 /// What a trial's global phase did.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GlobalReport {
-    /// Best motion parameters found (physical units), the trial's start.
+    /// Best motion parameters found (physical units): the search's start, bit for bit, when
+    /// no candidate scored better.
     pub x: Vec<f64>,
     /// Its fitness (module header; the rows' units).
     pub fitness: f64,
@@ -174,9 +176,12 @@ pub fn search(
             !problem.interrupt.is_raised()
         },
     );
+    // The start itself, bit for bit, when no candidate beat it.
     let mut x = x0.to_vec();
-    for ((&j, &s), &uj) in index.iter().zip(&scale).zip(&best.x) {
-        x[j] = (uj * s).clamp(lower[j], upper[j]);
+    if best.x != u0 {
+        for ((&j, &s), &uj) in index.iter().zip(&scale).zip(&best.x) {
+            x[j] = (uj * s).clamp(lower[j], upper[j]);
+        }
     }
     let seconds = clock.elapsed().as_secs_f64();
     say(format!(

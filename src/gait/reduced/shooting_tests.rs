@@ -159,10 +159,11 @@ fn segments_on_the_rollout_reproduce_single_shooting() {
 }
 
 /// The multiple-shooting Jacobian agrees with the dual-number oracle and, through the shared
-/// checker with Richardson extrapolation, with central differences, at start states perturbed
-/// by up to 1e-6 off the rollout (nonzero defects). Larger moves put the stiff contact spring
-/// within the difference steps: at 1e-3 one entry's extrapolated estimate was 5e-5 off while
-/// the dual-number oracle agreed to 1e-9.
+/// checker with Richardson extrapolation ([`fine_check_options`]), with central differences,
+/// and the effort's gradient with Ridders' differences, at start states perturbed by up to 1e-6
+/// off the rollout (nonzero defects). Larger moves put the stiff contact spring within the
+/// difference steps: at 1e-3 one entry's extrapolated estimate was 5e-5 off while the
+/// dual-number oracle agreed to 1e-9.
 #[test]
 fn multiple_shooting_derivatives_match_central_differences() {
     for (name, factor, segments) in [("luxo_leap", 0.2, 3), ("biped_hop", 0.05, 2)] {
