@@ -1,8 +1,9 @@
-//! The global phase (`[global]`): before a trial's solves, a derivative-free search over
-//! rollouts leads its low-knowledge start (`[start]`: zero forces, random splines or the
-//! hand-made guess) towards the kind of motion the task asks for, so that the SQP starts
-//! near it (seed chapter 6: "automatically generate better initial guesses", a global–local
-//! hybrid).
+//! The global phase (`[global]`): a derivative-free search over rollouts leads a trial's
+//! low-knowledge start (`[start]`: zero forces, random splines or the hand-made guess) towards
+//! the kind of motion the task asks for, so that the SQP starts near it (seed chapter 6:
+//! "automatically generate better initial guesses", a global–local hybrid). It runs before the
+//! trial's solves, or with `fallback` only after solves from the start itself fell short of
+//! Success (the order is [`crate::gait::trials`]').
 //!
 //! The search is CMA-ES ([`crate::gait::cmaes`]) over the knot values of every actuator
 //! (slopes stay at the start's), in units of half each actuator's force range, from the
@@ -34,7 +35,8 @@
 //! one that meets the early stage and misses a later one by much. A rollout that fails
 //! scores +∞. The search stops when the fitness is within the trial's tolerance (every row
 //! met), after `generations` generations or `evaluations` rollouts, when the distribution
-//! collapses, or on an interrupt; the best candidate seen starts the trial's solves.
+//! collapses, or on an interrupt; the best candidate seen (the start itself, bit for bit, if
+//! none beat it) is returned.
 //!
 //! Deterministic: trial `k`'s search is seeded with the run's seed and `k`, each generation
 //! on its own stream, and its candidates are rolled out in parallel into their own slots.
@@ -142,7 +144,8 @@ fn sample_steps(shaped: &Problem) -> Vec<usize> {
 /// What a trial's global phase did.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GlobalReport {
-    /// Best motion parameters found (physical units), the trial's start.
+    /// Best motion parameters found (physical units): the search's start, bit for bit, when
+    /// no candidate scored better.
     pub x: Vec<f64>,
     /// Its fitness (module header; the rows' units).
     pub fitness: f64,
@@ -232,9 +235,12 @@ pub fn search(
             !problem.interrupt.is_raised()
         },
     );
+    // The start itself, bit for bit, when no candidate beat it.
     let mut x = x0.to_vec();
-    for ((&j, &s), &uj) in index.iter().zip(&scale).zip(&best.x) {
-        x[j] = (uj * s).clamp(lower[j], upper[j]);
+    if best.x != u0 {
+        for ((&j, &s), &uj) in index.iter().zip(&scale).zip(&best.x) {
+            x[j] = (uj * s).clamp(lower[j], upper[j]);
+        }
     }
     let seconds = clock.elapsed().as_secs_f64();
     say(format!(
@@ -267,6 +273,7 @@ mod tests {
             population: Some(8),
             sigma: 0.5,
             staged: false,
+            fallback: false,
         };
         let x0 = vec![0.0; p.motion_parameters()];
         let run = |threads: usize| {
@@ -336,6 +343,7 @@ mod tests {
             population: Some(8),
             sigma: 0.5,
             staged: false,
+            fallback: false,
         };
         let x0 = vec![0.0; p.motion_parameters()];
         let r = search(&p, &settings, &x0, 8, 1, None);

@@ -167,6 +167,9 @@ pub struct GlobalPhaseSpec {
     pub sigma: Option<f64>,
     /// Whether the fitness ranks the shaping stages lexicographically; default false.
     pub staged: Option<bool>,
+    /// Whether the phase runs only when the solves from the trial's own start fall short of
+    /// Success (true), instead of before them (false, the default).
+    pub fallback: Option<bool>,
 }
 
 /// Validated `[global]` settings.
@@ -183,6 +186,9 @@ pub struct GlobalSettings {
     /// Fitness by stages: the first shaping stage with a row unmet decides the rank
     /// ([`crate::gait::global`]).
     pub staged: bool,
+    /// The phase runs only when the solves from the trial's start fall short of Success
+    /// ([`crate::gait::trials`]); otherwise it leads every trial's solves.
+    pub fallback: bool,
 }
 
 /// Validated `[trials]` settings.
@@ -1329,6 +1335,7 @@ fn build_global(source: &Source, g: &GlobalPhaseSpec) -> Result<GlobalSettings, 
         population: g.population,
         sigma,
         staged: g.staged.unwrap_or(false),
+        fallback: g.fallback.unwrap_or(false),
     })
 }
 
@@ -1920,12 +1927,15 @@ min = 0.1
                 g.evaluations,
                 g.population,
                 g.sigma,
-                g.staged
+                g.staged,
+                g.fallback
             ),
-            (300, 400, None, 0.3, false)
+            (300, 400, None, 0.3, false, false)
         );
         let staged = load(&(BASE.to_string() + "[global]\nstaged = true\n")).unwrap();
         assert!(staged.global.unwrap().staged);
+        let fallback = load(&(BASE.to_string() + "[global]\nfallback = true\n")).unwrap();
+        assert!(fallback.global.unwrap().fallback);
         for (table, says, key) in [
             (
                 "[start]\nkind = \"zero\"\namplitude = 0.5",

@@ -3,7 +3,7 @@
 //! the continuity rows) matches the dual-number oracle and extrapolated central differences.
 
 use super::Reduced;
-use super::tests::{central_difference, gap_to_oracle, shortened};
+use super::tests::{central_difference, gap_to_oracle, ridders_gradient, shortened};
 use crate::gait::sim::Simulator;
 use crate::gait::spline::SplineControls;
 use crate::solver::Nlp;
@@ -28,8 +28,27 @@ fn random_parameters(nlp: &Reduced<'_>, seed: u64) -> Vec<f64> {
 }
 
 /// The exact Jacobian values at `x` (pattern order), asserted equal to the dual-number
-/// oracle's to 1e-9 (relative, see `gap_to_oracle`).
+/// oracle's to 1e-9 (relative, see `gap_to_oracle`) or, where the motion amplifies round-off
+/// beyond that, to within the measured round-off floor ([`roundoff_floor`]).
 fn jacobian_matching_the_oracle(nlp: &Reduced<'_>, x: &[f64], what: &str) -> Vec<f64> {
+    let (fast, oracle) = exact_and_oracle(nlp, x);
+    let gap = gap_to_oracle(&fast, &oracle);
+    if gap >= 1e-9 {
+        let absolute = largest_difference(&fast, &oracle);
+        let floor = roundoff_floor(nlp, x, &fast, &oracle);
+        println!(
+            "{what}: sensitivities vs duals {gap:.2e} relative, {absolute:.2e} absolute; round-off floor {floor:.2e}"
+        );
+        assert!(
+            absolute <= floor,
+            "{what}: sensitivities vs duals {gap} relative, {absolute:.3e} absolute, above the round-off floor {floor:.3e}"
+        );
+    }
+    fast
+}
+
+/// The exact (sensitivity) and dual-number Jacobian values at `x`, pattern order.
+fn exact_and_oracle(nlp: &Reduced<'_>, x: &[f64]) -> (Vec<f64>, Vec<f64>) {
     let d = nlp.dims();
     let (mut grad, mut fast, mut oracle) =
         (vec![0.0; d.n], vec![0.0; d.jac_nnz], vec![0.0; d.jac_nnz]);
@@ -37,9 +56,35 @@ fn jacobian_matching_the_oracle(nlp: &Reduced<'_>, x: &[f64], what: &str) -> Vec
     let mut oracle_grad = vec![0.0; d.n];
     nlp.jacobian_by_parameter_duals(x, &mut oracle, &mut oracle_grad)
         .unwrap();
-    let gap = gap_to_oracle(&fast, &oracle);
-    assert!(gap < 1e-9, "{what}: sensitivities vs duals {gap}");
-    fast
+    (fast, oracle)
+}
+
+/// Largest entry-wise |a − b|.
+fn largest_difference(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (p - q).abs())
+        .fold(0.0, f64::max)
+}
+
+/// Round-off floor of the two exact Jacobians at `x` (values `fast` and `oracle` there): the
+/// largest change of either when every variable is moved by a relative 1e-15 (a few ulps, three
+/// seeded draws). Both methods round at every RK4 step; a motion that amplifies a perturbation of
+/// the state's last digits (stiff servos near a contact switch, docs/notes/gait.md, "the servo
+/// biped's derivative gap") amplifies that rounding as much, so two correct methods can differ
+/// by up to this much, while a missing term of the sensitivities gives a gap orders above it.
+fn roundoff_floor(nlp: &Reduced<'_>, x: &[f64], fast: &[f64], oracle: &[f64]) -> f64 {
+    (0..3u64)
+        .map(|s| {
+            let mut rng = ChaCha8Rng::seed_from_u64(100 + s);
+            let y: Vec<f64> = x
+                .iter()
+                .map(|v| v * (1.0 + rng.random_range(-1e-15..1e-15)))
+                .collect();
+            let (f2, o2) = exact_and_oracle(nlp, &y);
+            largest_difference(fast, &f2).max(largest_difference(oracle, &o2))
+        })
+        .fold(0.0, f64::max)
 }
 
 /// Fills the segment start states of `x` from the rollout, then moves each by up to ±1e-6
@@ -114,10 +159,11 @@ fn segments_on_the_rollout_reproduce_single_shooting() {
 }
 
 /// The multiple-shooting Jacobian agrees with the dual-number oracle and, through the shared
-/// checker with Richardson extrapolation, with central differences, at start states perturbed
-/// by up to 1e-6 off the rollout (nonzero defects). Larger moves put the stiff contact spring
-/// within the difference steps: at 1e-3 one entry's extrapolated estimate was 5e-5 off while
-/// the dual-number oracle agreed to 1e-9.
+/// checker with Richardson extrapolation ([`fine_check_options`]), with central differences,
+/// and the effort's gradient with Ridders' differences, at start states perturbed by up to 1e-6
+/// off the rollout (nonzero defects). Larger moves put the stiff contact spring within the
+/// difference steps: at 1e-3 one entry's extrapolated estimate was 5e-5 off while the
+/// dual-number oracle agreed to 1e-9.
 #[test]
 fn multiple_shooting_derivatives_match_central_differences() {
     for (name, factor, segments) in [("luxo_leap", 0.2, 3), ("biped_hop", 0.05, 2)] {
@@ -128,14 +174,44 @@ fn multiple_shooting_derivatives_match_central_differences() {
         x.resize(d.n, 0.0);
         start_states_off_the_rollout(&nlp, &mut x, 4);
         jacobian_matching_the_oracle(&nlp, &x, name);
-        let report = check_derivatives(&nlp, &x, &crate::gait::check_options()).unwrap();
+        let report = check_derivatives(&nlp, &x, &fine_check_options()).unwrap();
+        // The effort's gradient against a step-adaptive reference (see `ridders_gradient`):
+        // no one step serves its columns.
+        let mut grad = vec![0.0; d.n];
+        nlp.eval_derivatives(&x, &mut grad, &mut vec![0.0; d.jac_nnz])
+            .unwrap();
+        let worst_g = (0..d.n)
+            .map(|j| (ridders_gradient(&nlp, &x, j) - grad[j]).abs() / grad[j].abs().max(1.0))
+            .fold(0.0, f64::max);
         println!(
-            "{name}, S = {segments}: n = {}, m = {}, max error {:.2e} (checked {}, failed {})",
+            "{name}, S = {segments}: n = {}, m = {}, max error {:.2e} (checked {}, failed {}), gradient {worst_g:.2e}",
             d.n, d.m, report.jacobian.max_error, report.jacobian.checked, report.jacobian.failed
         );
-        assert!(report.passed(), "{name}: {:?}", report.worst_per_function);
+        assert_eq!(
+            report.jacobian.failed, 0,
+            "{name}: {:?}",
+            report.worst_per_function
+        );
         assert!(report.jacobian.checked >= d.jac_nnz);
+        assert!(
+            worst_g < crate::gait::CHECK_TOLERANCE,
+            "{name}: gradient {worst_g}"
+        );
     }
+}
+
+/// `--check`'s options with the characteristic scale of the functions (the distance over which
+/// they change, [`crate::solver::derivatives::FiniteDifferenceOptions`]) set to 0.01 (m, rad,
+/// m/s) instead of `1 + |x_j|`: the feet stand 2.3 mm deep in the contact springs and the servos
+/// hold to a fraction of a degree, so the rollouts curve over millimetres and milliradians. The
+/// central step is then ≈ 1e-6 instead of ≈ 1e-4 (Richardson-extrapolated from h and h/2); at
+/// 1e-4 the servo biped's extrapolated differences are still truncation-limited (one continuity
+/// entry off by 1.3e-3) and they converge to the exact values as the step shrinks
+/// (docs/notes/gait.md, "the servo biped's derivative gap").
+fn fine_check_options() -> crate::solver::derivatives::CheckOptions {
+    let mut options = crate::gait::check_options();
+    options.differences.characteristic_scale = Some(0.01);
+    options
 }
 
 /// The Luxo leap shortened to 0.1 s with its initial state as variables, half-widths 5 mm / 0.05 rad in
