@@ -33,7 +33,7 @@
 //! ([`super::volume::cone_volume_hessian_row`]), chords `L (I − ûûᵀ)/|x_a − x_b|` and the circle
 //! guide's second row `L/r · I`; plane and line guides and the `H_s` columns are linear.
 
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 use nalgebra::Matrix3;
 use rayon::prelude::*;
@@ -180,18 +180,27 @@ pub struct CmcNlp {
     chords: Vec<Chord>,
     smoothing: Vec<Smoothing>,
     weight: f64,
-    pattern: Vec<(usize, usize)>,
-    hessian: HessianPattern,
-    /// Hessian slots of each triangle's corners and of each smoothing term's star
-    /// ([`HessianPattern::star_slots`]).
-    triangle_slots: Vec<[usize; 9]>,
-    smoothing_slots: Vec<Vec<usize>>,
+    /// The sparsity structure (Jacobian pattern, Hessian pattern and slots), shared with the
+    /// problem it was rebuilt from when the connectivity and columns are the same
+    /// ([`CmcNlp::remeshed`]).
+    structure: Arc<Structure>,
     centre: Point,
     formulation: Formulation,
     /// The formulation [`CmcNlp::remeshed`] builds (`formulation` but after a fall-back).
     rebuilt_as: Formulation,
     max_rounds: usize,
     relaxation_gain: f64,
+}
+
+/// The Jacobian's and the Hessian's sparsity patterns of a problem, and the Hessian slots of
+/// each triangle's corners and of each smoothing term's star ([`HessianPattern::star_slots`]):
+/// functions of the connectivity, the rows and the variables' columns only.
+#[derive(Debug, Default)]
+struct Structure {
+    pattern: Vec<(usize, usize)>,
+    hessian: HessianPattern,
+    triangle_slots: Vec<[usize; 9]>,
+    smoothing_slots: Vec<Vec<usize>>,
 }
 
 /// Why a problem cannot be built.
@@ -233,6 +242,19 @@ impl CmcNlp {
         chords: Vec<Chord>,
         tangential_weight: f64,
         formulation: Formulation,
+    ) -> Result<CmcNlp, BuildError> {
+        CmcNlp::build(mesh, volumes, chords, tangential_weight, formulation, None)
+    }
+
+    /// [`CmcNlp::with_formulation`], taking the sparsity structure from `previous` when it is
+    /// the same ([`CmcNlp::same_structure`]) instead of building it again.
+    fn build(
+        mesh: Mesh,
+        volumes: Vec<VolumeConstraint>,
+        chords: Vec<Chord>,
+        tangential_weight: f64,
+        formulation: Formulation,
+        previous: Option<&CmcNlp>,
     ) -> Result<CmcNlp, BuildError> {
         if !(tangential_weight >= 0.0 && tangential_weight.is_finite()) {
             return Err(BuildError::Invalid(format!(
@@ -341,43 +363,76 @@ impl CmcNlp {
             chords,
             smoothing,
             weight: tangential_weight,
-            pattern: Vec::new(),
-            hessian: HessianPattern::default(),
-            triangle_slots: Vec::new(),
-            smoothing_slots: Vec::new(),
+            structure: Arc::default(),
             centre,
             formulation,
             rebuilt_as: formulation,
             max_rounds: MAX_ROUNDS,
             relaxation_gain: RELAXATION_GAIN,
         };
-        nlp.pattern = nlp.build_pattern();
-        nlp.hessian = nlp.build_hessian_pattern();
-        nlp.triangle_slots = nlp
-            .start
-            .triangles()
-            .iter()
-            .map(|tri| nlp.hessian.triangle_slots(&nlp.vars, tri))
-            .collect();
-        nlp.smoothing_slots = nlp
-            .smoothing
-            .iter()
-            .map(|term| nlp.hessian.star_slots(&nlp.vars, &term.star()))
-            .collect();
+        nlp.structure = match previous.filter(|p| nlp.same_structure(p)) {
+            Some(previous) => Arc::clone(&previous.structure),
+            None => Arc::new(nlp.build_structure()),
+        };
         Ok(nlp)
     }
 
     /// The same problem (volumes, chords, weight) on another mesh with the same vertices and
-    /// surfaces, e.g. after [`super::remesh::equiangulate`].
+    /// surfaces, e.g. after [`super::remesh::equiangulate`] or a normal-coordinate round (same
+    /// connectivity: the sparsity structure is shared, not rebuilt).
     pub fn remeshed(&self, mesh: Mesh) -> Result<CmcNlp, BuildError> {
-        Ok(CmcNlp::with_formulation(
+        Ok(CmcNlp::build(
             mesh,
             self.volumes.clone(),
             self.chords.clone(),
             self.weight,
             self.rebuilt_as,
+            Some(self),
         )?
         .with_rounds(self.max_rounds, self.relaxation_gain))
+    }
+
+    /// Whether `other` has this problem's sparsity structure: the same formulation,
+    /// triangles, rows, curvature columns, columns of every vertex and smoothing terms'
+    /// stars (the structure is a function of these alone).
+    fn same_structure(&self, other: &CmcNlp) -> bool {
+        let n = self.start.vertex_count();
+        self.formulation == other.formulation
+            && n == other.start.vertex_count()
+            && self.start.triangles() == other.start.triangles()
+            && self.rows == other.rows
+            && self.curvature_column == other.curvature_column
+            && self.vars.count() == other.vars.count()
+            && (0..n).all(|v| {
+                self.vars.column(v) == other.vars.column(v)
+                    && self.vars.width(v) == other.vars.width(v)
+            })
+            && self.smoothing.len() == other.smoothing.len()
+            && self
+                .smoothing
+                .iter()
+                .zip(&other.smoothing)
+                .all(|(a, b)| a.vertex == b.vertex && a.ring == b.ring)
+    }
+
+    /// The sparsity structure from scratch.
+    fn build_structure(&self) -> Structure {
+        let hessian = self.build_hessian_pattern();
+        Structure {
+            pattern: self.build_pattern(),
+            triangle_slots: self
+                .start
+                .triangles()
+                .iter()
+                .map(|tri| hessian.triangle_slots(&self.vars, tri))
+                .collect(),
+            smoothing_slots: self
+                .smoothing
+                .iter()
+                .map(|term| hessian.star_slots(&self.vars, &term.star()))
+                .collect(),
+            hessian,
+        }
     }
 
     /// The formulation in use.
@@ -699,7 +754,7 @@ impl CmcNlp {
         rows: impl Fn(usize, usize, &Point) -> Point,
         factor: f64,
     ) {
-        let slots = &self.triangle_slots[t];
+        let slots = &self.structure.triangle_slots[t];
         for k in 0..3 {
             for m in 0..3 {
                 HessianPattern::add_rows_at(
@@ -892,8 +947,8 @@ impl Nlp for CmcNlp {
         Dims {
             n: self.vars.count() + self.curvature_column.iter().flatten().count(),
             m: self.rows.len(),
-            jac_nnz: self.pattern.len(),
-            hess_nnz: self.hessian.entries().len(),
+            jac_nnz: self.structure.pattern.len(),
+            hess_nnz: self.structure.hessian.entries().len(),
         }
     }
 
@@ -930,7 +985,7 @@ impl Nlp for CmcNlp {
     }
 
     fn jacobian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
-        for (k, &(r, c)) in self.pattern.iter().enumerate() {
+        for (k, &(r, c)) in self.structure.pattern.iter().enumerate() {
             rows[k] = r;
             cols[k] = c;
         }
@@ -1038,7 +1093,7 @@ impl Nlp for CmcNlp {
                     }
                 }
             }
-            debug_assert_eq!(k, self.pattern.len());
+            debug_assert_eq!(k, self.structure.pattern.len());
             if grad.iter().chain(jac.iter()).all(|v| v.is_finite()) {
                 Ok(())
             } else {
@@ -1048,7 +1103,7 @@ impl Nlp for CmcNlp {
     }
 
     fn hessian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
-        for (k, &(r, c)) in self.hessian.entries().iter().enumerate() {
+        for (k, &(r, c)) in self.structure.hessian.entries().iter().enumerate() {
             rows[k] = r;
             cols[k] = c;
         }
@@ -1063,10 +1118,10 @@ impl Nlp for CmcNlp {
     ) -> Result<(), EvalError> {
         let l = self.scale;
         let vars = &self.vars;
-        let h = &self.hessian;
+        let h = &self.structure.hessian;
         values.fill(0.0);
         // Regularization (quadratic in the scaled variables): w Σ c_a c_b PᵀP.
-        for (term, slots) in self.smoothing.iter().zip(&self.smoothing_slots) {
+        for (term, slots) in self.smoothing.iter().zip(&self.structure.smoothing_slots) {
             let p = term.projector;
             let ptp = p.transpose() * p * (sigma * self.weight);
             let c_ring = -1.0 / term.ring.len() as f64;
@@ -1355,7 +1410,7 @@ mod tests {
         let (mut grad, mut jac) = (vec![0.0; d.n], vec![0.0; d.jac_nnz]);
         nlp.eval_derivatives(&sol.x, &mut grad, &mut jac).unwrap();
         let mut a = DMatrix::zeros(d.m, d.n);
-        for (&(r, c), v) in nlp.pattern.iter().zip(&jac) {
+        for (&(r, c), v) in nlp.structure.pattern.iter().zip(&jac) {
             a[(r, c)] += v;
         }
         // Null space of A: eigenvectors of AᵀA with negligible eigenvalues.
