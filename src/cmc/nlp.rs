@@ -130,7 +130,7 @@ pub const RELAXATION_SWEEPS: usize = 3;
 pub const RELAXATION_GAIN: f64 = 1e-5;
 
 /// Largest per-round contraction `λ` of the rounds' energy error assumed when choosing the
-/// over-relaxation `ω = 2 / (2 − λ)` between rounds ([`over_relaxation`]): caps ω at 1.82.
+/// over-relaxation `ω = 2 / (2 − λ)` between rounds (see [`CmcNlp::solve`]): caps ω at 1.82.
 pub const MAX_CONTRACTION: f64 = 0.9;
 
 /// Scaled optimality tolerance of a normal-coordinate round that another round may follow
@@ -463,7 +463,10 @@ impl CmcNlp {
     /// frozen anew) and solved again, until the relaxation after a round lowers the energy by
     /// at most [`RELAXATION_GAIN`] of the area, or a round and the relaxation after it move no
     /// vertex by more than [`ROUND_TOLERANCE`], or after [`MAX_ROUNDS`] rounds (both settable,
-    /// [`CmcNlp::with_rounds`]). `self` becomes the last round's problem, the returned solution
+    /// [`CmcNlp::with_rounds`]). From the second relaxation on, the mesh moves past the
+    /// relaxed positions by the over-relaxation `ω = 2 / (2 − λ)`, λ the rounds' contraction
+    /// estimated from the first two relaxations' gains ([`MAX_CONTRACTION`]), when that keeps
+    /// every triangle and lowers the relaxation's energy. `self` becomes the last round's problem, the returned solution
     /// its solution, with the iterations, evaluations and logs of every round; a round that
     /// fails leaves the previous round's result. Every round but the last possible one stops
     /// at [`ROUND_OPTIMALITY`], and the returned round, when it stopped there, is solved on
