@@ -202,6 +202,8 @@ pub struct Mesh {
     vertex_triangles: Vec<Vec<usize>>,
     neighbours: Vec<Vec<usize>>,
     edges: Vec<Edge>,
+    /// [`Mesh::is_interior_manifold`] of each vertex, found once from the connectivity.
+    interior_manifold: Vec<bool>,
 }
 
 impl Mesh {
@@ -287,6 +289,15 @@ impl Mesh {
         for list in &mut neighbours {
             list.sort_unstable();
         }
+        let interior_manifold = (0..n)
+            .map(|v| {
+                let star = &vertex_triangles[v];
+                neighbours[v].len() == star.len()
+                    && neighbours[v]
+                        .iter()
+                        .all(|&w| star.iter().filter(|&&t| triangles[t].contains(&w)).count() == 2)
+            })
+            .collect();
         let mesh = Mesh {
             positions,
             triangles,
@@ -297,6 +308,7 @@ impl Mesh {
             vertex_triangles,
             neighbours,
             edges,
+            interior_manifold,
         };
         mesh.check_areas()?;
         Ok(mesh)
@@ -437,14 +449,7 @@ impl Mesh {
     /// Whether the star of `v` is a closed disk: every edge at `v` is shared by exactly two of
     /// its triangles (so `v` is neither on a boundary nor on a junction).
     pub fn is_interior_manifold(&self, v: usize) -> bool {
-        let star = &self.vertex_triangles[v];
-        self.neighbours[v].iter().all(|&w| {
-            let shared = star
-                .iter()
-                .filter(|&&t| self.triangles[t].contains(&w))
-                .count();
-            shared == 2
-        }) && self.neighbours[v].len() == star.len()
+        self.interior_manifold[v]
     }
 
     /// The surface at whose vertex `v` a curvature constraint applies, if any: `v` is not

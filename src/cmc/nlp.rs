@@ -33,7 +33,7 @@
 //! ([`super::volume::cone_volume_hessian_row`]), chords `L (I − ûûᵀ)/|x_a − x_b|` and the circle
 //! guide's second row `L/r · I`; plane and line guides and the `H_s` columns are linear.
 
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 use nalgebra::Matrix3;
 use rayon::prelude::*;
@@ -42,7 +42,7 @@ use super::area::{TriangleAreaForm, total_area, total_area_gradient};
 use super::curvature::{mean_curvature, mean_curvature_gradient};
 use super::curvature_hessian::mean_curvature_hessian;
 use super::mesh::{Mesh, Point, orthonormal_pair};
-use super::tangential::{Motion, Smoothing, relax, vertex_normal};
+use super::tangential::{Motion, Smoothing, over_relaxed, relax, vertex_normal};
 use super::variables::{HessianPattern, Variables};
 use super::volume::{Region, chord, cone_volume_hessian_row};
 use crate::solver::global::WithStart;
@@ -129,6 +129,10 @@ pub const RELAXATION_SWEEPS: usize = 3;
 /// fraction of the area.
 pub const RELAXATION_GAIN: f64 = 1e-5;
 
+/// Largest per-round contraction `λ` of the rounds' energy error assumed when choosing the
+/// over-relaxation `ω = 2 / (2 − λ)` between rounds (see [`CmcNlp::solve`]): caps ω at 1.82.
+pub const MAX_CONTRACTION: f64 = 0.9;
+
 /// Scaled optimality tolerance of a normal-coordinate round that another round may follow
 /// (the solver's own tolerance when that is looser): the relaxation after it moves the film
 /// tangentially and the next round starts at an optimality of ~1e-3 again, so digits beyond
@@ -180,18 +184,27 @@ pub struct CmcNlp {
     chords: Vec<Chord>,
     smoothing: Vec<Smoothing>,
     weight: f64,
-    pattern: Vec<(usize, usize)>,
-    hessian: HessianPattern,
-    /// Hessian slots of each triangle's corners and of each smoothing term's star
-    /// ([`HessianPattern::star_slots`]).
-    triangle_slots: Vec<[usize; 9]>,
-    smoothing_slots: Vec<Vec<usize>>,
+    /// The sparsity structure (Jacobian pattern, Hessian pattern and slots), shared with the
+    /// problem it was rebuilt from when the connectivity and columns are the same
+    /// ([`CmcNlp::remeshed`]).
+    structure: Arc<Structure>,
     centre: Point,
     formulation: Formulation,
     /// The formulation [`CmcNlp::remeshed`] builds (`formulation` but after a fall-back).
     rebuilt_as: Formulation,
     max_rounds: usize,
     relaxation_gain: f64,
+}
+
+/// The Jacobian's and the Hessian's sparsity patterns of a problem, and the Hessian slots of
+/// each triangle's corners and of each smoothing term's star ([`HessianPattern::star_slots`]):
+/// functions of the connectivity, the rows and the variables' columns only.
+#[derive(Debug, Default)]
+struct Structure {
+    pattern: Vec<(usize, usize)>,
+    hessian: HessianPattern,
+    triangle_slots: Vec<[usize; 9]>,
+    smoothing_slots: Vec<Vec<usize>>,
 }
 
 /// Why a problem cannot be built.
@@ -233,6 +246,19 @@ impl CmcNlp {
         chords: Vec<Chord>,
         tangential_weight: f64,
         formulation: Formulation,
+    ) -> Result<CmcNlp, BuildError> {
+        CmcNlp::build(mesh, volumes, chords, tangential_weight, formulation, None)
+    }
+
+    /// [`CmcNlp::with_formulation`], taking the sparsity structure from `previous` when it is
+    /// the same ([`CmcNlp::same_structure`]) instead of building it again.
+    fn build(
+        mesh: Mesh,
+        volumes: Vec<VolumeConstraint>,
+        chords: Vec<Chord>,
+        tangential_weight: f64,
+        formulation: Formulation,
+        previous: Option<&CmcNlp>,
     ) -> Result<CmcNlp, BuildError> {
         if !(tangential_weight >= 0.0 && tangential_weight.is_finite()) {
             return Err(BuildError::Invalid(format!(
@@ -341,43 +367,76 @@ impl CmcNlp {
             chords,
             smoothing,
             weight: tangential_weight,
-            pattern: Vec::new(),
-            hessian: HessianPattern::default(),
-            triangle_slots: Vec::new(),
-            smoothing_slots: Vec::new(),
+            structure: Arc::default(),
             centre,
             formulation,
             rebuilt_as: formulation,
             max_rounds: MAX_ROUNDS,
             relaxation_gain: RELAXATION_GAIN,
         };
-        nlp.pattern = nlp.build_pattern();
-        nlp.hessian = nlp.build_hessian_pattern();
-        nlp.triangle_slots = nlp
-            .start
-            .triangles()
-            .iter()
-            .map(|tri| nlp.hessian.triangle_slots(&nlp.vars, tri))
-            .collect();
-        nlp.smoothing_slots = nlp
-            .smoothing
-            .iter()
-            .map(|term| nlp.hessian.star_slots(&nlp.vars, &term.star()))
-            .collect();
+        nlp.structure = match previous.filter(|p| nlp.same_structure(p)) {
+            Some(previous) => Arc::clone(&previous.structure),
+            None => Arc::new(nlp.build_structure()),
+        };
         Ok(nlp)
     }
 
     /// The same problem (volumes, chords, weight) on another mesh with the same vertices and
-    /// surfaces, e.g. after [`super::remesh::equiangulate`].
+    /// surfaces, e.g. after [`super::remesh::equiangulate`] or a normal-coordinate round (same
+    /// connectivity: the sparsity structure is shared, not rebuilt).
     pub fn remeshed(&self, mesh: Mesh) -> Result<CmcNlp, BuildError> {
-        Ok(CmcNlp::with_formulation(
+        Ok(CmcNlp::build(
             mesh,
             self.volumes.clone(),
             self.chords.clone(),
             self.weight,
             self.rebuilt_as,
+            Some(self),
         )?
         .with_rounds(self.max_rounds, self.relaxation_gain))
+    }
+
+    /// Whether `other` has this problem's sparsity structure: the same formulation,
+    /// triangles, rows, curvature columns, columns of every vertex and smoothing terms'
+    /// stars (the structure is a function of these alone).
+    fn same_structure(&self, other: &CmcNlp) -> bool {
+        let n = self.start.vertex_count();
+        self.formulation == other.formulation
+            && n == other.start.vertex_count()
+            && self.start.triangles() == other.start.triangles()
+            && self.rows == other.rows
+            && self.curvature_column == other.curvature_column
+            && self.vars.count() == other.vars.count()
+            && (0..n).all(|v| {
+                self.vars.column(v) == other.vars.column(v)
+                    && self.vars.width(v) == other.vars.width(v)
+            })
+            && self.smoothing.len() == other.smoothing.len()
+            && self
+                .smoothing
+                .iter()
+                .zip(&other.smoothing)
+                .all(|(a, b)| a.vertex == b.vertex && a.ring == b.ring)
+    }
+
+    /// The sparsity structure from scratch.
+    fn build_structure(&self) -> Structure {
+        let hessian = self.build_hessian_pattern();
+        Structure {
+            pattern: self.build_pattern(),
+            triangle_slots: self
+                .start
+                .triangles()
+                .iter()
+                .map(|tri| hessian.triangle_slots(&self.vars, tri))
+                .collect(),
+            smoothing_slots: self
+                .smoothing
+                .iter()
+                .map(|term| hessian.star_slots(&self.vars, &term.star()))
+                .collect(),
+            hessian,
+        }
     }
 
     /// The formulation in use.
@@ -404,7 +463,10 @@ impl CmcNlp {
     /// frozen anew) and solved again, until the relaxation after a round lowers the energy by
     /// at most [`RELAXATION_GAIN`] of the area, or a round and the relaxation after it move no
     /// vertex by more than [`ROUND_TOLERANCE`], or after [`MAX_ROUNDS`] rounds (both settable,
-    /// [`CmcNlp::with_rounds`]). `self` becomes the last round's problem, the returned solution
+    /// [`CmcNlp::with_rounds`]). From the second relaxation on, the mesh moves past the
+    /// relaxed positions by the over-relaxation `ω = 2 / (2 − λ)`, λ the rounds' contraction
+    /// estimated from the first two relaxations' gains ([`MAX_CONTRACTION`]), when that keeps
+    /// every triangle and lowers the relaxation's energy. `self` becomes the last round's problem, the returned solution
     /// its solution, with the iterations, evaluations and logs of every round; a round that
     /// fails leaves the previous round's result. Every round but the last possible one stops
     /// at [`ROUND_OPTIMALITY`], and the returned round, when it stopped there, is solved on
@@ -429,6 +491,7 @@ impl CmcNlp {
         }
         // Whether `solution` stopped at ROUND_OPTIMALITY rather than the solver's tolerance.
         let mut loose = round_options.tolerance > options.tolerance;
+        let (mut first_gain, mut omega) = (None, None);
         for round in 2..=self.max_rounds {
             let moved = self.largest_displacement(&solution.x) > ROUND_TOLERANCE;
             let Ok(mut mesh) = self.mesh_at(&solution.x) else {
@@ -439,9 +502,10 @@ impl CmcNlp {
             } else {
                 Vec::new()
             };
+            let pressures = self.surface_pressures(&solution.lambda);
             let (relaxed, relaxation) = relax(
                 &mesh,
-                &self.surface_pressures(&solution.lambda),
+                &pressures,
                 |v| self.motion(v),
                 &terms,
                 self.weight,
@@ -454,6 +518,15 @@ impl CmcNlp {
             {
                 break;
             }
+            match first_gain {
+                None => first_gain = Some(gain),
+                Some(first) => omega = omega.or(Some(over_relaxation(first, gain))),
+            }
+            let relaxed = omega
+                .and_then(|omega| {
+                    over_relaxed(&mesh, &relaxed, omega, &pressures, &terms, self.weight)
+                })
+                .unwrap_or(relaxed);
             let Ok(next) = mesh
                 .set_positions(relaxed)
                 .map_err(|e| e.to_string())
@@ -699,7 +772,7 @@ impl CmcNlp {
         rows: impl Fn(usize, usize, &Point) -> Point,
         factor: f64,
     ) {
-        let slots = &self.triangle_slots[t];
+        let slots = &self.structure.triangle_slots[t];
         for k in 0..3 {
             for m in 0..3 {
                 HessianPattern::add_rows_at(
@@ -790,6 +863,17 @@ fn merged(mut earlier: Solution, mut later: Solution) -> Solution {
     earlier.log.append(&mut later.log);
     later.log = earlier.log;
     later
+}
+
+/// The over-relaxation ω of the relaxation's displacement between rounds, from the energy
+/// gains `first` and `second` of the first two relaxations. The rounds alternate a normal
+/// solve with a tangential relaxation (block coordinate descent); near the solution the error
+/// contracts per round by an iteration matrix M with eigenvalues in [0, λ], the energy error
+/// by about λ², so `λ ≈ √(second/first)`. The relaxed iteration `(1 − ω) I + ω M` contracts
+/// fastest at `ω = 2 / (2 − λ)` (to `λ / (2 − λ)`), λ capped at [`MAX_CONTRACTION`].
+fn over_relaxation(first: f64, second: f64) -> f64 {
+    let contraction = (second / first).clamp(0.0, 1.0).sqrt().min(MAX_CONTRACTION);
+    2.0 / (2.0 - contraction)
 }
 
 /// The bounding-box diagonal over √3 (the edge of a cube with that diagonal), m; 1 for a
@@ -892,8 +976,8 @@ impl Nlp for CmcNlp {
         Dims {
             n: self.vars.count() + self.curvature_column.iter().flatten().count(),
             m: self.rows.len(),
-            jac_nnz: self.pattern.len(),
-            hess_nnz: self.hessian.entries().len(),
+            jac_nnz: self.structure.pattern.len(),
+            hess_nnz: self.structure.hessian.entries().len(),
         }
     }
 
@@ -930,7 +1014,7 @@ impl Nlp for CmcNlp {
     }
 
     fn jacobian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
-        for (k, &(r, c)) in self.pattern.iter().enumerate() {
+        for (k, &(r, c)) in self.structure.pattern.iter().enumerate() {
             rows[k] = r;
             cols[k] = c;
         }
@@ -1038,7 +1122,7 @@ impl Nlp for CmcNlp {
                     }
                 }
             }
-            debug_assert_eq!(k, self.pattern.len());
+            debug_assert_eq!(k, self.structure.pattern.len());
             if grad.iter().chain(jac.iter()).all(|v| v.is_finite()) {
                 Ok(())
             } else {
@@ -1048,7 +1132,7 @@ impl Nlp for CmcNlp {
     }
 
     fn hessian_structure(&self, rows: &mut [usize], cols: &mut [usize]) {
-        for (k, &(r, c)) in self.hessian.entries().iter().enumerate() {
+        for (k, &(r, c)) in self.structure.hessian.entries().iter().enumerate() {
             rows[k] = r;
             cols[k] = c;
         }
@@ -1063,10 +1147,10 @@ impl Nlp for CmcNlp {
     ) -> Result<(), EvalError> {
         let l = self.scale;
         let vars = &self.vars;
-        let h = &self.hessian;
+        let h = &self.structure.hessian;
         values.fill(0.0);
         // Regularization (quadratic in the scaled variables): w Σ c_a c_b PᵀP.
-        for (term, slots) in self.smoothing.iter().zip(&self.smoothing_slots) {
+        for (term, slots) in self.smoothing.iter().zip(&self.structure.smoothing_slots) {
             let p = term.projector;
             let ptp = p.transpose() * p * (sigma * self.weight);
             let c_ring = -1.0 / term.ring.len() as f64;
@@ -1213,6 +1297,15 @@ mod tests {
     }
 
     #[test]
+    fn over_relaxation_follows_the_estimated_contraction() {
+        // No contraction: no over-relaxation; energy gains falling ×0.64 per round: λ = 0.8,
+        // ω = 2 / 1.2; a gain that grows is capped at λ = MAX_CONTRACTION.
+        assert_eq!(over_relaxation(1.0, 0.0), 1.0);
+        assert!((over_relaxation(1e-4, 0.64e-4) - 2.0 / 1.2).abs() < 1e-12);
+        assert_eq!(over_relaxation(1e-4, 2e-4), 2.0 / (2.0 - MAX_CONTRACTION));
+    }
+
+    #[test]
     fn icosahedron_start_is_feasible() {
         let mesh = generators::icosphere(0.01, 0, "skin").unwrap();
         let region = Region {
@@ -1355,7 +1448,7 @@ mod tests {
         let (mut grad, mut jac) = (vec![0.0; d.n], vec![0.0; d.jac_nnz]);
         nlp.eval_derivatives(&sol.x, &mut grad, &mut jac).unwrap();
         let mut a = DMatrix::zeros(d.m, d.n);
-        for (&(r, c), v) in nlp.pattern.iter().zip(&jac) {
+        for (&(r, c), v) in nlp.structure.pattern.iter().zip(&jac) {
             a[(r, c)] += v;
         }
         // Null space of A: eigenvectors of AᵀA with negligible eigenvalues.

@@ -145,6 +145,31 @@ pub fn relax(
     (pos, relaxation)
 }
 
+/// The positions `x₀ + ω (x₁ − x₀)` from the mesh's positions `x₀` past the relaxed ones `x₁`
+/// (over-relaxation, ω ≥ 1), when no triangle there has turned over against `x₁` and the
+/// energy E of [`relax`] (same pressures, terms and weight) there is below E at `x₀`; else
+/// None.
+pub fn over_relaxed(
+    mesh: &Mesh,
+    relaxed: &[Point],
+    omega: f64,
+    surface_pressure: &[f64],
+    terms: &[Smoothing],
+    weight: f64,
+) -> Option<Vec<Point>> {
+    let start = mesh.positions();
+    let over: Vec<Point> = start
+        .iter()
+        .zip(relaxed)
+        .map(|(a, b)| a + omega * (b - a))
+        .collect();
+    let unturned = (0..mesh.triangles().len()).all(|t| {
+        area_vector(&corners(mesh, &over, t)).dot(&area_vector(&corners(mesh, relaxed, t))) > 0.0
+    });
+    let star = Star::new(mesh, terms, surface_pressure, weight);
+    (unturned && star.total(&over) < star.total(start)).then_some(over)
+}
+
 /// Per-vertex work space of [`Star::step`]: the area vectors of the vertex's triangles and the
 /// offsets `x − mean of ring` of its smoothing terms at the step's start.
 #[derive(Default)]
@@ -376,6 +401,46 @@ pub fn vertex_normal(mesh: &Mesh, v: usize) -> Point {
 mod tests {
     use super::*;
     use crate::cmc::generators;
+
+    /// Over-relaxing a relaxation of a jittered film: ω = 1 returns the relaxed positions (to roundoff)
+    /// (every triangle kept, E below the start), a huge ω is refused.
+    #[test]
+    fn over_relaxation_is_refused_when_it_turns_triangles_or_raises_the_energy() {
+        let mut mesh = generators::cube_frame(0.05, None, 3).unwrap().mesh;
+        let jittered: Vec<Point> = mesh
+            .positions()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let t = i as f64;
+                let free = !mesh.flags()[i].fixed;
+                p + if free {
+                    1e-3 * Point::new(t.sin(), (1.7 * t).cos(), 0.0)
+                } else {
+                    Point::zeros()
+                }
+            })
+            .collect();
+        mesh.set_positions(jittered).unwrap();
+        let pressures = vec![0.0; mesh.surfaces().len()];
+        let motion = |v: usize| {
+            if mesh.flags()[v].fixed {
+                Motion::Held
+            } else {
+                Motion::Free
+            }
+        };
+        let (relaxed, relaxation) = relax(&mesh, &pressures, motion, &[], 0.0, 0.0, 3);
+        assert!(relaxation.energy.1 < relaxation.energy.0);
+        // ω = 1 is the relaxation itself: accepted, unchanged.
+        let over = over_relaxed(&mesh, &relaxed, 1.0, &pressures, &[], 0.0).unwrap();
+        assert!(
+            over.iter()
+                .zip(&relaxed)
+                .all(|(a, b)| (a - b).norm() < 1e-12)
+        );
+        assert!(over_relaxed(&mesh, &relaxed, 1e3, &pressures, &[], 0.0).is_none());
+    }
 
     /// A vertex's share of E: its gradient and diagonal Hessian block against central
     /// differences of the share (and of that gradient), on a jittered cube frame with a bubble
