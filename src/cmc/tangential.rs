@@ -402,26 +402,29 @@ mod tests {
     use super::*;
     use crate::cmc::generators;
 
+    /// Moves every vertex `i` by `offset(i as f64, fixed)`.
+    fn jitter(mesh: &mut Mesh, offset: impl Fn(f64, bool) -> Point) {
+        let moved: Vec<Point> = mesh
+            .positions()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| p + offset(i as f64, mesh.flags()[i].fixed))
+            .collect();
+        mesh.set_positions(moved).unwrap();
+    }
+
     /// Over-relaxing a relaxation of a jittered film: ω = 1 returns the relaxed positions (to roundoff)
     /// (every triangle kept, E below the start), a huge ω is refused.
     #[test]
     fn over_relaxation_is_refused_when_it_turns_triangles_or_raises_the_energy() {
         let mut mesh = generators::cube_frame(0.05, None, 3).unwrap().mesh;
-        let jittered: Vec<Point> = mesh
-            .positions()
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let t = i as f64;
-                let free = !mesh.flags()[i].fixed;
-                p + if free {
-                    1e-3 * Point::new(t.sin(), (1.7 * t).cos(), 0.0)
-                } else {
-                    Point::zeros()
-                }
-            })
-            .collect();
-        mesh.set_positions(jittered).unwrap();
+        jitter(&mut mesh, |t, fixed| {
+            if fixed {
+                Point::zeros()
+            } else {
+                1e-3 * Point::new(t.sin(), (1.7 * t).cos(), 0.0)
+            }
+        });
         let pressures = vec![0.0; mesh.surfaces().len()];
         let motion = |v: usize| {
             if mesh.flags()[v].fixed {
@@ -448,16 +451,9 @@ mod tests {
     #[test]
     fn a_vertex_shares_derivatives_match_central_differences() {
         let mut mesh = generators::cube_frame(0.05, Some(2e-5), 3).unwrap().mesh;
-        let jittered: Vec<Point> = mesh
-            .positions()
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let t = i as f64;
-                p + 2e-3 * Point::new((1.3 * t).sin(), (2.1 * t).cos(), (0.7 * t).sin())
-            })
-            .collect();
-        mesh.set_positions(jittered).unwrap();
+        jitter(&mut mesh, |t, _| {
+            2e-3 * Point::new((1.3 * t).sin(), (2.1 * t).cos(), (0.7 * t).sin())
+        });
         let n = mesh.vertex_count();
         let terms: Vec<Smoothing> = (0..n)
             .step_by(3)
