@@ -520,11 +520,22 @@ impl CmcNlp {
             }
             match first_gain {
                 None => first_gain = Some(gain),
-                Some(first) => omega = omega.or(Some(over_relaxation(first, gain))),
+                Some(first) => {
+                    omega.get_or_insert_with(|| over_relaxation(first, gain));
+                }
             }
             let relaxed = omega
                 .and_then(|omega| {
-                    over_relaxed(&mesh, &relaxed, omega, &pressures, &terms, self.weight)
+                    let start = relaxation.energy.0;
+                    over_relaxed(
+                        &mesh,
+                        &relaxed,
+                        omega,
+                        start,
+                        &pressures,
+                        &terms,
+                        self.weight,
+                    )
                 })
                 .unwrap_or(relaxed);
             let Ok(next) = mesh

@@ -147,18 +147,19 @@ pub fn relax(
 
 /// The positions `x₀ + ω (x₁ − x₀)` from the mesh's positions `x₀` past the relaxed ones `x₁`
 /// (over-relaxation, ω ≥ 1), when no triangle there has turned over against `x₁` and the
-/// energy E of [`relax`] (same pressures, terms and weight) there is below E at `x₀`; else
-/// None.
+/// energy E of [`relax`] (same pressures, terms and weight) there is below `energy_start`, E
+/// at `x₀` (the relaxation's [`Relaxation::energy`]`.0`); else None.
 pub fn over_relaxed(
     mesh: &Mesh,
     relaxed: &[Point],
     omega: f64,
+    energy_start: f64,
     surface_pressure: &[f64],
     terms: &[Smoothing],
     weight: f64,
 ) -> Option<Vec<Point>> {
-    let start = mesh.positions();
-    let over: Vec<Point> = start
+    let over: Vec<Point> = mesh
+        .positions()
         .iter()
         .zip(relaxed)
         .map(|(a, b)| a + omega * (b - a))
@@ -167,7 +168,7 @@ pub fn over_relaxed(
         area_vector(&corners(mesh, &over, t)).dot(&area_vector(&corners(mesh, relaxed, t))) > 0.0
     });
     let star = Star::new(mesh, terms, surface_pressure, weight);
-    (unturned && star.total(&over) < star.total(start)).then_some(over)
+    (unturned && star.total(&over) < energy_start).then_some(over)
 }
 
 /// Per-vertex work space of [`Star::step`]: the area vectors of the vertex's triangles and the
@@ -436,13 +437,33 @@ mod tests {
         let (relaxed, relaxation) = relax(&mesh, &pressures, motion, &[], 0.0, 0.0, 3);
         assert!(relaxation.energy.1 < relaxation.energy.0);
         // ω = 1 is the relaxation itself: accepted, unchanged.
-        let over = over_relaxed(&mesh, &relaxed, 1.0, &pressures, &[], 0.0).unwrap();
+        let over = over_relaxed(
+            &mesh,
+            &relaxed,
+            1.0,
+            relaxation.energy.0,
+            &pressures,
+            &[],
+            0.0,
+        )
+        .unwrap();
         assert!(
             over.iter()
                 .zip(&relaxed)
                 .all(|(a, b)| (a - b).norm() < 1e-12)
         );
-        assert!(over_relaxed(&mesh, &relaxed, 1e3, &pressures, &[], 0.0).is_none());
+        assert!(
+            over_relaxed(
+                &mesh,
+                &relaxed,
+                1e3,
+                relaxation.energy.0,
+                &pressures,
+                &[],
+                0.0
+            )
+            .is_none()
+        );
     }
 
     /// A vertex's share of E: its gradient and diagonal Hessian block against central

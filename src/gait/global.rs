@@ -86,9 +86,11 @@ impl Stages {
     /// The staged fitness of rows with violations `at_key` at their key times and `least`
     /// at any time up to them (module header).
     fn fitness(&self, at_key: &[f64], least: &[f64]) -> f64 {
-        let unmet =
-            |k: usize| (0..at_key.len()).any(|r| self.of_row[r] == k && at_key[r] > self.tol);
-        let first = (0..self.count).find(|&k| unmet(k)).unwrap_or(self.count);
+        let first = (0..at_key.len())
+            .filter(|&r| at_key[r] > self.tol)
+            .map(|r| self.of_row[r])
+            .min()
+            .unwrap_or(self.count);
         let sum: f64 = (0..at_key.len())
             .filter(|&r| self.of_row[r] <= first)
             .map(|r| at_key[r] + least[r])
