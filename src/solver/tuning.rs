@@ -73,6 +73,10 @@ pub struct Tuning {
     pub retreat_stiffness: f64,
     /// Elastic-penalty increases per iteration.
     pub max_steering: usize,
+    /// QPs in a row with the same active set after which the sparse exact-Hessian step is the
+    /// Newton step on that active set without convexification, when it needs none (see
+    /// `qp::WarmStart::newton_step`); 0 switches it off.
+    pub endgame_after: usize,
     /// Decay of the exact-Hessian step damping after a full step (see `damp_exact_steps`).
     pub damping_decay: f64,
     /// Largest accepted step length that raises the exact-Hessian step damping.
@@ -115,6 +119,7 @@ impl Default for Tuning {
             max_retreats: 3,
             retreat_stiffness: 10.0,
             max_steering: 8,
+            endgame_after: 2,
             damping_decay: 3.0,
             damping_cut: 0.1,
             damping_min: 1e-8,

@@ -94,6 +94,9 @@ pub struct WarmStart {
     shift_floor: f64,
     /// The run's interrupt flag, polled by every solve (module header).
     interrupt: Interrupt,
+    /// The solver of [`WarmStart::newton_step`] (its own, so that its solves leave the main
+    /// solver's state alone).
+    newton: Option<Box<SparseQp>>,
 }
 
 impl fmt::Debug for WarmStart {
@@ -166,6 +169,83 @@ impl WarmStart {
         self.convexification = saved.convexification;
         self.repeat_shift = false;
     }
+}
+
+impl WarmStart {
+    /// The Newton step of the equality-constrained QP on the active set of `solution` (a sparse
+    /// solution of `problem` after [`identify_active_set`]): its active bounds fixed, its
+    /// active inequality rows made equalities, every other bound and row dropped, and H exactly
+    /// as given, without convexification. `None` unless H passes the inertia test on that
+    /// active set (positive definite on the null space of the active rows and bounds: the
+    /// second-order condition of the QP) and the step keeps the dropped bounds and rows and the
+    /// multipliers' signs (as [`polish`] checks); then the returned step is the QP's own
+    /// solution with the exact H, and the convexification on record is none. One
+    /// factorization: the reduced QP has no complementarity pairs. Sparse path with a
+    /// `SparseLower` Hessian only.
+    pub fn newton_step(
+        &mut self,
+        problem: &QpProblem,
+        solution: &QpSolution,
+        tolerance: f64,
+    ) -> Option<QpSolution> {
+        if !self.method.is_sparse(problem.g.len())
+            || !matches!(problem.h, QpHessian::SparseLower(_))
+            || solution.status != QpStatus::Optimal
+        {
+            return None;
+        }
+        let [dl, du, bl, bu] = newton_problem(problem, solution);
+        let reduced = QpProblem {
+            dl: &dl,
+            du: &du,
+            bl: &bl,
+            bu: &bu,
+            ..*problem
+        };
+        let solver = self.newton.get_or_insert_with(|| {
+            let mut solver = SparseQp::new();
+            solver.exact_only = true;
+            Box::new(solver)
+        });
+        solver.interrupt = self.interrupt.clone();
+        let (newton, _) = solver.solve(&reduced, tolerance);
+        if newton.status != QpStatus::Optimal
+            || !keeps_problem(problem, &[&dl, &du, &bl, &bu], &newton, tolerance)
+        {
+            return None;
+        }
+        self.convexification = Convexification::default();
+        Some(QpSolution {
+            iterations: solution.iterations + newton.iterations,
+            ..newton
+        })
+    }
+}
+
+/// Bounds of the equality-constrained QP of `solution`'s active set (see
+/// [`WarmStart::newton_step`]): a bound or inequality row with a nonzero multiplier (after
+/// [`identify_active_set`]) fixed at that bound, every other one dropped.
+fn newton_problem(problem: &QpProblem, solution: &QpSolution) -> [Vec<f64>; 4] {
+    let (inf, n, m) = (f64::INFINITY, problem.dl.len(), problem.bl.len());
+    let (mut dl, mut du) = (vec![-inf; n], vec![inf; n]);
+    for j in 0..n {
+        let (l, u, z) = (problem.dl[j], problem.du[j], solution.z[j]);
+        if l == u || z < 0.0 {
+            (dl[j], du[j]) = (l, l);
+        } else if z > 0.0 {
+            (dl[j], du[j]) = (u, u);
+        }
+    }
+    let (mut bl, mut bu) = (vec![-inf; m], vec![inf; m]);
+    for i in 0..m {
+        let (l, u, lambda) = (problem.bl[i], problem.bu[i], solution.lambda[i]);
+        if l == u || lambda < 0.0 {
+            (bl[i], bu[i]) = (l, l);
+        } else if lambda > 0.0 {
+            (bl[i], bu[i]) = (u, u);
+        }
+    }
+    [dl, du, bl, bu]
 }
 
 /// What [`WarmStart::snapshot`] saves.
@@ -344,9 +424,27 @@ fn polish(
     solver.fixed_convexification = Some(warm.convexification.clone());
     let (polished, _) = solver.solve(&reduced, tolerance);
     solver.fixed_convexification = None;
-    if polished.status != QpStatus::Optimal {
+    if polished.status != QpStatus::Optimal
+        || !keeps_problem(problem, &[&dl, &du, &bl, &bu], &polished, tolerance)
+    {
         return None;
     }
+    Some(QpSolution {
+        iterations: solution.iterations + polished.iterations,
+        ..polished
+    })
+}
+
+/// Whether `polished`, the solution of the QP `problem` with the bounds `[dl, du, bl, bu]` (some
+/// bounds fixed at the active ones, others kept or dropped), solves `problem` itself: the
+/// bounds and rows not fixed hold (to `tolerance`, relative), and a fixed one's multiplier has
+/// the sign of an active bound (to `√tolerance` of the gradient's scale).
+fn keeps_problem(
+    problem: &QpProblem,
+    [dl, du, bl, bu]: &[&[f64]; 4],
+    polished: &QpSolution,
+    tolerance: f64,
+) -> bool {
     let scale = 1.0 + problem.g.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
     let sign_slack = tolerance.sqrt() * scale;
     let within = |v: f64, l: f64, u: f64| {
@@ -362,7 +460,7 @@ fn polish(
             z >= -sign_slack
         };
         if !ok {
-            return None;
+            return false;
         }
     }
     let ad = problem.a * &nalgebra::DVector::from_column_slice(&polished.d);
@@ -376,13 +474,10 @@ fn polish(
             lambda >= -sign_slack
         };
         if !ok {
-            return None;
+            return false;
         }
     }
-    Some(QpSolution {
-        iterations: solution.iterations + polished.iterations,
-        ..polished
-    })
+    true
 }
 
 /// Turns an interior-point solution into the form an active-set method returns, which the
@@ -533,6 +628,58 @@ mod tests {
         let s = solve_with(QpHessian::SparseLower(&lower));
         assert_eq!(s.status, QpStatus::Optimal);
         assert!(s.d.iter().all(|v| v.abs() <= 1.0 + 1e-12));
+    }
+
+    /// min ½dᵀHd + gᵀd s.t. −1 ≤ d ≤ 1 with H = [[1, ½], [½, −1]] (indefinite): the sparse
+    /// solve flips H₁₁, then the Newton step on its active set uses H itself.
+    fn newton_after_flip(g: &[f64]) -> (QpSolution, Option<QpSolution>, Convexification) {
+        let mut coo = CooMatrix::new(2, 2);
+        coo.push(0, 0, 1.0);
+        coo.push(1, 0, 0.5);
+        coo.push(1, 1, -1.0);
+        let h = CscMatrix::from(&coo);
+        let a = CsrMatrix::zeros(0, 2);
+        let problem = QpProblem {
+            h: QpHessian::SparseLower(&h),
+            g,
+            a: &a,
+            dl: &[-1.0, -1.0],
+            du: &[1.0, 1.0],
+            bl: &[],
+            bu: &[],
+        };
+        let mut warm = WarmStart::new(QpMethod::Sparse);
+        let convexified = solve(&problem, &mut warm, 1e-10);
+        let flip = warm.convexification().clone();
+        let newton = warm.newton_step(&problem, &convexified, 1e-10);
+        (convexified, newton, flip)
+    }
+
+    #[test]
+    fn newton_step_on_the_active_set_uses_the_exact_hessian() {
+        // d₁ = −1 is active: on the rest (d₀ alone, curvature 1) H is positive definite, so the
+        // step is the exact one, d₀ = ½, with the bound multiplier of H itself,
+        // z₁ = −(½·½ + (−1)(−1) + 2) = −3.25 (the flipped H₁₁ = +1 gives −1.25).
+        let (convexified, newton, flip) = newton_after_flip(&[0.0, 2.0]);
+        assert!(!flip.is_zero());
+        assert!(
+            (convexified.z[1] + 1.25).abs() < 1e-6,
+            "{:?}",
+            convexified.z
+        );
+        let newton = newton.expect("H is convex on the active set");
+        assert!((newton.d[0] - 0.5).abs() < 1e-9 && newton.d[1] == -1.0);
+        assert!((newton.z[1] + 3.25).abs() < 1e-9 && newton.z[0].abs() < 1e-9);
+    }
+
+    #[test]
+    fn newton_step_is_refused_where_the_active_set_leaves_negative_curvature_free() {
+        // d₀ = 1 is active and d₁ (curvature −1) is free: no Newton step.
+        let (convexified, newton, flip) = newton_after_flip(&[-5.0, 0.2]);
+        assert!(!flip.is_zero());
+        assert_eq!(convexified.d[0], 1.0);
+        assert!(convexified.d[1].abs() < 1.0);
+        assert!(newton.is_none());
     }
 
     #[test]

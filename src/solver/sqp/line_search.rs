@@ -236,10 +236,22 @@ impl Sqp<'_> {
             bounds.bu[i] -= shift;
         }
         let problem = bounds.problem(self.model.qp_hessian(), &point.derivatives.grad, jac);
-        let saved = self.warm.snapshot();
         let tol = self.qp_tolerance();
-        let sol = qp::solve(&problem, &mut self.warm, tol);
-        self.warm.restore(saved);
+        let sol = match &self.newton_base {
+            // A Newton step on the active set is corrected on the same active set.
+            Some(base) if self.newton_step => {
+                let Some(sol) = self.warm.newton_step(&problem, base, tol) else {
+                    return Ok(None);
+                };
+                sol
+            }
+            _ => {
+                let saved = self.warm.snapshot();
+                let sol = qp::solve(&problem, &mut self.warm, tol);
+                self.warm.restore(saved);
+                sol
+            }
+        };
         if sol.status != QpStatus::Optimal {
             return Ok(None);
         }

@@ -4,7 +4,11 @@
 
 use nalgebra_sparse::CsrMatrix;
 
+use super::super::Globalization;
+#[cfg(doc)]
+use super::super::Tuning;
 use super::super::elastic::{self, Linearization};
+use super::super::hessian::Model;
 use super::super::multipliers;
 use super::super::qp::{self, QpHessian, QpProblem, QpSolution, QpStatus};
 use super::Sqp;
@@ -67,6 +71,19 @@ impl Sqp<'_> {
         let tol = self.qp_tolerance();
         let problem = bounds.problem(self.model.qp_hessian(), g, jac);
         let mut qp = qp::solve(&problem, &mut self.warm, tol);
+        let stable = same_active_set(&mut self.active_signature, &qp);
+        self.active_stable = if stable { self.active_stable + 1 } else { 0 };
+        self.newton_step = false;
+        self.newton_base = None;
+        if self.endgame_due() {
+            if let Some(newton) = self.warm.newton_step(&problem, &qp, tol) {
+                if self.options.verbosity >= 2 {
+                    self.say("      Newton step on the active set");
+                }
+                self.newton_base = Some(std::mem::replace(&mut qp, newton));
+                self.newton_step = true;
+            }
+        }
         self.subproblem_multipliers(&mut qp.lambda, jac, &qp.d);
         let lin = bounds.linearization(jac);
         let now = lin.violation_now();
@@ -143,6 +160,22 @@ impl Sqp<'_> {
             infeasible_stationary: stationary && primal_bad,
             qp_iterations: iterations,
         }
+    }
+
+    /// Whether the step of this iteration is to be the exact Newton step on the QP's active set
+    /// ([`qp::WarmStart::newton_step`]): with the exact Hessian on the sparse path under the line
+    /// search, when the QP needed a convexification, no damping floor is in effect, no Newton
+    /// step was refused at this point, and its active set is the one of the last
+    /// [`Tuning::endgame_after`] QPs or the last step was a Newton step taken in full.
+    fn endgame_due(&self) -> bool {
+        matches!(self.model, Model::Exact { .. })
+            && self.sparse_qp()
+            && self.options.globalization == Globalization::LineSearch
+            && self.tuning.endgame_after > 0
+            && (self.active_stable >= self.tuning.endgame_after || self.endgame)
+            && !self.endgame_refused
+            && self.warm.shift_floor() == 0.0
+            && !self.warm.convexification().is_zero()
     }
 
     /// A subproblem's multipliers in the problem's terms: the exact model's row weights
@@ -235,4 +268,19 @@ impl Sqp<'_> {
         let lin = bounds.linearization(jac);
         lin.row_reductions(d)
     }
+}
+
+/// Records the active set of `qp` (the signs of its bound and row multipliers; none when it
+/// failed) in `signature`; true when it is the one recorded before.
+fn same_active_set(signature: &mut Vec<i8>, qp: &QpSolution) -> bool {
+    let now: Vec<i8> = if qp.status == QpStatus::Optimal {
+        (qp.z.iter().chain(&qp.lambda))
+            .map(|&v| (v > 0.0) as i8 - (v < 0.0) as i8)
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let same = !now.is_empty() && now == *signature;
+    *signature = now;
+    same
 }

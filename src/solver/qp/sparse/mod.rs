@@ -151,6 +151,10 @@ pub struct SparseQp {
     /// When set, the convexification used without an inertia search (the caller knows it
     /// suffices, e.g. the QP has more equality rows than one already convexified with it).
     pub fixed_convexification: Option<Convexification>,
+    /// When set, H must pass the inertia test as it is (no convexification): a QP that would
+    /// need one ends [`QpStatus::Numerical`] after that one factorization (an SQP's Newton
+    /// step on an identified active set, taken only when it needs no correction).
+    pub exact_only: bool,
     /// Smallest shift δ_c tried (absolute, default 0): an SQP damps its steps with it when
     /// the exact Hessian's Newton steps were much longer than its line search could accept.
     pub min_shift: f64,
@@ -282,6 +286,7 @@ impl SparseQp {
             first_shift: DEFAULT_FIRST_SHIFT,
             shift_growth: DEFAULT_SHIFT_GROWTH,
             fixed_convexification: None,
+            exact_only: false,
             min_shift: 0.0,
             interrupt: Interrupt::new(),
             system: None,
@@ -341,6 +346,13 @@ impl SparseQp {
         ws.resize(n, m, p);
         let convexification = match &self.fixed_convexification {
             Some(fixed) => fixed.clone(),
+            None if self.exact_only => {
+                let exact = Convexification::default();
+                match system.passes(qp, layout, &exact, &mut ws.sig_d, &mut ws.dual_diag) {
+                    Ok(true) => exact,
+                    _ => return (fail(QpStatus::Numerical), info),
+                }
+            }
             None => match system.convexify(
                 qp,
                 layout,

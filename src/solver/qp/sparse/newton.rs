@@ -420,31 +420,13 @@ impl NewtonSystem {
         if let QpHessian::LowRank { delta, w, m } = qp.h {
             return Ok(Some(Convexification::uniform(low_rank_shift(delta, w, m))));
         }
-        for (i, slot) in scratch_m.iter_mut().enumerate() {
-            *slot = if layout.row[i] == RowKind::Equality {
-                0.0
-            } else {
-                -1.0
-            };
-        }
         let diag_scale = (0..self.n)
             .map(|j| self.diagonal_of_h(qp, j).abs())
             .fold(1.0f64, f64::max);
         let mut trial = Convexification::uniform(floor.max(0.0));
         let mut flip_tried = false;
         while trial.shift <= 1e20 * diag_scale {
-            for (j, slot) in scratch_n.iter_mut().enumerate() {
-                *slot = trial.added(j);
-            }
-            self.assemble(
-                qp,
-                layout,
-                scratch_n,
-                |i| layout.row[i] == RowKind::Equality,
-                scratch_m,
-            );
-            let inertia = self.factor_with(qp, layout, true)?;
-            if inertia.is_quasi_definite_like(self.n, self.m) {
+            if self.passes(qp, layout, &trial, scratch_n, scratch_m)? {
                 return Ok(Some(trial));
             }
             if !flip_tried {
@@ -464,6 +446,37 @@ impl NewtonSystem {
             };
         }
         Ok(None)
+    }
+
+    /// Whether `H + E` (E the diagonal of `trial`) is positive definite on the null space of the
+    /// equality rows: the inertia test of [`Self::convexify`], one factorization.
+    pub fn passes(
+        &mut self,
+        qp: &QpProblem<'_>,
+        layout: &Layout,
+        trial: &Convexification,
+        scratch_n: &mut [f64],
+        scratch_m: &mut [f64],
+    ) -> Result<bool, KktError> {
+        for (i, slot) in scratch_m.iter_mut().enumerate() {
+            *slot = if layout.row[i] == RowKind::Equality {
+                0.0
+            } else {
+                -1.0
+            };
+        }
+        for (j, slot) in scratch_n.iter_mut().enumerate() {
+            *slot = trial.added(j);
+        }
+        self.assemble(
+            qp,
+            layout,
+            scratch_n,
+            |i| layout.row[i] == RowKind::Equality,
+            scratch_m,
+        );
+        let inertia = self.factor_with(qp, layout, true)?;
+        Ok(inertia.is_quasi_definite_like(self.n, self.m))
     }
 
     /// H_jj for the sparse and dense forms (used to scale the first convexification shift).
