@@ -124,9 +124,6 @@ impl TriangleAreaForm {
 
 /// The diagonal block `∂²a/∂p_k²` of [`triangle_area_hessian`] alone (dimensionless):
 /// `−½ [e_k]× (I − n̂n̂ᵀ) ½[e_k]× / a`, positive semidefinite (the area is convex in one corner).
-/// As `e_k ⊥ n̂`, `[e]× (I − n̂n̂ᵀ) [e]× = eeᵀ − |e|² I + (e × n̂)(e × n̂)ᵀ = −|e|² n̂n̂ᵀ`: the
-/// rank-one `|e_k|² n̂n̂ᵀ / (4a)` (the area is linear in a corner moving in the triangle's plane,
-/// the height over the opposite edge, and grows at second order out of it).
 pub fn triangle_area_hessian_diagonal(p: &[Point; 3], k: usize) -> Matrix3<f64> {
     triangle_area_corner_derivatives(p, &area_vector(p), k).1
 }
@@ -143,10 +140,9 @@ pub fn triangle_area_corner_derivatives(
     let a = vector.norm();
     let n = vector / a;
     let e = opposite_edge(p, k);
-    (
-        0.5 * n.cross(&e),
-        (0.25 * e.norm_squared() / a) * (n * n.transpose()),
-    )
+    let projector = Matrix3::identity() - n * n.transpose();
+    let skew_e = skew(&e);
+    (0.5 * n.cross(&e), -0.25 / a * skew_e * projector * skew_e)
 }
 
 /// The mixed (Voronoi / obtuse-rule) area of corner 0 of a triangle, m², and its gradient
