@@ -173,12 +173,12 @@ impl WarmStart {
 
 impl WarmStart {
     /// The Newton step of the equality-constrained QP on the active set of `solution` (a sparse
-    /// solution of `problem` after [`identify_active_set`]): its active bounds fixed, its
+    /// solution of `problem` after `identify_active_set`): its active bounds fixed, its
     /// active inequality rows made equalities, every other bound and row dropped, and H exactly
     /// as given, without convexification. `None` unless H passes the inertia test on that
     /// active set (positive definite on the null space of the active rows and bounds: the
     /// second-order condition of the QP) and the step keeps the dropped bounds and rows and the
-    /// multipliers' signs (as [`polish`] checks); then the returned step is the QP's own
+    /// multipliers' signs (as `polish` checks); then the returned step is the QP's own
     /// solution with the exact H, and the convexification on record is none. One
     /// factorization: the reduced QP has no complementarity pairs. Sparse path with a
     /// `SparseLower` Hessian only.
@@ -194,26 +194,18 @@ impl WarmStart {
         {
             return None;
         }
-        let [dl, du, bl, bu] = newton_problem(problem, solution);
-        let reduced = QpProblem {
-            dl: &dl,
-            du: &du,
-            bl: &bl,
-            bu: &bu,
-            ..*problem
-        };
         let solver = self.newton.get_or_insert_with(|| {
             let mut solver = SparseQp::new();
             solver.exact_only = true;
             Box::new(solver)
         });
         solver.interrupt = self.interrupt.clone();
-        let (newton, _) = solver.solve(&reduced, tolerance);
-        if newton.status != QpStatus::Optimal
-            || !keeps_problem(problem, &[&dl, &du, &bl, &bu], &newton, tolerance)
-        {
-            return None;
-        }
+        let newton = solve_reduced(
+            solver,
+            problem,
+            newton_problem(problem, solution),
+            tolerance,
+        )?;
         self.convexification = Convexification::default();
         Some(QpSolution {
             iterations: solution.iterations + newton.iterations,
@@ -224,28 +216,28 @@ impl WarmStart {
 
 /// Bounds of the equality-constrained QP of `solution`'s active set (see
 /// [`WarmStart::newton_step`]): a bound or inequality row with a nonzero multiplier (after
-/// [`identify_active_set`]) fixed at that bound, every other one dropped.
+/// `identify_active_set`) fixed at that bound, every other one dropped.
 fn newton_problem(problem: &QpProblem, solution: &QpSolution) -> [Vec<f64>; 4] {
-    let (inf, n, m) = (f64::INFINITY, problem.dl.len(), problem.bl.len());
-    let (mut dl, mut du) = (vec![-inf; n], vec![inf; n]);
-    for j in 0..n {
-        let (l, u, z) = (problem.dl[j], problem.du[j], solution.z[j]);
-        if l == u || z < 0.0 {
-            (dl[j], du[j]) = (l, l);
-        } else if z > 0.0 {
-            (dl[j], du[j]) = (u, u);
-        }
-    }
-    let (mut bl, mut bu) = (vec![-inf; m], vec![inf; m]);
-    for i in 0..m {
-        let (l, u, lambda) = (problem.bl[i], problem.bu[i], solution.lambda[i]);
-        if l == u || lambda < 0.0 {
-            (bl[i], bu[i]) = (l, l);
-        } else if lambda > 0.0 {
-            (bl[i], bu[i]) = (u, u);
-        }
-    }
+    let (dl, du) = fixed_at_active(problem.dl, problem.du, &solution.z);
+    let (bl, bu) = fixed_at_active(problem.bl, problem.bu, &solution.lambda);
     [dl, du, bl, bu]
+}
+
+/// Bounds `[lower, upper]` with those of a negative multiplier fixed at the lower one, of a
+/// positive multiplier at the upper one, fixed ones kept, and the others dropped (±∞).
+fn fixed_at_active(lower: &[f64], upper: &[f64], multipliers: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let mut fixed = (
+        vec![f64::NEG_INFINITY; lower.len()],
+        vec![f64::INFINITY; lower.len()],
+    );
+    for (k, ((&l, &u), &y)) in lower.iter().zip(upper).zip(multipliers).enumerate() {
+        if l == u || y < 0.0 {
+            (fixed.0[k], fixed.1[k]) = (l, l);
+        } else if y > 0.0 {
+            (fixed.0[k], fixed.1[k]) = (u, u);
+        }
+    }
+    fixed
 }
 
 /// What [`WarmStart::snapshot`] saves.
@@ -412,7 +404,26 @@ fn polish(
     warm: &mut WarmStart,
     tolerance: f64,
 ) -> Option<QpSolution> {
-    let [dl, du, bl, bu] = active_set_problem(problem, solution, tolerance)?;
+    let bounds = active_set_problem(problem, solution, tolerance)?;
+    let solver = warm.sparse.as_mut()?;
+    solver.fixed_convexification = Some(warm.convexification.clone());
+    let polished = solve_reduced(solver, problem, bounds, tolerance);
+    solver.fixed_convexification = None;
+    let polished = polished?;
+    Some(QpSolution {
+        iterations: solution.iterations + polished.iterations,
+        ..polished
+    })
+}
+
+/// `problem` with the bounds `[dl, du, bl, bu]` instead of its own, solved by `solver`; its
+/// solution if it solves `problem` itself (see [`keeps_problem`]).
+fn solve_reduced(
+    solver: &mut SparseQp,
+    problem: &QpProblem,
+    [dl, du, bl, bu]: [Vec<f64>; 4],
+    tolerance: f64,
+) -> Option<QpSolution> {
     let reduced = QpProblem {
         dl: &dl,
         du: &du,
@@ -420,19 +431,10 @@ fn polish(
         bu: &bu,
         ..*problem
     };
-    let solver = warm.sparse.as_mut()?;
-    solver.fixed_convexification = Some(warm.convexification.clone());
-    let (polished, _) = solver.solve(&reduced, tolerance);
-    solver.fixed_convexification = None;
-    if polished.status != QpStatus::Optimal
-        || !keeps_problem(problem, &[&dl, &du, &bl, &bu], &polished, tolerance)
-    {
-        return None;
-    }
-    Some(QpSolution {
-        iterations: solution.iterations + polished.iterations,
-        ..polished
-    })
+    let (solution, _) = solver.solve(&reduced, tolerance);
+    (solution.status == QpStatus::Optimal
+        && keeps_problem(problem, &[&dl, &du, &bl, &bu], &solution, tolerance))
+    .then_some(solution)
 }
 
 /// Whether `polished`, the solution of the QP `problem` with the bounds `[dl, du, bl, bu]` (some

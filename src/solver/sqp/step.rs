@@ -75,14 +75,14 @@ impl Sqp<'_> {
         self.active_stable = if stable { self.active_stable + 1 } else { 0 };
         self.newton_step = false;
         self.newton_base = None;
-        if self.endgame_due() {
-            if let Some(newton) = self.warm.newton_step(&problem, &qp, tol) {
-                if self.options.verbosity >= 2 {
-                    self.say("      Newton step on the active set");
-                }
-                self.newton_base = Some(std::mem::replace(&mut qp, newton));
-                self.newton_step = true;
+        if self.endgame_due()
+            && let Some(newton) = self.warm.newton_step(&problem, &qp, tol)
+        {
+            if self.options.verbosity >= 2 {
+                self.say("      Newton step on the active set");
             }
+            self.newton_base = Some(std::mem::replace(&mut qp, newton));
+            self.newton_step = true;
         }
         self.subproblem_multipliers(&mut qp.lambda, jac, &qp.d);
         let lin = bounds.linearization(jac);
