@@ -327,59 +327,6 @@ pub fn minimize(
     best
 }
 
-/// IPOP-CMA-ES (Auger & Hansen, "A restart CMA evolution strategy with increasing population
-/// size", 2005): [`minimize`] from `x0`, restarted from `x0` with the population doubled and a
-/// fresh seed whenever a run ends [`Stop::Converged`] (its best stalled or its distribution
-/// collapsed), at most `restarts` times, all runs within one `budget` (generations and
-/// evaluations counted over the runs; a restart starts only if `x0` and one generation fit).
-/// `observe` sees every generation with the counts over the runs. Returns the best point of
-/// all runs (the earliest on ties) and the last run's stop. With `restarts = 0` it is
-/// [`minimize`].
-#[allow(clippy::too_many_arguments)]
-pub fn minimize_restarting(
-    f: impl Fn(&[f64]) -> f64 + Sync,
-    x0: &[f64],
-    sigma: f64,
-    population: Option<usize>,
-    budget: Budget,
-    seed: u64,
-    restarts: usize,
-    mut observe: impl FnMut(&Generation) -> bool,
-) -> Minimum {
-    let mut lambda = CmaEs::new(x0, sigma, population).population();
-    let mut total = minimize(&f, x0, sigma, Some(lambda), budget, seed, &mut observe);
-    for restart in 1..=restarts {
-        lambda *= 2;
-        let (g0, e0) = (total.generations, total.evaluations);
-        if total.stop != Stop::Converged
-            || g0 >= budget.generations
-            || e0 + 1 + lambda > budget.evaluations
-        {
-            break;
-        }
-        let left = Budget {
-            generations: budget.generations - g0,
-            evaluations: budget.evaluations - e0,
-            target: budget.target,
-        };
-        let run_seed = seed ^ (restart as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
-        let run = minimize(&f, x0, sigma, Some(lambda), left, run_seed, |g| {
-            observe(&Generation {
-                generation: g.generation + g0,
-                evaluations: g.evaluations + e0,
-                ..*g
-            })
-        });
-        if run.value < total.value {
-            (total.x, total.value) = (run.x, run.value);
-        }
-        total.generations += run.generations;
-        total.evaluations += run.evaluations;
-        total.stop = run.stop;
-    }
-    total
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -437,44 +384,6 @@ mod tests {
     }
 
     /// Same seed, same run on one thread and on two; another seed, another run.
-    fn rastrigin(x: &[f64]) -> f64 {
-        x.iter()
-            .map(|v| v * v - 10.0 * (2.0 * std::f64::consts::PI * v).cos() + 10.0)
-            .sum()
-    }
-
-    /// IPOP: without restarts it is one run; with them, a converged run is followed by runs of
-    /// doubled population within the budget, and the best value does not get worse.
-    #[test]
-    fn restarts_double_the_population_within_the_budget() {
-        let x0 = [3.0; 4];
-        let b = Budget {
-            generations: 10_000,
-            evaluations: 20_000,
-            target: f64::NEG_INFINITY,
-        };
-        let once = minimize(rastrigin, &x0, 0.5, None, b, 3, |_| true);
-        assert_eq!(once.stop, Stop::Converged);
-        let same = minimize_restarting(rastrigin, &x0, 0.5, None, b, 3, 0, |_| true);
-        assert_eq!(once, same);
-        let mut counts = Vec::new();
-        let more = minimize_restarting(rastrigin, &x0, 0.5, None, b, 3, 2, |g| {
-            counts.push((g.generation, g.evaluations));
-            true
-        });
-        assert!(more.evaluations > once.evaluations && more.evaluations <= b.evaluations);
-        assert!(more.value <= once.value, "{} vs {}", more.value, once.value);
-        assert!(
-            counts
-                .windows(2)
-                .all(|w| w[0].0 < w[1].0 && w[0].1 < w[1].1)
-        );
-        // The second run's generations hold twice the first's candidates.
-        let first = CmaEs::new(&x0, 0.5, None).population();
-        let step = counts.windows(2).map(|w| w[1].1 - w[0].1).max().unwrap();
-        assert!(step >= 2 * first, "{step} vs {first}");
-    }
-
     #[test]
     fn runs_do_not_depend_on_the_thread_count() {
         let run = |threads: usize, seed: u64| {

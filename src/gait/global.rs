@@ -44,16 +44,12 @@
 //! collapses, or on an interrupt; the best candidate seen (the start itself, bit for bit, if
 //! none beat it) is returned.
 //!
-//! With `[global] restarts`, a search that stalls is restarted from the start with the
-//! population doubled (IPOP-CMA-ES, [`crate::gait::cmaes::minimize_restarting`]) within the
-//! same rollout budget.
-//!
 //! Deterministic: trial `k`'s search is seeded with the run's seed and `k`, each generation
 //! on its own stream, and its candidates are rolled out in parallel into their own slots.
 
 use std::time::Instant;
 
-use super::cmaes::{Budget, Stop, minimize_restarting};
+use super::cmaes::{Budget, Stop, minimize};
 use super::formulation::Formulation;
 use super::sim::Simulator;
 use super::spec::{GlobalSettings, Problem};
@@ -261,14 +257,13 @@ pub fn search(
             log.line(&format!("{} global: {text}", log.stage));
         }
     };
-    let best = minimize_restarting(
+    let best = minimize(
         fitness,
         &u0,
         settings.sigma,
         settings.population,
         budget,
         trial_seed(seed, trial),
-        settings.restarts,
         |g| {
             if g.generation.is_multiple_of(PROGRESS_EVERY) {
                 say(format!(
@@ -323,7 +318,6 @@ mod tests {
             staged: false,
             fallback: false,
             coarsening: 1,
-            restarts: 0,
         };
         let x0 = vec![0.0; p.motion_parameters()];
         let run = |threads: usize| {
@@ -365,6 +359,7 @@ mod tests {
             of_row: vec![0, 1, 1, 2],
             count: 3,
             tol: 1e-3,
+            settled_at: vec![10, 25, 40],
         };
         let zero = [0.0; 4];
         // Stage 0 met, stage 1 missed by much; against stage 0 missed a little.
@@ -415,7 +410,6 @@ mod tests {
             staged: false,
             fallback: false,
             coarsening: 1,
-            restarts: 0,
         };
         let x0 = vec![0.0; p.motion_parameters()];
         let r = search(&p, &settings, &x0, 8, 1, None);

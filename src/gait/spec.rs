@@ -173,9 +173,6 @@ pub struct GlobalPhaseSpec {
     /// The phase's rollouts take RK4 steps of `coarsening·dt`; default 1, in 1..=64, and every
     /// task and shaping time a multiple of that step.
     pub coarsening: Option<usize>,
-    /// Most IPOP restarts (population doubled) after a stalled search, within `evaluations`;
-    /// default 0, in 0..=20.
-    pub restarts: Option<usize>,
 }
 
 /// Validated `[global]` settings.
@@ -197,8 +194,6 @@ pub struct GlobalSettings {
     pub fallback: bool,
     /// The phase's rollout step as a multiple of the file's `dt` (≥ 1).
     pub coarsening: usize,
-    /// Most IPOP restarts of a stalled search ([`crate::gait::cmaes::minimize_restarting`]).
-    pub restarts: usize,
 }
 
 /// Validated `[trials]` settings.
@@ -1361,13 +1356,6 @@ fn build_global(source: &Source, g: &GlobalPhaseSpec) -> Result<GlobalSettings, 
             format!("`coarsening` must be in 1..=64, got {coarsening}"),
         ));
     }
-    let restarts = g.restarts.unwrap_or(0);
-    if restarts > 20 {
-        return Err(at(
-            "restarts",
-            format!("`restarts` must be in 0..=20, got {restarts}"),
-        ));
-    }
     Ok(GlobalSettings {
         generations,
         evaluations,
@@ -1376,7 +1364,6 @@ fn build_global(source: &Source, g: &GlobalPhaseSpec) -> Result<GlobalSettings, 
         staged: g.staged.unwrap_or(false),
         fallback: g.fallback.unwrap_or(false),
         coarsening,
-        restarts,
     })
 }
 
@@ -1970,10 +1957,9 @@ min = 0.1
                 g.sigma,
                 g.staged,
                 g.fallback,
-                g.coarsening,
-                g.restarts
+                g.coarsening
             ),
-            (300, 400, None, 0.3, false, false, 1, 0)
+            (300, 400, None, 0.3, false, false, 1)
         );
         let staged = load(&(BASE.to_string() + "[global]\nstaged = true\n")).unwrap();
         assert!(staged.global.unwrap().staged);
@@ -2001,7 +1987,6 @@ min = 0.1
             ("[global]\npopulation = 1", "2..=10000", "population"),
             ("[global]\nsigma = 0.0", "(0, 2]", "sigma"),
             ("[global]\ncoarsening = 0", "1..=64", "coarsening"),
-            ("[global]\nrestarts = 21", "0..=20", "restarts"),
             ("[global]\ngenerations = 0", "1..=100000", "generations"),
             ("[global]\nevaluations = 0", "1..=10000000", "evaluations"),
             (

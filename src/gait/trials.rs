@@ -1186,7 +1186,6 @@ mod tests {
             staged: false,
             fallback: false,
             coarsening: 1,
-            restarts: 0,
         };
         p.global = Some(settings);
         let led = &run_trials(&p, 8, Some(1), &options)[0];
