@@ -351,16 +351,21 @@ mod tests {
         assert_ne!(one.x, search(&p, &settings, &x0, 8, 2, None).x);
     }
 
-    /// The staged fitness ranks by the first unmet stage: meeting the early stage beats any
-    /// later rows, and among candidates failing the same stage the smaller sum wins.
-    #[test]
-    fn the_staged_fitness_ranks_the_first_unmet_stage_first() {
-        let stages = Stages {
+    /// Four rows at key steps 10 (stage 0), 20 and 25 (stage 1) and 40 (stage 2).
+    fn three_stages() -> Stages {
+        Stages {
             of_row: vec![0, 1, 1, 2],
             count: 3,
             tol: 1e-3,
             settled_at: vec![10, 25, 40],
-        };
+        }
+    }
+
+    /// The staged fitness ranks by the first unmet stage: meeting the early stage beats any
+    /// later rows, and among candidates failing the same stage the smaller sum wins.
+    #[test]
+    fn the_staged_fitness_ranks_the_first_unmet_stage_first() {
+        let stages = three_stages();
         let zero = [0.0; 4];
         // Stage 0 met, stage 1 missed by much; against stage 0 missed a little.
         let early_met = stages.fitness(&[0.0, 2.0, 2.0, 5.0], &zero);
@@ -380,13 +385,7 @@ mod tests {
     /// step of the stages up to `s` is reached; not while every reached row is met.
     #[test]
     fn the_staged_fitness_settles_after_the_first_unmet_stage_key_times() {
-        // Rows at key steps 10 (stage 0), 20 and 25 (stage 1), 40 (stage 2).
-        let stages = Stages {
-            of_row: vec![0, 1, 1, 2],
-            count: 3,
-            tol: 1e-3,
-            settled_at: vec![10, 25, 40],
-        };
+        let stages = three_stages();
         let take_off_missed = [0.5, 0.0, 0.0, 0.0];
         assert!(!stages.settled(&take_off_missed, 9));
         assert!(stages.settled(&take_off_missed, 10));
