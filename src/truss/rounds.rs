@@ -13,7 +13,7 @@
 use crate::error::Error;
 use crate::solver::{Evaluations, IterationRecord, Options, Solution, Status};
 
-use super::nlp::TrussNlp;
+use super::nlp::{ForceParts, TrussNlp};
 use super::topology::{self, RoundReport, RoundSettings};
 
 /// Most solve + clean-up rounds by default (without `[rounds] count` or `--rounds`): rounds
@@ -128,7 +128,12 @@ pub fn solve_rounds(
             restarts = 0;
         }
         reports.push(report);
-        nlp = TrussNlp::new(structure, nlp.settings().clone(), forces)
+        let parts = if nlp.settings().mass_linear_in_force() {
+            signed_parts(&forces)
+        } else {
+            vec![ForceParts::Both; forces.len()]
+        };
+        nlp = TrussNlp::with_parts(structure, nlp.settings().clone(), forces, parts)
             .map_err(|e| Error::Runtime(format!("round {round}: {e}")))?;
     }
     let result_round = reported_round(
@@ -152,6 +157,27 @@ pub fn solve_rounds(
         evaluations,
         logs,
     })
+}
+
+/// The force parts of the next round with `linear` mass (as the layout start gives round 1):
+/// the sign's part alone for a force above `start::IDLE_FRACTION` of the largest, both parts
+/// for a near-zero one, which may take either sign. With both parts a loaded member's other
+/// part is a degenerate direction of the QP (t and c rising together cost mass only through
+/// the objective's slope), and pier_cantilever_linear's later rounds crawled along a
+/// self-stress of three such parts (docs/notes/truss.md). With Euler compression both parts
+/// stay: a member whose force crosses zero between rounds is a real route there (fixed signs
+/// cost cantilever_bridge 6 % mass).
+fn signed_parts(forces: &[f64]) -> Vec<ForceParts> {
+    let largest = forces.iter().map(|f| f.abs()).fold(0.0, f64::max);
+    (forces.iter())
+        .map(|&f| {
+            if f.abs() > super::start::IDLE_FRACTION * largest {
+                ForceParts::of(f)
+            } else {
+                ForceParts::Both
+            }
+        })
+        .collect()
 }
 
 /// The round whose design a run reports: the last one, unless it did not end Optimal while an
