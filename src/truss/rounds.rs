@@ -245,3 +245,24 @@ pub(super) fn reported_round(
         _ => last,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn later_rounds_keep_the_sign_part_of_loaded_members_and_both_of_idle_ones() {
+        // Largest force 2e5 N: 1e-2 N is below IDLE_FRACTION of it, 5 N above.
+        let parts = signed_parts(&[-2e5, 3e4, 1e-2, -5.0, 0.0]);
+        assert_eq!(
+            parts,
+            [
+                ForceParts::Tension,
+                ForceParts::Compression,
+                ForceParts::Both,
+                ForceParts::Tension,
+                ForceParts::Both,
+            ]
+        );
+    }
+}
