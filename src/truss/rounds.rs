@@ -9,6 +9,11 @@
 //! concave Euler mass): the clean-up makes it in one move. A round whose clean-up changes
 //! nothing is solved once more from its end point without the creep test, so the last round
 //! runs to the solver's own tests and limits.
+//!
+//! With `linear` mass two more defaults apply. A round is cleaned up once after
+//! [`CLEAN_UP_CHECK`] iterations and ends there if that changes the design (else it goes on
+//! from that point). And the rounds after the first keep only the sign's part of each loaded
+//! member's force, as the layout start does for the first.
 
 use crate::error::Error;
 use crate::solver::{Evaluations, IterationRecord, Options, Solution, Status};
