@@ -125,12 +125,24 @@ impl TriangleAreaForm {
 /// The diagonal block `∂²a/∂p_k²` of [`triangle_area_hessian`] alone (dimensionless):
 /// `−½ [e_k]× (I − n̂n̂ᵀ) ½[e_k]× / a`, positive semidefinite (the area is convex in one corner).
 pub fn triangle_area_hessian_diagonal(p: &[Point; 3], k: usize) -> Matrix3<f64> {
-    let big_n = area_vector(p);
-    let a = big_n.norm();
-    let n = big_n / a;
+    triangle_area_corner_derivatives(p, &area_vector(p), k).1
+}
+
+/// The gradient (m, [`triangle_area_corner_gradient`]) and diagonal Hessian block
+/// (dimensionless, [`triangle_area_hessian_diagonal`]) of the triangle area w.r.t. corner `k`,
+/// from the triangle's area vector `vector` ([`area_vector`] of `p`): one normalization for
+/// both.
+pub fn triangle_area_corner_derivatives(
+    p: &[Point; 3],
+    vector: &Point,
+    k: usize,
+) -> (Point, Matrix3<f64>) {
+    let a = vector.norm();
+    let n = vector / a;
+    let e = opposite_edge(p, k);
     let projector = Matrix3::identity() - n * n.transpose();
-    let skew_e = skew(&opposite_edge(p, k));
-    -0.25 / a * skew_e * projector * skew_e
+    let skew_e = skew(&e);
+    (0.5 * n.cross(&e), -0.25 / a * skew_e * projector * skew_e)
 }
 
 /// The mixed (Voronoi / obtuse-rule) area of corner 0 of a triangle, m², and its gradient

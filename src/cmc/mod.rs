@@ -389,11 +389,11 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     if !coarse_stages.is_empty() {
         summary.timings.insert("coarse".into(), coarse_seconds);
     }
-    let area = figures::figures(&mesh, &nlp.surface_curvatures(&solution.x), nlp.volumes());
+    // The caption's area is the headline's (the figures' total is the same sum).
     let caption = format!(
         "{}: {}, {}",
         problem.name,
-        Headline::new("area", area.total_area, "m²").text(),
+        summary.headline.text(),
         solution.status.sentence()
     );
     let export_started = Instant::now();

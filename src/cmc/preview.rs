@@ -39,9 +39,13 @@ pub fn svg(mesh: &Mesh, width: f64, caption: &str) -> String {
     let span = (x1 - x0).max(y1 - y0).max(1e-300);
     let s = (width - 2.0 * margin) / span;
     let height = (y1 - y0) * s + 2.0 * margin + 24.0;
+    let depth: Vec<f64> = mesh
+        .triangles()
+        .iter()
+        .map(|tri| tri.iter().map(|&v| pts[v].2).sum::<f64>())
+        .collect();
     let mut order: Vec<usize> = (0..mesh.triangles().len()).collect();
-    let depth = |t: usize| mesh.triangles()[t].iter().map(|&v| pts[v].2).sum::<f64>();
-    order.sort_by(|&a, &b| depth(a).total_cmp(&depth(b)));
+    order.sort_by(|&a, &b| depth[a].total_cmp(&depth[b]));
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -53,17 +57,20 @@ pub fn svg(mesh: &Mesh, width: f64, caption: &str) -> String {
         let shade = 0.35 + 0.65 * n.dot(&light).abs();
         let (r, g, b) = PALETTE[mesh.triangle_surface()[t] % PALETTE.len()];
         let colour = |c: f64| (255.0 * (c * shade).clamp(0.0, 1.0)).round() as u8;
-        let points: Vec<String> = mesh.triangles()[t]
-            .iter()
-            .map(|&v| {
-                let (x, y, _) = pts[v];
-                format!("{:.2},{:.2}", (x - x0) * s + margin, (y - y0) * s + margin)
-            })
-            .collect();
+        out.push_str(r#"<polygon points=""#);
+        for (k, &v) in mesh.triangles()[t].iter().enumerate() {
+            let (x, y, _) = pts[v];
+            let gap = if k > 0 { " " } else { "" };
+            let _ = write!(
+                out,
+                "{gap}{:.2},{:.2}",
+                (x - x0) * s + margin,
+                (y - y0) * s + margin
+            );
+        }
         let _ = writeln!(
             out,
-            r#"<polygon points="{}" fill="rgb({},{},{})" stroke="rgb(40,40,40)" stroke-width="0.2" fill-opacity="0.85"/>"#,
-            points.join(" "),
+            r#"" fill="rgb({},{},{})" stroke="rgb(40,40,40)" stroke-width="0.2" fill-opacity="0.85"/>"#,
             colour(r),
             colour(g),
             colour(b)

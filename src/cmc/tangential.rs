@@ -33,7 +33,7 @@
 
 use nalgebra::Matrix3;
 
-use super::area::{area_vector, triangle_area_corner_gradient, triangle_area_hessian_diagonal};
+use super::area::{area_vector, triangle_area_corner_derivatives};
 use super::mesh::{Mesh, Point};
 use super::volume::{cone_volume, cone_volume_corner_gradient};
 
@@ -349,9 +349,9 @@ impl<'a> Star<'a> {
             let Some(k) = self.mesh.triangles()[t].iter().position(|&u| u == v) else {
                 continue;
             };
-            gradient += triangle_area_corner_gradient(&c, k)
-                - p * cone_volume_corner_gradient(&c, &Point::zeros(), k);
-            hessian += triangle_area_hessian_diagonal(&c, k);
+            let (area_gradient, area_hessian) = triangle_area_corner_derivatives(&c, &vector, k);
+            gradient += area_gradient - p * cone_volume_corner_gradient(&c, &Point::zeros(), k);
+            hessian += area_hessian;
         }
         scratch.offsets.clear();
         for &k in &self.terms_of[v] {

@@ -32,9 +32,15 @@
 //! ranks above every candidate that does not, whatever their later rows (CMA-ES uses ranks
 //! only), so the search meets the take-off before it is scored on the landing, as the staged
 //! solves do. A sum over all rows lets a flailing motion that misses every row a little beat
-//! one that meets the early stage and misses a later one by much. A rollout that fails
-//! scores +∞. The search stops when the fitness is within the trial's tolerance (every row
-//! met), after `generations` generations or `evaluations` rollouts, when the distribution
+//! one that meets the early stage and misses a later one by much. The staged fitness of a
+//! rollout is settled once a row of stage `k` is unmet and every row of the stages up to `k`
+//! has passed its key time: the rollout ends there (the later steps change no term; a
+//! rollout of a tumble that fails the take-off costs its first 0.3 s, not the whole horizon).
+//! With shaping stages the staged search's target is [`SHAPED_TARGET`] (every shaping stage
+//! met; the task's last rows are the solves' job).
+//!
+//! A rollout that fails before its fitness is settled scores +∞. The search stops when the
+//! fitness reaches its target (unstaged: within the trial's tolerance, every row met), after `generations` generations or `evaluations` rollouts, when the distribution
 //! collapses, or on an interrupt; the best candidate seen (the start itself, bit for bit, if
 //! none beat it) is returned.
 //!
@@ -48,6 +54,7 @@ use super::formulation::Formulation;
 use super::sim::Simulator;
 use super::spec::{GlobalSettings, Problem};
 use super::spline::SplineControls;
+use super::step_check::coarsened;
 use crate::solver::log::LogTarget;
 
 /// Generations between progress lines.
@@ -55,6 +62,11 @@ pub const PROGRESS_EVERY: usize = 10;
 
 /// The weight of one unmet stage in the staged fitness (module header); the rows' units.
 pub const STAGE_WEIGHT: f64 = 1e3;
+
+/// The staged search's target when there are shaping stages: a fitness below `2·W` has every
+/// shaping stage met (only the last stage, the task's rows after the last shaping horizon, may
+/// be unmet), and the search hands that candidate to the solves (module header).
+pub const SHAPED_TARGET: f64 = 2.0 * STAGE_WEIGHT;
 
 /// Time between the samples of the time-relaxed term (s).
 pub const SAMPLE_INTERVAL: f64 = 0.01;
@@ -65,32 +77,57 @@ struct Stages {
     of_row: Vec<usize>,
     count: usize,
     tol: f64,
+    /// For each stage `s`, the last key step of the rows in stages `≤ s`.
+    settled_at: Vec<usize>,
 }
 
 impl Stages {
     /// The stages of `shaped`'s rows under `problem`'s shaping horizons.
     fn new(problem: &Problem, shaped: &Problem) -> Self {
         let horizons = problem.shaping_horizons();
-        let of_row = shaped
+        let of_row: Vec<usize> = shaped
             .constraints
             .iter()
             .map(|c| horizons.iter().filter(|&&h| h < c.time).count())
             .collect();
+        let count = horizons.len() + 1;
+        let mut settled_at = vec![0; count];
+        for (c, &s) in shaped.constraints.iter().zip(&of_row) {
+            settled_at[s] = settled_at[s].max(c.step);
+        }
+        for s in 1..count {
+            settled_at[s] = settled_at[s].max(settled_at[s - 1]);
+        }
         Stages {
             of_row,
-            count: horizons.len() + 1,
+            count,
             tol: problem.trials.tolerance,
+            settled_at,
         }
+    }
+
+    /// The first stage with a row unmet at its key time among `at_key` (`count` when none;
+    /// rows not yet reached hold 0, met).
+    fn first_unmet(&self, at_key: &[f64]) -> usize {
+        (0..at_key.len())
+            .filter(|&r| at_key[r] > self.tol)
+            .map(|r| self.of_row[r])
+            .min()
+            .unwrap_or(self.count)
+    }
+
+    /// Whether a rollout sampled up to step `step` has its fitness settled: a row of stage `s`
+    /// is unmet and every row of the stages up to `s` has passed its key time, so the later
+    /// steps change no term of the fitness (module header).
+    fn settled(&self, at_key: &[f64], step: usize) -> bool {
+        let first = self.first_unmet(at_key);
+        first < self.count && step >= self.settled_at[first]
     }
 
     /// The staged fitness of rows with violations `at_key` at their key times and `least`
     /// at any time up to them (module header).
     fn fitness(&self, at_key: &[f64], least: &[f64]) -> f64 {
-        let first = (0..at_key.len())
-            .filter(|&r| at_key[r] > self.tol)
-            .map(|r| self.of_row[r])
-            .min()
-            .unwrap_or(self.count);
+        let first = self.first_unmet(at_key);
         let sum: f64 = (0..at_key.len())
             .filter(|&r| self.of_row[r] <= first)
             .map(|r| at_key[r] + least[r])
@@ -110,7 +147,7 @@ fn row_fitness(shaped: &Problem, steps: &[usize], x: &[f64], stages: Option<&Sta
     let mut state = shaped.initial_of(x);
     let mut sim = Simulator::<f64>::new(&shaped.model).interruptible(&shaped.interrupt);
     let (mut at_key, mut least) = (vec![0.0; rows.len()], vec![f64::INFINITY; rows.len()]);
-    let rolled = sim.rollout(&mut state, shaped.dt, steps, &controls, |k, s, sim| {
+    let rolled = sim.rollout_while(&mut state, shaped.dt, steps, &controls, |k, s, sim| {
         for (r, c) in rows.iter().enumerate() {
             if steps[k] <= c.step {
                 let v = c.quantity.value(&shaped.model, s, &sim.dynamics);
@@ -121,6 +158,7 @@ fn row_fitness(shaped: &Problem, steps: &[usize], x: &[f64], stages: Option<&Sta
                 }
             }
         }
+        !stages.is_some_and(|st| st.settled(&at_key, steps[k]))
     });
     match rolled {
         Ok(()) => match stages {
@@ -178,7 +216,7 @@ pub fn search(
     log: Option<&LogTarget>,
 ) -> GlobalReport {
     let clock = Instant::now();
-    let shaped = problem.shaped();
+    let shaped = coarsened(&problem.shaped(), settings.coarsening);
     let steps = sample_steps(&shaped);
     let stages = settings.staged.then(|| Stages::new(problem, &shaped));
     let f = Formulation::new(problem);
@@ -209,7 +247,10 @@ pub fn search(
     let budget = Budget {
         generations: settings.generations,
         evaluations: settings.evaluations,
-        target: problem.trials.tolerance,
+        target: match &stages {
+            Some(st) if st.count > 1 => SHAPED_TARGET,
+            _ => problem.trials.tolerance,
+        },
     };
     let say = |text: String| {
         if let Some(log) = log {
@@ -276,6 +317,7 @@ mod tests {
             sigma: 0.5,
             staged: false,
             fallback: false,
+            coarsening: 1,
         };
         let x0 = vec![0.0; p.motion_parameters()];
         let run = |threads: usize| {
@@ -309,15 +351,21 @@ mod tests {
         assert_ne!(one.x, search(&p, &settings, &x0, 8, 2, None).x);
     }
 
+    /// Four rows at key steps 10 (stage 0), 20 and 25 (stage 1) and 40 (stage 2).
+    fn three_stages() -> Stages {
+        Stages {
+            of_row: vec![0, 1, 1, 2],
+            count: 3,
+            tol: 1e-3,
+            settled_at: vec![10, 25, 40],
+        }
+    }
+
     /// The staged fitness ranks by the first unmet stage: meeting the early stage beats any
     /// later rows, and among candidates failing the same stage the smaller sum wins.
     #[test]
     fn the_staged_fitness_ranks_the_first_unmet_stage_first() {
-        let stages = Stages {
-            of_row: vec![0, 1, 1, 2],
-            count: 3,
-            tol: 1e-3,
-        };
+        let stages = three_stages();
         let zero = [0.0; 4];
         // Stage 0 met, stage 1 missed by much; against stage 0 missed a little.
         let early_met = stages.fitness(&[0.0, 2.0, 2.0, 5.0], &zero);
@@ -333,6 +381,20 @@ mod tests {
         assert!(b < a);
     }
 
+    /// A rollout's staged fitness is settled once a row of stage `s` is unmet and the last key
+    /// step of the stages up to `s` is reached; not while every reached row is met.
+    #[test]
+    fn the_staged_fitness_settles_after_the_first_unmet_stage_key_times() {
+        let stages = three_stages();
+        let take_off_missed = [0.5, 0.0, 0.0, 0.0];
+        assert!(!stages.settled(&take_off_missed, 9));
+        assert!(stages.settled(&take_off_missed, 10));
+        let landing_missed = [0.0, 0.2, 0.0, 0.0];
+        assert!(!stages.settled(&landing_missed, 20));
+        assert!(stages.settled(&landing_missed, 25));
+        assert!(!stages.settled(&[0.0; 4], 40));
+    }
+
     /// A raised interrupt ends the search after its current generation, whose rollouts stop
     /// at once and score +∞: the start is returned.
     #[test]
@@ -346,6 +408,7 @@ mod tests {
             sigma: 0.5,
             staged: false,
             fallback: false,
+            coarsening: 1,
         };
         let x0 = vec![0.0; p.motion_parameters()];
         let r = search(&p, &settings, &x0, 8, 1, None);

@@ -234,6 +234,22 @@ impl<'m, T: Real> Simulator<'m, T> {
         controls: &dyn Controls<T>,
         mut sample: impl FnMut(usize, &State<T>, &Self),
     ) -> Result<(), SimError> {
+        self.rollout_while(x, h, steps, controls, |k, x, sim| {
+            sample(k, x, sim);
+            true
+        })
+    }
+
+    /// [`Simulator::rollout`], ending after the first sample for which `sample` returns
+    /// `false` (the later steps are not taken).
+    pub fn rollout_while(
+        &mut self,
+        x: &mut State<T>,
+        h: f64,
+        steps: &[usize],
+        controls: &dyn Controls<T>,
+        mut sample: impl FnMut(usize, &State<T>, &Self) -> bool,
+    ) -> Result<(), SimError> {
         let mut n = 0;
         for (k, &target) in steps.iter().enumerate() {
             while n < target {
@@ -241,7 +257,9 @@ impl<'m, T: Real> Simulator<'m, T> {
                 n += 1;
             }
             self.observe(x);
-            sample(k, x, self);
+            if !sample(k, x, self) {
+                break;
+            }
         }
         Ok(())
     }

@@ -170,6 +170,9 @@ pub struct GlobalPhaseSpec {
     /// Whether the phase runs only when the solves from the trial's own start fall short of
     /// Success (true), instead of before them (false, the default).
     pub fallback: Option<bool>,
+    /// The phase's rollouts take RK4 steps of `coarsening·dt`; default 1, in 1..=64, and every
+    /// task and shaping time a multiple of that step.
+    pub coarsening: Option<usize>,
 }
 
 /// Validated `[global]` settings.
@@ -189,6 +192,8 @@ pub struct GlobalSettings {
     /// The phase runs only when the solves from the trial's start fall short of Success
     /// ([`crate::gait::trials`]); otherwise it leads every trial's solves.
     pub fallback: bool,
+    /// The phase's rollout step as a multiple of the file's `dt` (≥ 1).
+    pub coarsening: usize,
 }
 
 /// Validated `[trials]` settings.
@@ -739,6 +744,21 @@ fn build(source: &Source, file: FileSpec) -> Result<Problem, InputError> {
         .as_ref()
         .map(|g| build_global(source, g))
         .transpose()?;
+    if let Some(g) = &global
+        && let Some(c) = constraints
+            .iter()
+            .chain(&shaping)
+            .find(|c| !c.step.is_multiple_of(g.coarsening))
+    {
+        return Err(source.error_at(
+            &[Key::Name("global"), Key::Name("coarsening")],
+            format!(
+                "every task time must be a multiple of `coarsening`·dt = {} s, got {} s",
+                g.coarsening as f64 * file.dt,
+                c.time
+            ),
+        ));
+    }
     Ok(Problem {
         name,
         model,
@@ -1329,6 +1349,13 @@ fn build_global(source: &Source, g: &GlobalPhaseSpec) -> Result<GlobalSettings, 
             format!("`sigma` must be in (0, 2], got {sigma}"),
         ));
     }
+    let coarsening = g.coarsening.unwrap_or(1);
+    if !(1..=64).contains(&coarsening) {
+        return Err(at(
+            "coarsening",
+            format!("`coarsening` must be in 1..=64, got {coarsening}"),
+        ));
+    }
     Ok(GlobalSettings {
         generations,
         evaluations,
@@ -1336,6 +1363,7 @@ fn build_global(source: &Source, g: &GlobalPhaseSpec) -> Result<GlobalSettings, 
         sigma,
         staged: g.staged.unwrap_or(false),
         fallback: g.fallback.unwrap_or(false),
+        coarsening,
     })
 }
 
@@ -1928,14 +1956,22 @@ min = 0.1
                 g.population,
                 g.sigma,
                 g.staged,
-                g.fallback
+                g.fallback,
+                g.coarsening
             ),
-            (300, 400, None, 0.3, false, false)
+            (300, 400, None, 0.3, false, false, 1)
         );
         let staged = load(&(BASE.to_string() + "[global]\nstaged = true\n")).unwrap();
         assert!(staged.global.unwrap().staged);
         let fallback = load(&(BASE.to_string() + "[global]\nfallback = true\n")).unwrap();
         assert!(fallback.global.unwrap().fallback);
+        let coarse = load(&(BASE.to_string() + "[global]\ncoarsening = 2\n")).unwrap();
+        assert_eq!(coarse.global.unwrap().coarsening, 2);
+        let off_step = load(&(BASE.to_string() + "[global]\ncoarsening = 64\n")).unwrap_err();
+        assert!(
+            off_step.to_string().contains("multiple of `coarsening`"),
+            "{off_step}"
+        );
         for (table, says, key) in [
             (
                 "[start]\nkind = \"zero\"\namplitude = 0.5",
@@ -1950,6 +1986,7 @@ min = 0.1
             ("[start]\nkind = \"searched\"", "unknown variant", "kind"),
             ("[global]\npopulation = 1", "2..=10000", "population"),
             ("[global]\nsigma = 0.0", "(0, 2]", "sigma"),
+            ("[global]\ncoarsening = 0", "1..=64", "coarsening"),
             ("[global]\ngenerations = 0", "1..=100000", "generations"),
             ("[global]\nevaluations = 0", "1..=10000000", "evaluations"),
             (

@@ -33,10 +33,21 @@ pub struct StepCheck {
 /// `problem` at `dt/factor`: the same key times at `factor`× the steps, single shooting (the
 /// motion is one rollout of its parameters).
 pub fn refined(problem: &Problem, factor: usize) -> Problem {
+    restepped(problem, problem.dt / factor as f64, |n| n * factor)
+}
+
+/// `problem` at `factor·dt`: the same key times at `1/factor` of the steps (each a multiple of
+/// `factor`, as `[global] coarsening` is validated), single shooting.
+pub fn coarsened(problem: &Problem, factor: usize) -> Problem {
+    restepped(problem, problem.dt * factor as f64, |n| n / factor)
+}
+
+/// `problem` with step `dt` (s), its rows' key steps mapped by `step`, single shooting.
+fn restepped(problem: &Problem, dt: f64, step: impl Fn(usize) -> usize) -> Problem {
     let mut p = problem.clone();
-    p.dt /= factor as f64;
+    p.dt = dt;
     for c in p.constraints.iter_mut().chain(p.shaping.iter_mut()) {
-        c.step *= factor;
+        c.step = step(c.step);
     }
     p.segments = 1;
     p.shooting_steps.clear();
@@ -150,6 +161,17 @@ mod tests {
         }
         let coarse = assess(&Formulation::new(&p), &x).unwrap();
         (p, x, coarse)
+    }
+
+    /// Coarsening undoes refining: the same step and key steps.
+    #[test]
+    fn coarsening_a_refined_problem_restores_its_steps() {
+        let p = golden("luxo_leap_short");
+        let back = coarsened(&refined(&p, 4), 4);
+        assert_eq!(back.dt, p.dt);
+        let steps = |q: &Problem| q.constraints.iter().map(|c| c.step).collect::<Vec<_>>();
+        assert_eq!(steps(&back), steps(&p));
+        assert_eq!(coarsened(&p, 1).dt, p.dt);
     }
 
     /// A motion that meets its rows at the file's step only is not reported Success.

@@ -1185,6 +1185,7 @@ mod tests {
             sigma: 0.3,
             staged: false,
             fallback: false,
+            coarsening: 1,
         };
         p.global = Some(settings);
         let led = &run_trials(&p, 8, Some(1), &options)[0];

@@ -31,11 +31,11 @@ impl Sqp<'_> {
         kkt: Kkt,
         jac: &CsrMatrix<f64>,
     ) -> Option<Next> {
-        let tol = self.options.tolerance;
-        let ctol = self.options.constraint_tolerance;
-        if kkt.primal <= ctol && kkt.optimality <= tol {
+        if self.converged(kkt) {
             return Some(Next::Finish(Status::Optimal));
         }
+        let tol = self.options.tolerance;
+        let ctol = self.options.constraint_tolerance;
         if step.qp.status == QpStatus::Interrupted {
             return Some(Next::Finish(Status::Interrupted));
         }
@@ -77,6 +77,11 @@ impl Sqp<'_> {
             return Some(Next::Finish(Status::SlowProgress));
         }
         self.limit_reached(state.iteration).map(Next::Finish)
+    }
+
+    /// Whether the KKT measures pass the tolerances (`Status::Optimal`).
+    pub(super) fn converged(&self, kkt: Kkt) -> bool {
+        kkt.primal <= self.options.constraint_tolerance && kkt.optimality <= self.options.tolerance
     }
 
     /// Stalled, unless x is infeasible and stationary for the violation (then Infeasible).

@@ -131,6 +131,9 @@ pub(super) struct State {
     /// Consecutive iterations with an exact Hessian and a penalty weight above
     /// [`Tuning::exact_weight_limit`].
     pub(super) heavy_weights: usize,
+    /// The multipliers of the QP whose step led to `point` (None at the start and after a
+    /// repeated iteration): the termination test tries them before a new QP is solved.
+    pub(super) arrival_multipliers: Option<Vec<f64>>,
 }
 
 impl State {
@@ -146,6 +149,7 @@ impl State {
             model_reset: false,
             retreats_left: retreats,
             heavy_weights: 0,
+            arrival_multipliers: None,
         }
     }
 
