@@ -210,4 +210,11 @@ impl Settings {
         self.objective == Objective::Length
             || matches!(self.mass.compression, Compression::Linear { .. })
     }
+
+    /// Whether the objective is a mass linear in |λ| in both signs (`linear` mass, not the
+    /// length objective): at fixed geometry the plastic layout LP, convex in each force.
+    pub fn mass_linear_in_force(&self) -> bool {
+        self.objective != Objective::Length
+            && matches!(self.mass.compression, Compression::Linear { .. })
+    }
 }

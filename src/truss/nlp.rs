@@ -403,6 +403,17 @@ impl TrussNlp {
             .collect()
     }
 
+    /// The force parts that are variables, per case and beam (case-major).
+    pub fn parts(&self) -> Vec<ForceParts> {
+        (self.force_vars.iter())
+            .map(|v| match v {
+                [Some(_), Some(_)] => ForceParts::Both,
+                [Some(_), None] => ForceParts::Tension,
+                _ => ForceParts::Compression,
+            })
+            .collect()
+    }
+
     /// The structure the problem was built from (start geometry).
     pub fn structure(&self) -> &Structure {
         &self.structure

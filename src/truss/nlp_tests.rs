@@ -55,6 +55,29 @@ fn point(nlp: &TrussNlp, forces: &[f64]) -> Vec<f64> {
 }
 
 #[test]
+fn the_force_parts_given_are_the_parts_reported() {
+    use super::nlp::ForceParts;
+    let s = Structure {
+        joints: vec![
+            joint([-3.0, 0.0, 0.0], pinned(), vec![Vec3::zeros()]),
+            joint([3.0, 0.0, 0.0], pinned(), vec![Vec3::zeros()]),
+            joint([0.0, 4.0, 0.0], JointKind::Free, vec![Vec3::zeros()]),
+            joint([0.0, -4.0, 0.0], JointKind::Free, vec![Vec3::zeros()]),
+        ],
+        beams: vec![Beam::new(0, 2), Beam::new(1, 2), Beam::new(0, 3)],
+    };
+    let parts = vec![
+        ForceParts::Compression,
+        ForceParts::Both,
+        ForceParts::Tension,
+    ];
+    let nlp = TrussNlp::with_parts(s, settings(1), vec![1.0, 0.0, -1.0], parts.clone()).unwrap();
+    assert_eq!(nlp.parts(), parts);
+    // One variable per signed part, two for the free sign, then the free joints' coordinates.
+    assert_eq!(nlp.dims().n, 4 + 2 * 3);
+}
+
+#[test]
 fn two_bar_truss_balances_at_its_analytic_forces() {
     // Anchors at (±3, 0), load P down at (0, 4): each bar carries P·5/(2·4) in compression.
     let p = 1e5;

@@ -9,11 +9,17 @@
 //! concave Euler mass): the clean-up makes it in one move. A round whose clean-up changes
 //! nothing is solved once more from its end point without the creep test, so the last round
 //! runs to the solver's own tests and limits.
+//!
+//! With `linear` mass two more defaults apply. A round is cleaned up once after
+//! [`CLEAN_UP_CHECK`] iterations and ends there if that changes the design (else it goes on
+//! from that point). And the rounds after the first keep only the sign's part of each loaded
+//! member's force, as the layout start does for the first.
 
 use crate::error::Error;
 use crate::solver::{Evaluations, IterationRecord, Options, Solution, Status};
 
-use super::nlp::TrussNlp;
+use super::model::Structure;
+use super::nlp::{ForceParts, TrussNlp};
 use super::topology::{self, RoundReport, RoundSettings};
 
 /// Most solve + clean-up rounds by default (without `[rounds] count` or `--rounds`): rounds
@@ -33,6 +39,17 @@ pub const CREEP_WINDOW: usize = 50;
 /// Relative objective decrease a default round must make every [`CREEP_WINDOW`] feasible
 /// iterations.
 pub const CREEP_TOLERANCE: f64 = 1e-3;
+
+/// Iterations after which a default round of a `linear`-mass run is cleaned up once: should the
+/// clean-up change the design (a member's force gone to zero, two joints met, a straight run
+/// formed), the round ends there and the next one starts on the cleaned design; else the round
+/// goes on from that point. A round on a design that needs a topology change otherwise crawls
+/// toward it until the creep test ends it ([`CREEP_WINDOW`] iterations at the least). Not with
+/// Euler compression or the length objective: there a clean-up in mid-route (a member whose
+/// force passes through zero, joints that only pass near each other) cost crane_tripod 37 % mass
+/// and left crane_derrick and through_deck_cantilever Stalled, roof_warren Infeasible
+/// (docs/notes/truss.md).
+pub const CLEAN_UP_CHECK: usize = 25;
 
 /// Largest violation (the solver's scaled measure) of a round's end point after which its
 /// clean-up may merge joints and tension runs. Merging moves joints and adds forces; at a point
@@ -77,11 +94,13 @@ pub fn solve_rounds(
     let mut reports = Vec::new();
     let mut iterations = 0;
     let mut evaluations = Evaluations::default();
-    let mut logs = Vec::new();
+    let mut logs: Vec<Vec<IterationRecord>> = Vec::new();
     let mut solution: Solution;
     let mut round = 0;
     // The last round that ended Optimal: its model, solution and number.
     let mut converged: Option<(TrussNlp, Solution, usize)> = None;
+    // Iterations the current round spent before its clean-up check (0: not checked yet).
+    let mut checked = 0;
     loop {
         let mut options = options.clone();
         options.log = options.log.with_objective(nlp.objective_unit());
@@ -92,12 +111,41 @@ pub fn solve_rounds(
             options.progress_window = CREEP_WINDOW;
             options.progress_tolerance = CREEP_TOLERANCE;
         }
+        let check = creep_test
+            && nlp.settings().mass_linear_in_force()
+            && restarts == 0
+            && checked == 0
+            && options.max_iterations > CLEAN_UP_CHECK;
+        if check {
+            options.max_iterations = CLEAN_UP_CHECK;
+        } else {
+            options.max_iterations -= checked;
+        }
         solution = crate::solver::solve(&nlp, &options);
         iterations += solution.iterations;
         evaluations.functions += solution.evaluations.functions;
         evaluations.derivatives += solution.evaluations.derivatives;
         evaluations.hessians += solution.evaluations.hessians;
-        logs.push(solution.log.clone());
+        if checked > 0 {
+            let log = logs.last_mut().expect("the checked part's log");
+            log.extend(solution.log.iter().skip(1).map(|r| IterationRecord {
+                iter: r.iter + checked,
+                ..r.clone()
+            }));
+        } else {
+            logs.push(solution.log.clone());
+        }
+        if check && solution.status == Status::IterationLimit {
+            let (structure, forces, report) = clean_up_at(&nlp, &solution, clean_up);
+            if report.changes_nothing() {
+                // Nothing to clean up yet: the round goes on from here.
+                checked = solution.iterations;
+                nlp = TrussNlp::with_parts(structure, nlp.settings().clone(), forces, nlp.parts())
+                    .map_err(|e| Error::Runtime(format!("round {}: {e}", round + 1)))?;
+                continue;
+            }
+        }
+        checked = 0;
         round += 1;
         let optimal = solution.status == Status::Optimal;
         if optimal {
@@ -106,16 +154,7 @@ pub fn solve_rounds(
         if round == rounds || solution.status == Status::Interrupted {
             break;
         }
-        let settings = RoundSettings {
-            merge: solution.max_violation <= MERGE_VIOLATION,
-            ..*clean_up
-        };
-        let (structure, forces, report) = topology::clean(
-            nlp.structure(),
-            &nlp.positions(&solution.x),
-            &nlp.forces(&solution.x),
-            &settings,
-        );
+        let (structure, forces, report) = clean_up_at(&nlp, &solution, clean_up);
         if report.changes_nothing() {
             // Another solve would start at this optimum of the same model; by default a
             // non-converged round on an unchanged model is restarted once (fresh Hessian,
@@ -128,7 +167,12 @@ pub fn solve_rounds(
             restarts = 0;
         }
         reports.push(report);
-        nlp = TrussNlp::new(structure, nlp.settings().clone(), forces)
+        let parts = if nlp.settings().mass_linear_in_force() {
+            signed_parts(&forces)
+        } else {
+            vec![ForceParts::Both; forces.len()]
+        };
+        nlp = TrussNlp::with_parts(structure, nlp.settings().clone(), forces, parts)
             .map_err(|e| Error::Runtime(format!("round {round}: {e}")))?;
     }
     let result_round = reported_round(
@@ -154,6 +198,45 @@ pub fn solve_rounds(
     })
 }
 
+/// The clean-up of `solution`'s end point (its `merge` decided by the point's violation).
+fn clean_up_at(
+    nlp: &TrussNlp,
+    solution: &Solution,
+    clean_up: &RoundSettings,
+) -> (Structure, Vec<f64>, RoundReport) {
+    let settings = RoundSettings {
+        merge: solution.max_violation <= MERGE_VIOLATION,
+        ..*clean_up
+    };
+    topology::clean(
+        nlp.structure(),
+        &nlp.positions(&solution.x),
+        &nlp.forces(&solution.x),
+        &settings,
+    )
+}
+
+/// The force parts of the next round with `linear` mass (as the layout start gives round 1):
+/// the sign's part alone for a force above `start::IDLE_FRACTION` of the largest, both parts
+/// for a near-zero one, which may take either sign. With both parts a loaded member's other
+/// part is a degenerate direction of the QP (t and c rising together cost mass only through
+/// the objective's slope), and pier_cantilever_linear's later rounds crawled along a
+/// self-stress of three such parts (docs/notes/truss.md). With Euler compression both parts
+/// stay: a member whose force crosses zero between rounds is a real route there (fixed signs
+/// cost cantilever_bridge 6 % mass).
+fn signed_parts(forces: &[f64]) -> Vec<ForceParts> {
+    let largest = forces.iter().map(|f| f.abs()).fold(0.0, f64::max);
+    (forces.iter())
+        .map(|&f| {
+            if f.abs() > super::start::IDLE_FRACTION * largest {
+                ForceParts::of(f)
+            } else {
+                ForceParts::Both
+            }
+        })
+        .collect()
+}
+
 /// The round whose design a run reports: the last one, unless it did not end Optimal while an
 /// earlier one did (`last_converged`, the last such round) — a clean-up that the next solve
 /// cannot settle does not discard a converged design.
@@ -165,5 +248,26 @@ pub(super) fn reported_round(
     match last_converged {
         Some(round) if !last_optimal => round,
         _ => last,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn later_rounds_keep_the_sign_part_of_loaded_members_and_both_of_idle_ones() {
+        // Largest force 2e5 N: 1e-2 N is below IDLE_FRACTION of it, 5 N above.
+        let parts = signed_parts(&[-2e5, 3e4, 1e-2, -5.0, 0.0]);
+        assert_eq!(
+            parts,
+            [
+                ForceParts::Tension,
+                ForceParts::Compression,
+                ForceParts::Both,
+                ForceParts::Tension,
+                ForceParts::Both,
+            ]
+        );
     }
 }
