@@ -295,6 +295,30 @@ impl SparseQp {
         }
     }
 
+    /// The status of a QP that needs no interior-point iteration (the step d = 0 is returned):
+    /// mismatched dimensions, a raised interrupt, contradictory bounds, or no variables (A d = 0
+    /// either satisfies every row or none can). Classifies the rows into `self.layout`.
+    fn settled_without_iterating(&mut self, qp: &QpProblem<'_>) -> Option<QpStatus> {
+        if !dimensions_agree(qp) {
+            return Some(QpStatus::Numerical);
+        }
+        if self.interrupt.is_raised() {
+            return Some(QpStatus::Interrupted);
+        }
+        if self.layout.classify(qp).is_err() {
+            return Some(QpStatus::Infeasible);
+        }
+        if qp.g.is_empty() {
+            let feasible = (0..qp.a.nrows()).all(|i| qp.bl[i] <= 0.0 && 0.0 <= qp.bu[i]);
+            return Some(if feasible {
+                QpStatus::Optimal
+            } else {
+                QpStatus::Infeasible
+            });
+        }
+        None
+    }
+
     /// Solves `problem` to relative tolerance `tolerance`; see the module header.
     pub fn solve(&mut self, qp: &QpProblem<'_>, tolerance: f64) -> (QpSolution, SparseQpInfo) {
         let (n, m) = (qp.g.len(), qp.a.nrows());
@@ -306,23 +330,7 @@ impl SparseQp {
             z: vec![0.0; n],
             iterations: 0,
         };
-        if !dimensions_agree(qp) {
-            return (fail(QpStatus::Numerical), info);
-        }
-        if self.interrupt.is_raised() {
-            return (fail(QpStatus::Interrupted), info);
-        }
-        if self.layout.classify(qp).is_err() {
-            return (fail(QpStatus::Infeasible), info);
-        }
-        if n == 0 {
-            // Nothing to optimize: A d = 0 either satisfies every row or none can.
-            let feasible = (0..m).all(|i| qp.bl[i] <= 0.0 && 0.0 <= qp.bu[i]);
-            let status = if feasible {
-                QpStatus::Optimal
-            } else {
-                QpStatus::Infeasible
-            };
+        if let Some(status) = self.settled_without_iterating(qp) {
             return (fail(status), info);
         }
         info.reused_symbolic = self.system.as_ref().is_some_and(|s| s.matches(qp));
