@@ -525,10 +525,12 @@ fn short_rollout<T: Real>(p: &super::Problem, params: [T; 3]) -> State<T> {
         out[0] = force * (1.0 + 10.0 * t);
     };
     let mut sim = Simulator::<T>::new(m);
-    // At least 2e-4 s: with luxo_leap's 1e-4 s the central differences of this saturated
-    // rollout grew as 1/h (relative error 7.8e-3 at h = 1e-4, 3.5 at 1e-6, 185 at 1e-8), the
-    // signature of round-off amplified by the rollout; a wrong derivative would give an error
-    // constant in h. The duals differentiate the same step function at any step.
+    // At least 2e-4 s: with luxo_leap's 1e-4 s the central differences of this rollout grew
+    // as 1/h (relative error 7.8e-3 at h = 1e-4, 3.5 at 1e-6, 185 at 1e-8): a fixed difference
+    // of ~1e-5 between the two sides whatever h, the signature of a jump (or noise) in the
+    // rollout map at that base point, not of a wrong derivative (whose error is constant in h).
+    // Its source is not traced (a contact switching inside a step is the suspect; open in
+    // docs/notes/gait.md). The duals differentiate the same step function at any step.
     let dt = p.dt.max(2e-4);
     for n in 0..(0.05 / dt).round() as usize {
         sim.step(n as f64 * dt, dt, &mut x, &controls).unwrap();
