@@ -34,6 +34,17 @@ fn problem(name: &str) -> Problem {
     load(&path(name)).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// The shipped file `name` run with default options and no output; asserts it ends Optimal.
+fn optimal_run(name: &str) -> crate::outcome::Outcome {
+    let opts = RunOptions {
+        quiet: true,
+        ..Default::default()
+    };
+    let outcome = crate::application::run_problem::<super::Truss>(&problem(name), &opts).unwrap();
+    assert_eq!(outcome.summary.status, "Optimal", "{name}");
+    outcome
+}
+
 #[test]
 fn every_example_loads_with_a_sensible_ground_structure() {
     for name in EXAMPLES {
@@ -188,13 +199,7 @@ fn a_minimal_file_loads_and_errors_are_positioned() {
 fn a_fink_roof_posed_against_the_lp_ends_optimal_below_its_certified_optimum() {
     // fink_roof_linear: `linear` mass, every pair of lattice joints priced (`[connect] full`),
     // default rounds and solver settings.
-    let p = problem("fink_roof_linear");
-    let opts = RunOptions {
-        quiet: true,
-        ..Default::default()
-    };
-    let outcome = crate::application::run_problem::<super::Truss>(&p, &opts).unwrap();
-    assert_eq!(outcome.summary.status, "Optimal");
+    let outcome = optimal_run("fink_roof_linear");
     // The layout start joins the LP's struts through free joints (linear compression mass):
     // 19 iterations; 112 with them kept.
     assert!(
@@ -235,13 +240,7 @@ fn a_linear_warren_deck_joins_its_struts_through_free_joints_and_converges() {
     // (166 iterations). Later rounds with each loaded member's sign part alone: 151; each
     // round cleaned up once after `CLEAN_UP_CHECK` iterations, ending there when that changed
     // the design: 97.
-    let p = problem("warren_deck_linear");
-    let opts = RunOptions {
-        quiet: true,
-        ..Default::default()
-    };
-    let outcome = crate::application::run_problem::<super::Truss>(&p, &opts).unwrap();
-    assert_eq!(outcome.summary.status, "Optimal");
+    let outcome = optimal_run("warren_deck_linear");
     let rounds = outcome.summary.figures["rounds"].as_array().unwrap();
     let runs: u64 = rounds
         .iter()
@@ -270,13 +269,7 @@ fn a_linear_pier_cantilever_converges_below_its_lp_with_signed_later_rounds() {
     // of every member in the rounds after the first, its later rounds crawled along a
     // self-stress of three parts (245 iterations); with the sign's part alone, 105 (177 with
     // the clean-up check, whose first rounds end earlier).
-    let p = problem("pier_cantilever_linear");
-    let opts = RunOptions {
-        quiet: true,
-        ..Default::default()
-    };
-    let outcome = crate::application::run_problem::<super::Truss>(&p, &opts).unwrap();
-    assert_eq!(outcome.summary.status, "Optimal");
+    let outcome = optimal_run("pier_cantilever_linear");
     assert!(
         outcome.summary.iterations <= 200,
         "{} iterations",
