@@ -20,6 +20,7 @@ use crate::solver::{Evaluations, IterationRecord, Options, Solution, Status};
 
 use super::model::Structure;
 use super::nlp::{ForceParts, TrussNlp};
+use super::start::signed_parts;
 use super::topology::{self, RoundReport, RoundSettings};
 
 /// Most solve + clean-up rounds by default (without `[rounds] count` or `--rounds`): rounds
@@ -170,6 +171,8 @@ pub fn solve_rounds(
         let parts = if nlp.settings().mass_linear_in_force() {
             signed_parts(&forces)
         } else {
+            // With Euler compression both parts stay: a member whose force crosses zero
+            // between rounds is a real route there (fixed signs cost cantilever_bridge 6 % mass).
             vec![ForceParts::Both; forces.len()]
         };
         nlp = TrussNlp::with_parts(structure, nlp.settings().clone(), forces, parts)
@@ -214,27 +217,6 @@ fn clean_up_at(
         &nlp.forces(&solution.x),
         &settings,
     )
-}
-
-/// The force parts of the next round with `linear` mass (as the layout start gives round 1):
-/// the sign's part alone for a force above `start::IDLE_FRACTION` of the largest, both parts
-/// for a near-zero one, which may take either sign. With both parts a loaded member's other
-/// part is a degenerate direction of the QP (t and c rising together cost mass only through
-/// the objective's slope), and pier_cantilever_linear's later rounds crawled along a
-/// self-stress of three such parts (docs/notes/truss.md). With Euler compression both parts
-/// stay: a member whose force crosses zero between rounds is a real route there (fixed signs
-/// cost cantilever_bridge 6 % mass).
-fn signed_parts(forces: &[f64]) -> Vec<ForceParts> {
-    let largest = forces.iter().map(|f| f.abs()).fold(0.0, f64::max);
-    (forces.iter())
-        .map(|&f| {
-            if f.abs() > super::start::IDLE_FRACTION * largest {
-                ForceParts::of(f)
-            } else {
-                ForceParts::Both
-            }
-        })
-        .collect()
 }
 
 /// The round whose design a run reports: the last one, unless it did not end Optimal while an

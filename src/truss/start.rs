@@ -581,15 +581,7 @@ fn prune(
     let start: Vec<f64> = (forces.iter())
         .flat_map(|f| active.iter().map(|&j| f[j]))
         .collect();
-    let parts = (start.iter())
-        .map(|&f| {
-            if f.abs() > IDLE_FRACTION * largest {
-                ForceParts::of(f)
-            } else {
-                ForceParts::Both
-            }
-        })
-        .collect();
+    let parts = signed_parts(&start);
     LayoutStart {
         dropped_beams: structure.beams.len() - beams.len(),
         dropped_joints: structure.joints.len() - joints.len(),
@@ -598,6 +590,26 @@ fn prune(
         parts,
         lp,
     }
+}
+
+/// The force parts of a round's variables for `forces` (case-major): the sign's part alone for a
+/// force above [`IDLE_FRACTION`] of the largest, both parts for a near-zero one, which may take
+/// either sign. The layout start gives round 1 these parts; with `linear` mass the later rounds
+/// too (`rounds`). With both parts a loaded member's other part is a degenerate direction of
+/// the QP (t and c rising together cost mass only through the objective's slope), and
+/// pier_cantilever_linear's later rounds crawled along a self-stress of three such parts
+/// (docs/notes/truss.md).
+pub(super) fn signed_parts(forces: &[f64]) -> Vec<ForceParts> {
+    let largest = forces.iter().map(|f| f.abs()).fold(0.0, f64::max);
+    (forces.iter())
+        .map(|&f| {
+            if f.abs() > IDLE_FRACTION * largest {
+                ForceParts::of(f)
+            } else {
+                ForceParts::Both
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]

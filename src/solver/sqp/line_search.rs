@@ -239,7 +239,7 @@ impl Sqp<'_> {
         let tol = self.qp_tolerance();
         let sol = match &self.newton_base {
             // A Newton step on the active set is corrected on the same active set.
-            Some(base) if self.newton_step => {
+            Some(base) => {
                 let Some(sol) = self.warm.newton_step(&problem, base, tol) else {
                     return Ok(None);
                 };

@@ -141,9 +141,8 @@ struct Sqp<'a> {
     /// before it they were the same (see `endgame_due`).
     active_signature: Vec<i8>,
     active_stable: usize,
-    /// This iteration's step is a Newton step on the active set (see `endgame_due`), and the
+    /// When this iteration's step is a Newton step on the active set (see `endgame_due`): the
     /// convexified QP's solution whose active set it used.
-    newton_step: bool,
     newton_base: Option<qp::QpSolution>,
     /// The last step was such a Newton step, taken in full: the next one is due whatever the
     /// active set's history.
@@ -236,7 +235,6 @@ fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
         radius: f64::INFINITY,
         active_signature: Vec::new(),
         active_stable: 0,
-        newton_step: false,
         newton_base: None,
         endgame: false,
         endgame_refused: false,
@@ -329,7 +327,9 @@ impl Sqp<'_> {
                 self.trust_region_step(&state.point, jac, d, descent.slope, descent.dhd)
             }
         };
-        if self.newton_step && matches!(outcome, LineSearch::Rejected | LineSearch::Failed) {
+        if self.newton_base.is_some()
+            && matches!(outcome, LineSearch::Rejected | LineSearch::Failed)
+        {
             // The iteration is repeated with the convexified QP's step.
             self.endgame = false;
             self.endgame_refused = true;
@@ -358,7 +358,7 @@ impl Sqp<'_> {
     ) -> Next {
         let d = &step.qp.d;
         state.model_reset = false;
-        self.endgame = self.newton_step && alpha == 1.0;
+        self.endgame = self.newton_base.is_some() && alpha == 1.0;
         self.endgame_refused = false;
         if !self.model.is_quasi_newton()
             && !step.elastic

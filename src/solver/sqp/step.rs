@@ -73,7 +73,6 @@ impl Sqp<'_> {
         let mut qp = qp::solve(&problem, &mut self.warm, tol);
         let stable = same_active_set(&mut self.active_signature, &qp);
         self.active_stable = if stable { self.active_stable + 1 } else { 0 };
-        self.newton_step = false;
         self.newton_base = None;
         if self.endgame_due()
             && let Some(newton) = self.warm.newton_step(&problem, &qp, tol)
@@ -82,7 +81,6 @@ impl Sqp<'_> {
                 self.say("      Newton step on the active set");
             }
             self.newton_base = Some(std::mem::replace(&mut qp, newton));
-            self.newton_step = true;
         }
         self.subproblem_multipliers(&mut qp.lambda, jac, &qp.d);
         let lin = bounds.linearization(jac);
