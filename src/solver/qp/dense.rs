@@ -9,8 +9,8 @@
 //! iterate feasible (multipliers uₖ ≥ 0 on active inequalities) and adds the most violated
 //! constraint at a time, dropping active ones whose multiplier would turn negative. It keeps
 //! `J` with `J Jᵀ = H⁻¹` and an upper-triangular `R` with `Jᵀ N = [R; 0]` for the active normals
-//! `N`, updated by a Householder reflection of J's inactive columns when a constraint is
-//! added and by Givens rotations when one is dropped. The equalities come first: they are
+//! `N`, updated by a Householder reflection of J's inactive columns when an equality is
+//! added and by Givens rotations otherwise. The equalities come first: they are
 //! factored one by one without steps, and the minimizer on their manifold is then formed at
 //! once from J and R (`x = J y`, `Rᵀy₁ = b`, `y₂ = −J₂ᵀg`). When a violated constraint can be neither reached by a
 //! primal step nor made reachable by dropping another, the constraints are inconsistent and the
@@ -274,30 +274,41 @@ impl ActiveSet {
     /// Appends a constraint whose `d = Jᵀn` is given; false when it is linearly dependent on
     /// the active ones (to working precision).
     ///
-    /// One Householder reflection `P = I − β v vᵀ` of J's inactive columns `iq..n` maps
-    /// `d[iq..]` to `α e₁` (|α| = ‖d[iq..]‖, the sign of α opposite to d[iq]'s, so that
-    /// `v = d[iq..] − α e₁` does not cancel): `J[:, iq..] ← J[:, iq..] P` keeps `J Jᵀ = H⁻¹`,
-    /// and column iq of `Jᵀ N` becomes `(d[..iq], α, 0, …)`, R's new column. 4n(n − iq)
-    /// multiply-adds, against 6n(n − iq) and n − iq square roots for a chain of Givens
-    /// rotations.
+    /// J's inactive columns `iq..n` are turned so that `d[iq..]` becomes `(α, 0, …)`, |α| =
+    /// ‖d[iq..]‖: `J Jᵀ = H⁻¹` is kept and column iq of `Jᵀ N` becomes `(d[..iq], α, 0, …)`,
+    /// R's new column. An equality is turned by one Householder reflection
+    /// ([`ActiveSet::reflect`], 4n(n − iq) multiply-adds); an inequality by the chain of
+    /// Givens rotations of Goldfarb and Idnani (6n(n − iq) and n − iq square roots). The
+    /// equalities are most of the additions of a truss QP; the inequalities keep the
+    /// rotations so that QPs without equalities take the same path to the bit (ill-conditioned
+    /// problems of the HS set, HS106, HS108 and HS116, end elsewhere when their rounding
+    /// changes).
     fn add(&mut self, mut d: DVector<f64>, id: ConstraintId, u: f64, equality: bool) -> bool {
         let n = self.j.nrows();
         let iq = self.len();
         if iq >= n {
             return false;
         }
-        let sigma = d.rows(iq, n - iq).norm();
-        if sigma <= f64::EPSILON * self.r_norm.max(1.0) * 1e2 {
-            return false;
+        if equality {
+            let sigma = d.rows(iq, n - iq).norm();
+            if sigma <= f64::EPSILON * self.r_norm.max(1.0) * 1e2 {
+                return false;
+            }
+            d[iq] = self.reflect(&d, sigma);
+        } else {
+            for c in (iq + 1..n).rev() {
+                let (cs, sn, h) = givens(d[c - 1], d[c]);
+                if sn == 0.0 {
+                    continue;
+                }
+                d[c - 1] = h;
+                d[c] = 0.0;
+                rotate_columns(&mut self.j, c - 1, c, cs, sn);
+            }
+            if d[iq].abs() <= f64::EPSILON * self.r_norm.max(1.0) * 1e2 {
+                return false;
+            }
         }
-        let alpha = if d[iq] > 0.0 { -sigma } else { sigma };
-        let mut v = d.rows(iq, n - iq).into_owned();
-        v[0] -= alpha;
-        let beta = 1.0 / (sigma * (sigma + d[iq].abs()));
-        let mut inactive = self.j.columns_mut(iq, n - iq);
-        let w = &inactive * &v;
-        inactive.ger(-beta, &w, &v, 1.0);
-        d[iq] = alpha;
         for i in 0..=iq {
             self.rt[(iq, i)] = d[i];
         }
@@ -306,6 +317,23 @@ impl ActiveSet {
         self.u.push(u);
         self.equality.push(equality);
         true
+    }
+
+    /// Applies to J's inactive columns `iq..n` the Householder reflection `P = I − β v vᵀ`
+    /// that maps `d[iq..]` (norm `sigma` > 0) to `α e₁`, and returns α. The sign of α is
+    /// opposite to d[iq]'s, so that `v = d[iq..] − α e₁` does not cancel, and
+    /// `β = 2 / vᵀv = 1 / (σ (σ + |d[iq]|))`.
+    fn reflect(&mut self, d: &DVector<f64>, sigma: f64) -> f64 {
+        let n = self.j.nrows();
+        let iq = self.len();
+        let alpha = if d[iq] > 0.0 { -sigma } else { sigma };
+        let mut v = d.rows(iq, n - iq).into_owned();
+        v[0] -= alpha;
+        let beta = 1.0 / (sigma * (sigma + d[iq].abs()));
+        let mut inactive = self.j.columns_mut(iq, n - iq);
+        let w = &inactive * &v;
+        inactive.ger(-beta, &w, &v, 1.0);
+        alpha
     }
 
     /// Removes the active constraint at position `pos` and restores R's triangular form.
@@ -859,7 +887,10 @@ mod tests {
                 assert!((r.solution.d[k] - exact[k]).abs() < 1e-9, "n {n}: d[{k}]");
             }
             for i in 0..m {
-                assert!((r.solution.lambda[i] - exact[n + i]).abs() < 1e-8, "n {n}: λ[{i}]");
+                assert!(
+                    (r.solution.lambda[i] - exact[n + i]).abs() < 1e-8,
+                    "n {n}: λ[{i}]"
+                );
             }
         }
     }
