@@ -39,6 +39,16 @@
 //! With shaping stages the staged search's target is [`SHAPED_TARGET`] (every shaping stage
 //! met; the task's last rows are the solves' job).
 //!
+//! **Restart on a stalled stage** ([`STALL_RESTARTS`]): a staged search that stops (budget,
+//! stall or collapse) without a candidate meeting a stage its start does not meet — its best
+//! fitness has the start's `⌊fitness/W⌋` — runs once more from the start, with the same
+//! budget, step size and population, on a fresh random stream; the better best of the two
+//! runs is kept and their rollouts add up. CMA-ES's own stall test watches the best value,
+//! which keeps falling by small amounts within the take-off stage's sum while no candidate
+//! meets it, so IPOP's population doubling never fired on such a run (docs/notes/gait.md,
+//! "round 3"); the stage count is the progress that matters. The first run's stream is the
+//! one without restarts, so a search that meets a stage is unchanged.
+//!
 //! A rollout that fails before its fitness is settled scores +∞. The search stops when the
 //! fitness reaches its target (unstaged: within the trial's tolerance, every row met), after `generations` generations or `evaluations` rollouts, when the distribution
 //! collapses, or on an interrupt; the best candidate seen (the start itself, bit for bit, if
@@ -382,6 +392,15 @@ mod tests {
             start.fitness
         );
         assert_ne!(one.x, search(&p, &settings, &x0, 8, 2, None).x);
+    }
+
+    /// A restart's stream differs from the first run's, which is the search's own seed.
+    #[test]
+    fn restarts_draw_fresh_streams_and_the_first_run_keeps_the_seed() {
+        let seed = trial_seed(8, 6);
+        assert_eq!(restart_seed(seed, 0), seed);
+        assert_ne!(restart_seed(seed, 1), seed);
+        assert_ne!(restart_seed(seed, 1), trial_seed(8, 7));
     }
 
     /// Four rows at key steps 10 (stage 0), 20 and 25 (stage 1) and 40 (stage 2).

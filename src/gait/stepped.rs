@@ -85,3 +85,36 @@ pub fn solve_stepped(
     let solution = effort_solves(problem, f, nlp, options, true, &mut kept, &clock);
     finish(problem, f, trial, start, kept, solution, &clock)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gait::golden_problem as golden;
+    use crate::gait::trials::{TrialStatus, starts};
+
+    /// The short pogo crouch solved at 2·dt and continued at dt ends a Success judged at the
+    /// file's dt (its end is the rollout at dt of its parameters); with factor 1 the
+    /// continuation is the plain trial.
+    #[test]
+    fn a_trial_solved_at_twice_the_step_is_judged_at_dt() {
+        let p = golden("pogo_crouch_short");
+        let f = Formulation::new(&p);
+        let options = Options {
+            max_iterations: 60,
+            verbosity: 0,
+            ..Options::default()
+        };
+        let x0 = starts(&p, &f, 8)[0].x.clone();
+        let r = solve_stepped(&p, &f, 1, &x0, &options, 2);
+        assert_eq!(r.status, TrialStatus::Success, "{:?} {:?}", r.end, r.fine);
+        let at_dt = assess(&f, &r.x).unwrap();
+        assert_eq!(Some(&at_dt), r.end.as_ref());
+        assert!(at_dt.max() <= p.trials.tolerance);
+        let coarse = coarsened(&p, 2);
+        let at_coarse = assess(&Formulation::new(&coarse), &r.x).unwrap();
+        assert_ne!(at_coarse.cost, at_dt.cost);
+        let plain = solve_trial(&p, &f, 1, &x0, &options);
+        let same = solve_stepped(&p, &f, 1, &x0, &options, 1);
+        assert_eq!((plain.x, plain.iterations), (same.x, same.iterations));
+    }
+}

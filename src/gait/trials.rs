@@ -705,7 +705,8 @@ pub fn run_trials(
 
 /// Trial `trial` from `start`, with the file's global phase ([`crate::gait::global`];
 /// progress lines with a solver log) if it has one. By default the phase leads: it runs from
-/// the start and [`solve_trial`] runs from its best candidate. With `[global] fallback = true`
+/// the start and the solves run from its best candidate, at the phase's coarsened step first
+/// when it has one ([`solve_stepped`]). With `[global] fallback = true`
 /// the solves run from the start itself first, and the phase only when they end short of
 /// Success; if its best candidate differs from the start (it scored better), the solves run
 /// again from it and the better end counts ([`best`]). The trial's time includes every phase.
