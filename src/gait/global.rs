@@ -282,7 +282,9 @@ pub fn search(
     let mut best: Option<Minimum> = None;
     for restart in 0..=STALL_RESTARTS {
         if restart > 0 {
-            say(format!("no stage met beyond the start's: restart {restart} from the start"));
+            say(format!(
+                "no stage met beyond the start's: restart {restart} from the start"
+            ));
         }
         let run = minimize(
             fitness,

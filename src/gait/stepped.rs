@@ -22,7 +22,9 @@ use std::time::Instant;
 use super::formulation::Formulation;
 use super::spec::Problem;
 use super::step_check::coarsened;
-use super::trials::{Kept, TrialResult, append_log, assess, effort_solves, finish, improves, solve_trial};
+use super::trials::{
+    Kept, TrialResult, append_log, assess, effort_solves, finish, improves, solve_trial,
+};
 use crate::solver::{Options, solve};
 
 /// Solves trial `trial` from physical start `x0` at step `factor·dt` first and then at the
