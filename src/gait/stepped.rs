@@ -114,7 +114,9 @@ mod tests {
         assert!(at_dt.max() <= p.trials.tolerance);
         let coarse = coarsened(&p, 2);
         let at_coarse = assess(&Formulation::new(&coarse), &r.x).unwrap();
-        assert_ne!(at_coarse.cost, at_dt.cost);
+        // The head's height and speed rows are equalities: their violations differ with the
+        // step (the force splines' effort does not: it is integrated in closed form).
+        assert_ne!(at_coarse.violations[..2], at_dt.violations[..2]);
         let plain = solve_trial(&p, &f, 1, &x0, &options);
         let same = solve_stepped(&p, &f, 1, &x0, &options, 1);
         assert_eq!((plain.x, plain.iterations), (same.x, same.iterations));
