@@ -39,6 +39,16 @@
 //! With shaping stages the staged search's target is [`SHAPED_TARGET`] (every shaping stage
 //! met; the task's last rows are the solves' job).
 //!
+//! **Restart on a stalled stage** ([`STALL_RESTARTS`]): a staged search that stops (budget,
+//! stall or collapse) without a candidate meeting a stage its start does not meet — its best
+//! fitness has the start's `⌊fitness/W⌋` — runs once more from the start, with the same
+//! budget, step size and population, on a fresh random stream; the better best of the two
+//! runs is kept and their rollouts add up. CMA-ES's own stall test watches the best value,
+//! which keeps falling by small amounts within the take-off stage's sum while no candidate
+//! meets it, so IPOP's population doubling never fired on such a run (docs/notes/gait.md,
+//! "round 3"); the stage count is the progress that matters. The first run's stream is the
+//! one without restarts, so a search that meets a stage is unchanged.
+//!
 //! A rollout that fails before its fitness is settled scores +∞. The search stops when the
 //! fitness reaches its target (unstaged: within the trial's tolerance, every row met), after `generations` generations or `evaluations` rollouts, when the distribution
 //! collapses, or on an interrupt; the best candidate seen (the start itself, bit for bit, if
@@ -49,7 +59,7 @@
 
 use std::time::Instant;
 
-use super::cmaes::{Budget, Stop, minimize};
+use super::cmaes::{Budget, Minimum, Stop, minimize};
 use super::formulation::Formulation;
 use super::sim::Simulator;
 use super::spec::{GlobalSettings, Problem};
@@ -199,6 +209,14 @@ pub struct GlobalReport {
     pub seconds: f64,
 }
 
+/// Restarts of a staged search that met no stage beyond its start's (module header).
+pub const STALL_RESTARTS: usize = 1;
+
+/// The stream of run `restart` of a search seeded `seed` (run 0: `seed` itself).
+fn restart_seed(seed: u64, restart: usize) -> u64 {
+    seed ^ (restart as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)
+}
+
 /// The seed of trial `trial`'s search, from the run's `seed`.
 pub fn trial_seed(seed: u64, trial: usize) -> u64 {
     seed ^ (trial as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
@@ -257,27 +275,54 @@ pub fn search(
             log.line(&format!("{} global: {text}", log.stage));
         }
     };
-    let best = minimize(
-        fitness,
-        &u0,
-        settings.sigma,
-        settings.population,
-        budget,
-        trial_seed(seed, trial),
-        |g| {
-            if g.generation.is_multiple_of(PROGRESS_EVERY) {
-                say(format!(
-                    "generation {}, {} rollouts, best fitness {:.3e}, σ {:.3}, {:.1} s",
-                    g.generation,
-                    g.evaluations,
-                    g.best,
-                    g.sigma,
-                    clock.elapsed().as_secs_f64()
-                ));
-            }
-            !problem.interrupt.is_raised()
-        },
-    );
+    // A staged search that ends without meeting a stage its start does not meet runs again
+    // from the start on a fresh stream (module header), [`STALL_RESTARTS`] times at most.
+    let level = |v: f64| (v / STAGE_WEIGHT).floor();
+    let start_level = stages.as_ref().map(|_| level(fitness(&u0)));
+    let mut best: Option<Minimum> = None;
+    for restart in 0..=STALL_RESTARTS {
+        if restart > 0 {
+            say(format!(
+                "no stage met beyond the start's: restart {restart} from the start"
+            ));
+        }
+        let run = minimize(
+            fitness,
+            &u0,
+            settings.sigma,
+            settings.population,
+            budget,
+            restart_seed(trial_seed(seed, trial), restart),
+            |g| {
+                if g.generation.is_multiple_of(PROGRESS_EVERY) {
+                    say(format!(
+                        "generation {}, {} rollouts, best fitness {:.3e}, σ {:.3}, {:.1} s",
+                        g.generation,
+                        g.evaluations,
+                        g.best,
+                        g.sigma,
+                        clock.elapsed().as_secs_f64()
+                    ));
+                }
+                !problem.interrupt.is_raised()
+            },
+        );
+        let stalled = start_level.is_some_and(|l| level(run.value) >= l)
+            && !matches!(run.stop, Stop::Target | Stop::Stopped);
+        best = Some(match best {
+            None => run,
+            Some(b) => Minimum {
+                generations: b.generations + run.generations,
+                evaluations: b.evaluations + run.evaluations,
+                stop: run.stop,
+                ..if run.value < b.value { run } else { b }
+            },
+        });
+        if !stalled {
+            break;
+        }
+    }
+    let best = best.expect("at least one run");
     // The start itself, bit for bit, when no candidate beat it.
     let mut x = x0.to_vec();
     if best.x != u0 {
@@ -349,6 +394,15 @@ mod tests {
             start.fitness
         );
         assert_ne!(one.x, search(&p, &settings, &x0, 8, 2, None).x);
+    }
+
+    /// A restart's stream differs from the first run's, which is the search's own seed.
+    #[test]
+    fn restarts_draw_fresh_streams_and_the_first_run_keeps_the_seed() {
+        let seed = trial_seed(8, 6);
+        assert_eq!(restart_seed(seed, 0), seed);
+        assert_ne!(restart_seed(seed, 1), seed);
+        assert_ne!(restart_seed(seed, 1), trial_seed(8, 7));
     }
 
     /// Four rows at key steps 10 (stage 0), 20 and 25 (stage 1) and 40 (stage 2).

@@ -30,6 +30,7 @@ pub mod spatial;
 pub mod spec;
 pub mod spline;
 pub mod step_check;
+pub mod stepped;
 pub mod task;
 pub mod trials;
 

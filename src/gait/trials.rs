@@ -61,6 +61,7 @@ use super::global::{GlobalReport, search};
 use super::shaping::shape;
 use super::spec::{Problem, StartKind};
 use super::step_check::confirm;
+use super::stepped::solve_stepped;
 use crate::solver::log::{Buffer, LogTarget, ObjectiveUnit};
 use crate::solver::{Evaluations, IterationRecord, Nlp, Options, Solution, Status, solve};
 
@@ -273,7 +274,7 @@ fn halves_violation(a: Option<&Assessment>, b: Option<&Assessment>, tol: f64) ->
 
 /// Whether assessment `b` is better than `a`: meeting every constraint within `tol` first, then
 /// the lower cost among such points, else the lower violation sum.
-fn improves(a: Option<&Assessment>, b: Option<&Assessment>, tol: f64) -> bool {
+pub(super) fn improves(a: Option<&Assessment>, b: Option<&Assessment>, tol: f64) -> bool {
     match (a, b) {
         (_, None) => false,
         (None, Some(_)) => true,
@@ -286,18 +287,18 @@ fn improves(a: Option<&Assessment>, b: Option<&Assessment>, tol: f64) -> bool {
 }
 
 /// A trial's kept point and running totals while its phases run.
-struct Kept {
+pub(super) struct Kept {
     /// The best point met so far (physical units: spline parameters, then segment start
     /// states until [`finish`] drops them).
-    x: Vec<f64>,
+    pub(super) x: Vec<f64>,
     /// Its assessment.
-    end: Option<Assessment>,
+    pub(super) end: Option<Assessment>,
     /// Iterations of every phase and solve so far.
-    iterations: usize,
+    pub(super) iterations: usize,
     /// Evaluations of every phase and solve so far.
-    evaluations: Evaluations,
+    pub(super) evaluations: Evaluations,
     /// The solves' iteration log so far, numbered on ([`append_log`]).
-    log: Vec<IterationRecord>,
+    pub(super) log: Vec<IterationRecord>,
 }
 
 impl Kept {
@@ -309,7 +310,7 @@ impl Kept {
     }
 
     /// Adds a solve's (or the shaping solves') iterations and evaluations.
-    fn count_solves(&mut self, iterations: usize, evaluations: &Evaluations) {
+    pub(super) fn count_solves(&mut self, iterations: usize, evaluations: &Evaluations) {
         self.iterations += iterations;
         self.evaluations.functions += evaluations.functions;
         self.evaluations.derivatives += evaluations.derivatives;
@@ -527,7 +528,7 @@ fn shaping_phase<'p>(
 /// first solve's always, unless a phase before it left a candidate), and its iteration log
 /// is appended to the trial's. With `kept_candidate` (a phase before them left the kept point)
 /// the first solve's end point must improve on it too. Returns the last solve's solution.
-fn effort_solves<'p>(
+pub(super) fn effort_solves<'p>(
     problem: &Problem,
     f: &Formulation<'p>,
     mut nlp: Formulation<'p>,
@@ -600,7 +601,7 @@ fn effort_solves<'p>(
 /// The trial's result: the kept point cut to its spline parameters, classified (module
 /// header) and confirmed at `dt/4` ([`confirm`]), with the last solve's `solution` carrying
 /// the trial's whole iteration log.
-fn finish(
+pub(super) fn finish(
     problem: &Problem,
     f: &Formulation<'_>,
     trial: usize,
@@ -704,7 +705,8 @@ pub fn run_trials(
 
 /// Trial `trial` from `start`, with the file's global phase ([`crate::gait::global`];
 /// progress lines with a solver log) if it has one. By default the phase leads: it runs from
-/// the start and [`solve_trial`] runs from its best candidate. With `[global] fallback = true`
+/// the start and the solves run from its best candidate, at the phase's coarsened step first
+/// when it has one ([`solve_stepped`]). With `[global] fallback = true`
 /// the solves run from the start itself first, and the phase only when they end short of
 /// Success; if its best candidate differs from the start (it scored better), the solves run
 /// again from it and the better end counts ([`best`]). The trial's time includes every phase.
@@ -732,13 +734,14 @@ fn run_trial(
     let log = (options.verbosity >= 1).then_some(&options.log);
     if !settings.fallback {
         let global = search(problem, settings, &start.x, seed, trial, log);
-        let mut result = solve_trial(problem, f, trial, &global.x, options);
+        let mut result = solve_stepped(problem, f, trial, &global.x, options, settings.coarsening);
         result.origin = format!("{}+CMA", start.origin);
         result.seconds += global.seconds;
         result.global = Some(global);
         return result;
     }
-    let mut local = solve_trial(problem, f, trial, &start.x, options);
+    let k = settings.coarsening;
+    let mut local = solve_stepped(problem, f, trial, &start.x, options, k);
     local.origin = start.origin.clone();
     if local.status == TrialStatus::Success {
         return local;
@@ -748,7 +751,7 @@ fn run_trial(
     let mut result = if global.x == start.x {
         local
     } else {
-        let mut again = solve_trial(problem, f, trial, &global.x, options);
+        let mut again = solve_stepped(problem, f, trial, &global.x, options, k);
         again.origin = format!("{}+CMA", start.origin);
         spent += again.seconds;
         let mut pair = vec![local, again];
