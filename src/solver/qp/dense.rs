@@ -387,8 +387,8 @@ impl ActiveSet {
         let mut u = vec![0.0; iq];
         for i in (0..iq).rev() {
             let mut s = y[i] + j1g[i];
-            for k in i + 1..iq {
-                s -= self.rt[(k, i)] * u[k];
+            for (k, uk) in u.iter().enumerate().skip(i + 1) {
+                s -= self.rt[(k, i)] * uk;
             }
             u[i] = s / self.rt[(i, i)];
         }
