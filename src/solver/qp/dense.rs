@@ -321,7 +321,7 @@ impl ActiveSet {
 
     /// Applies to J's inactive columns `iq..n` the Householder reflection `P = I − β v vᵀ`
     /// that maps `d[iq..]` (norm `sigma` > 0) to `α e₁`, and returns α. The sign of α is
-    /// opposite to d[iq]'s, so that `v = d[iq..] − α e₁` does not cancel, and
+    /// opposite to `d[iq]`'s, so that `v = d[iq..] − α e₁` does not cancel, and
     /// `β = 2 / vᵀv = 1 / (σ (σ + |d[iq]|))`.
     fn reflect(&mut self, d: &DVector<f64>, sigma: f64) -> f64 {
         let n = self.j.nrows();
