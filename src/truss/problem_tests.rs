@@ -45,6 +45,14 @@ fn optimal_run(name: &str) -> crate::outcome::Outcome {
     outcome
 }
 
+/// Asserts that the run's final mass is below its layout-LP start's (same lattice) mass.
+fn assert_below_its_lp(outcome: &crate::outcome::Outcome) {
+    let figures = &outcome.summary.figures;
+    let lp_cost = figures["start"]["lp"]["cost"][0].as_f64().unwrap();
+    let mass = figures["mass_kg"].as_f64().unwrap();
+    assert!(mass < lp_cost, "{mass} kg, LP {lp_cost} kg");
+}
+
 #[test]
 fn every_example_loads_with_a_sensible_ground_structure() {
     for name in EXAMPLES {
@@ -257,10 +265,7 @@ fn a_linear_warren_deck_joins_its_struts_through_free_joints_and_converges() {
         rounds[0]["beams_after"] != rounds[0]["beams_before"],
         "{rounds:?}"
     );
-    let lp_cost = outcome.summary.figures["start"]["lp"]["cost"][0]
-        .as_f64()
-        .unwrap();
-    assert!(outcome.summary.figures["mass_kg"].as_f64().unwrap() < lp_cost);
+    assert_below_its_lp(&outcome);
 }
 
 #[test]
@@ -275,10 +280,7 @@ fn a_linear_pier_cantilever_converges_below_its_lp_with_signed_later_rounds() {
         "{} iterations",
         outcome.summary.iterations
     );
-    let lp_cost = outcome.summary.figures["start"]["lp"]["cost"][0]
-        .as_f64()
-        .unwrap();
-    assert!(outcome.summary.figures["mass_kg"].as_f64().unwrap() < lp_cost);
+    assert_below_its_lp(&outcome);
 }
 
 #[test]
