@@ -61,7 +61,7 @@
 //! them back, or γ ≫ 1 times an infeasibility would enter the next Hessian and the penalty
 //! weights.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, DVectorView};
 
 /// Dense symmetric matrix from lower-triangle triplets (duplicates summed).
 pub fn assemble_dense(n: usize, rows: &[usize], cols: &[usize], values: &[f64]) -> DMatrix<f64> {
@@ -113,38 +113,90 @@ const PROJECTED_GAMMA: f64 = 1e6;
 pub const FALLBACK_GAMMA: f64 = 1e4;
 
 /// The rows' independent subset and `I − QQᵀ`, Q an orthonormal basis of their span (`rows`
-/// k×n, unit or any scaling): the projector onto their null space. Q by modified Gram–Schmidt
-/// over the unit rows in order (two passes, for orthogonality to working precision), O(n·k·r);
-/// a row within [`RANK_TOLERANCE`] of the span of those before it is left out. (A thin QR of
-/// dependent rows returns k columns spanning more than the rows, and leaves part of their
-/// null space unshifted.)
+/// k×n, unit or any scaling): the projector onto their null space. Q by classical Gram–Schmidt
+/// with reorthogonalization where the first pass cancelled (CGS2, "twice is enough":
+/// orthogonal to working precision like two passes of modified Gram–Schmidt) over the unit
+/// rows in order, O(n·k·r); a row within
+/// [`RANK_TOLERANCE`] of the span of those before it is left out. (A thin QR of dependent rows
+/// returns k columns spanning more than the rows, and leaves part of their null space
+/// unshifted.) The basis is held as the rows of a k×n matrix, so that both projections run
+/// over contiguous columns, the first one over the row's nonzeros only (a truss balance row
+/// has a handful), and `QQᵀ` is one matrix product.
 fn independent_rows(rows: &DMatrix<f64>) -> (Vec<usize>, DMatrix<f64>) {
-    let n = rows.ncols();
-    let mut basis: Vec<DVector<f64>> = Vec::new();
+    let (k, n) = rows.shape();
+    let mut basis = DMatrix::<f64>::zeros(k, n);
     let mut kept = Vec::new();
-    for (k, row) in rows.row_iter().enumerate() {
+    let mut v = DVector::<f64>::zeros(n);
+    let mut c = DVector::<f64>::zeros(k);
+    for (index, row) in rows.row_iter().enumerate() {
         let norm = row.norm();
         if norm == 0.0 || !norm.is_finite() {
             continue;
         }
-        let mut v: DVector<f64> = row.transpose() / norm;
-        for _ in 0..2 {
-            for q in &basis {
-                let c = q.dot(&v);
-                v.axpy(-c, q, 1.0);
+        let r = kept.len();
+        for (vi, x) in v.iter_mut().zip(row.iter()) {
+            *vi = x / norm;
+        }
+        for pass in 0..2 {
+            // The second pass only when the first removed more than half of the row's square
+            // norm (Daniel, Gragg, Kaufman & Stewart 1976): otherwise the cancellation that
+            // loses orthogonality has not happened.
+            if pass == 1 && v.norm_squared() > 0.5 {
+                break;
+            }
+            // Column i of the basis matrix: every basis vector's entry i, the first r in use.
+            let q = basis.as_slice();
+            let column = |i: usize| &q[i * k..i * k + r];
+            let c = &mut c.as_mut_slice()[..r];
+            c.fill(0.0);
+            for (i, &vi) in v.iter().enumerate() {
+                if vi != 0.0 {
+                    for (cj, qj) in c.iter_mut().zip(column(i)) {
+                        *cj += qj * vi;
+                    }
+                }
+            }
+            let c = DVectorView::from_slice(c, r);
+            for (i, vi) in v.iter_mut().enumerate() {
+                *vi -= DVectorView::from_slice(column(i), r).dot(&c);
             }
         }
         let residual = v.norm();
         if residual > RANK_TOLERANCE {
-            basis.push(v / residual);
-            kept.push(k);
+            for (i, vi) in v.iter().enumerate() {
+                basis[(r, i)] = vi / residual;
+            }
+            kept.push(index);
         }
     }
+    let q = basis.rows(0, kept.len());
     let mut projector = DMatrix::identity(n, n);
-    for q in &basis {
-        projector.ger(-1.0, q, q, 1.0);
-    }
+    projector.gemm(-1.0, &q.transpose(), &q, 1.0);
     (kept, projector)
+}
+
+/// `UᵀU` for the rows U (k×n) over each row's nonzeros only: a truss's balance rows have a
+/// handful of n entries, so this is O(Σ nnz²) instead of the dense product's O(k·n²).
+fn gram_of(unit: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = unit.ncols();
+    let mut gram = DMatrix::zeros(n, n);
+    let mut nonzeros = Vec::with_capacity(n);
+    for row in unit.row_iter() {
+        nonzeros.clear();
+        nonzeros.extend(
+            row.iter()
+                .enumerate()
+                .filter(|(_, v)| **v != 0.0)
+                .map(|(j, &v)| (j, v)),
+        );
+        for &(j, vj) in &nonzeros {
+            let mut column = gram.column_mut(j);
+            for &(i, vi) in &nonzeros {
+                column[i] += vi * vj;
+            }
+        }
+    }
+    gram
 }
 
 /// `h` as it is (no shift, no row term).
@@ -203,22 +255,22 @@ fn safely_definite(h: &DMatrix<f64>, scale: f64) -> bool {
 
 impl InertiaShift {
     /// `h + δ·(I − QQᵀ) + γ·Σₖ uₖuₖᵀ` with Q an orthonormal basis of the span of the unit rows
-    /// `unit` (equalities and expected-active inequalities): the shift of the δ schedule acts
+    /// uₖ (equalities and expected-active inequalities; `gram` = Σₖ uₖuₖᵀ, `projector` =
+    /// I − QQᵀ): the shift of the δ schedule acts
     /// on their null space only, where the second-order conditions ask for positive
     /// curvature, and γ ∈ [`GAMMAS`] or [`PROJECTED_GAMMA`] (relative to `scale`) makes the
     /// whole positive definite across the rows. None when no δ up to `DELTA_MAX` works.
     fn projected_shift(
         &mut self,
         h: &DMatrix<f64>,
-        unit: &DMatrix<f64>,
+        gram: &DMatrix<f64>,
         projector: &DMatrix<f64>,
         scale: f64,
     ) -> Option<(DMatrix<f64>, f64, f64)> {
-        let gram = unit.tr_mul(unit);
         let ((matrix, weight), delta) = shift_schedule(self.last, |delta| {
             let shifted = h + projector * (delta * scale);
             GAMMAS.iter().chain(&[PROJECTED_GAMMA]).find_map(|g| {
-                let augmented = &shifted + &gram * (g * scale);
+                let augmented = &shifted + gram * (g * scale);
                 safely_definite(&augmented, scale).then_some((augmented, g * scale))
             })
         })?;
@@ -276,7 +328,7 @@ impl InertiaShift {
         for mut r in unit.row_iter_mut() {
             r /= r.norm();
         }
-        let gram = unit.tr_mul(&unit);
+        let gram = gram_of(&unit);
         if let Some(found) = augmented(h, &gram, &kept, scale) {
             return Some(found);
         }
@@ -300,7 +352,7 @@ impl InertiaShift {
         let mut base = (h.clone(), 0.0, Vec::new());
         if !kept.is_empty() {
             if let Some((matrix, shift, row_weight)) =
-                self.projected_shift(h, &unit, &projector, scale)
+                self.projected_shift(h, &gram, &projector, scale)
             {
                 return Some(Convexified {
                     matrix,
@@ -311,8 +363,7 @@ impl InertiaShift {
             }
             let equality_rows = kept.iter().take_while(|&&k| k < equalities).count();
             if equality_rows > 0 {
-                let eq = unit.rows(0, equality_rows);
-                let gram = eq.tr_mul(&eq);
+                let gram = gram_of(&unit.rows(0, equality_rows).into_owned());
                 base = (
                     h + &gram * (FALLBACK_GAMMA * scale),
                     FALLBACK_GAMMA * scale,
