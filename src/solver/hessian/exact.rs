@@ -451,6 +451,33 @@ mod tests {
     }
 
     #[test]
+    fn row_basis_leaves_out_dependent_rows_and_projects_onto_the_null_space() {
+        // Rows 0 and 1 sparse and nearly parallel, row 2 = row 0 + 2·row 1 (dependent), row 3
+        // zero, row 4 dense; n = 6.
+        let rows = DMatrix::from_row_slice(
+            5,
+            6,
+            &[
+                1.0, 0.0, 2.0, 0.0, 0.0, 0.0, //
+                1.0, 1e-3, 2.0, 0.0, 0.0, 0.0, //
+                3.0, 2e-3, 6.0, 0.0, 0.0, 0.0, //
+                0.0, 0.0, 0.0, 0.0, 0.0, 0.0, //
+                0.5, -1.0, 0.25, 2.0, 1.0, -3.0,
+            ],
+        );
+        let (kept, projector) = independent_rows(&rows);
+        assert_eq!(kept, vec![0, 1, 4]);
+        // P is symmetric, idempotent, of rank n − 3, and annihilates every row.
+        assert!((&projector - projector.transpose()).amax() < 1e-14);
+        assert!((&projector * &projector - &projector).amax() < 1e-13);
+        assert!((projector.trace() - 3.0).abs() < 1e-12);
+        assert!((&rows * &projector).amax() < 1e-12);
+        // The sparse Gram matrix is the dense product.
+        let gram = gram_of(&rows);
+        assert!((&gram - rows.tr_mul(&rows)).amax() < 1e-13);
+    }
+
+    #[test]
     fn the_shift_follows_the_reduced_hessian_despite_a_strong_coupling_across_the_row() {
         // Row e₀, coupled by 100 to x₁; on the row's null space (x₁, x₂) the block
         // [[1, 1.005], [1.005, 1]] has eigenvalue −0.005 (no negative diagonal entry, so no
