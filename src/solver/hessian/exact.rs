@@ -245,12 +245,37 @@ pub fn scale_of(h: &DMatrix<f64>) -> f64 {
     h.diagonal().iter().fold(1.0_f64, |a, v| a.max(v.abs()))
 }
 
-/// Positive definite with every Cholesky pivot above `PIVOT_MIN·scale`.
+/// Positive definite with every squared Cholesky pivot above `PIVOT_MIN·scale`. Only the
+/// answer is needed, not the factor: a left-looking factorization of a copy (column j of L
+/// from the columns before it, over contiguous column slices) that stops at the first pivot
+/// below the bound, so a failed trial of the δ or γ schedules costs only the columns up to it.
 fn safely_definite(h: &DMatrix<f64>, scale: f64) -> bool {
-    match h.clone().cholesky() {
-        Some(c) => c.l().diagonal().iter().all(|p| p * p >= PIVOT_MIN * scale),
-        None => false,
+    let n = h.nrows();
+    let bound = PIVOT_MIN * scale;
+    let mut l = h.clone();
+    let l = l.as_mut_slice();
+    for j in 0..n {
+        let (before, rest) = l.split_at_mut(j * n);
+        let column = &mut rest[j..n];
+        for k in 0..j {
+            let lk = &before[k * n + j..(k + 1) * n];
+            let factor = lk[0];
+            if factor != 0.0 {
+                for (c, &v) in column.iter_mut().zip(lk) {
+                    *c -= factor * v;
+                }
+            }
+        }
+        let pivot = column[0];
+        if pivot.is_nan() || pivot < bound {
+            return false;
+        }
+        let root = pivot.sqrt();
+        for c in &mut column[1..] {
+            *c /= root;
+        }
     }
+    true
 }
 
 impl InertiaShift {
