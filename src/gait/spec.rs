@@ -285,6 +285,17 @@ pub enum ShapeSpec {
         #[serde(default, deserialize_with = "crate::spec::arrays::exact")]
         center: [f64; 3],
     },
+    /// A solid right circular cone of base `radius` (m) from its `apex` to its `base` centre (m).
+    Cone {
+        /// Base radius (m).
+        radius: f64,
+        /// Apex (m).
+        #[serde(deserialize_with = "crate::spec::arrays::exact")]
+        apex: [f64; 3],
+        /// Centre of the base (m).
+        #[serde(deserialize_with = "crate::spec::arrays::exact")]
+        base: [f64; 3],
+    },
 }
 
 /// Joint type.
@@ -1372,6 +1383,7 @@ fn build_shape(s: &ShapeSpec) -> Result<Shape, String> {
         ShapeSpec::Box { size, center } => Shape::Box { size, center },
         ShapeSpec::Capsule { radius, from, to } => Shape::Capsule { radius, from, to },
         ShapeSpec::Sphere { radius, center } => Shape::Sphere { radius, center },
+        ShapeSpec::Cone { radius, apex, base } => Shape::Cone { radius, apex, base },
     };
     let ok = match shape {
         Shape::Box { size, center } => {
@@ -1383,11 +1395,15 @@ fn build_shape(s: &ShapeSpec) -> Result<Shape, String> {
         Shape::Sphere { radius, center } => {
             radius > 0.0 && radius.is_finite() && finite_all(&center)
         }
+        Shape::Cone { radius, apex, base } => {
+            radius > 0.0 && radius.is_finite() && finite_all(&apex) && finite_all(&base)
+                && apex != base
+        }
     };
     if ok {
         Ok(shape)
     } else {
-        Err("shape sizes must be positive and coordinates finite".into())
+        Err("shape sizes must be positive, coordinates finite and a cone's apex apart from its base".into())
     }
 }
 
