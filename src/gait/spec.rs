@@ -1396,7 +1396,10 @@ fn build_shape(s: &ShapeSpec) -> Result<Shape, String> {
             radius > 0.0 && radius.is_finite() && finite_all(&center)
         }
         Shape::Cone { radius, apex, base } => {
-            radius > 0.0 && radius.is_finite() && finite_all(&apex) && finite_all(&base)
+            radius > 0.0
+                && radius.is_finite()
+                && finite_all(&apex)
+                && finite_all(&base)
                 && apex != base
         }
     };

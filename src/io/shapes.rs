@@ -252,7 +252,10 @@ mod tests {
         let cube = cuboid([0.5; 3], [1.0, 2.0, 3.0]);
         assert!((volume(&cube) - 48.0).abs() < 1e-4, "{}", volume(&cube));
         // πr²h/3, either way up.
-        for (apex, base) in [([0.0; 3], [0.0, 0.0, 3.0]), ([1.0, 3.0, 0.0], [1.0, 0.0, 0.0])] {
+        for (apex, base) in [
+            ([0.0; 3], [0.0, 0.0, 3.0]),
+            ([1.0, 3.0, 0.0], [1.0, 0.0, 0.0]),
+        ] {
             let c = cone(apex, base, 1.0, 64);
             let exact = PI;
             assert!((volume(&c) - exact).abs() < 0.01 * exact, "{}", volume(&c));
