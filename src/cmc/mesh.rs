@@ -400,7 +400,8 @@ impl Mesh {
 
     /// The three corner positions of triangle `t`.
     pub fn corners(&self, t: usize) -> [Point; 3] {
-        self.triangles[t].map(|v| self.positions[v])
+        let [a, b, c] = self.triangles[t];
+        [self.positions[a], self.positions[b], self.positions[c]]
     }
 
     /// Triangles containing vertex `v`.
