@@ -15,8 +15,6 @@
 //! Degenerate input (an index out of range, a repeated vertex in a triangle, a non-finite
 //! coordinate, a zero-area triangle, a vertex in no triangle) is a [`MeshError`], never a panic.
 
-use std::collections::BTreeMap;
-
 use nalgebra::Vector3;
 
 /// A point or vector in metres.
@@ -263,26 +261,30 @@ impl Mesh {
             }
         }
         let mut vertex_triangles = vec![Vec::new(); n];
-        let mut edge_map: BTreeMap<[usize; 2], Vec<usize>> = BTreeMap::new();
+        // Each triangle's three edges (sorted vertex pair, triangle), then sorted by the pair
+        // (stably: a pair's triangles stay in index order): the edges in pair order.
+        let mut sides: Vec<([usize; 2], usize)> = Vec::with_capacity(3 * triangles.len());
         for (t, tri) in triangles.iter().enumerate() {
             for k in 0..3 {
                 vertex_triangles[tri[k]].push(t);
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                edge_map.entry([a.min(b), a.max(b)]).or_default().push(t);
+                sides.push(([a.min(b), a.max(b)], t));
             }
         }
         if let Some(v) = vertex_triangles.iter().position(Vec::is_empty) {
             return Err(MeshError::Unused(v));
         }
+        sides.sort_by_key(|&(pair, _)| pair);
         let mut neighbours = vec![Vec::new(); n];
-        let edges: Vec<Edge> = edge_map
-            .into_iter()
-            .map(|(vertices, triangles)| {
+        let edges: Vec<Edge> = sides
+            .chunk_by(|a, b| a.0 == b.0)
+            .map(|group| {
+                let vertices = group[0].0;
                 neighbours[vertices[0]].push(vertices[1]);
                 neighbours[vertices[1]].push(vertices[0]);
                 Edge {
                     vertices,
-                    triangles,
+                    triangles: group.iter().map(|&(_, t)| t).collect(),
                 }
             })
             .collect();
