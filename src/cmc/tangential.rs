@@ -282,7 +282,7 @@ impl<'a> Star<'a> {
         0.0
     }
 
-    /// The share of `v` ([`Star::share`]) after it moved by `step` when no triangle around `v`
+    /// The share of `v` (the terms of E that depend on `x_v`) after it moved by `step` when no triangle around `v`
     /// has turned over against its area vector in `scratch` (before the move), else None; the
     /// triangles' area vectors and energies there become `scratch`'s trial ones. A term's
     /// offset is linear in `x_v`: `o + c·step` from its offset `o` at the start in `scratch`.
