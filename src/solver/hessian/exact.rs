@@ -33,9 +33,9 @@
 //!
 //! When no γ alone succeeds, the shift is first confined to the null space of all those rows
 //! (equalities and expected-active inequalities): `H + δ(I − QQᵀ) + γ·Σₖuₖuₖᵀ`, Q an
-//! orthonormal basis of the span of the independent rows (modified Gram–Schmidt, O(n·k·r)
-//! per iteration; dependent rows are left out of Q and of the γ term), with the same δ
-//! schedule and γ up to [`PROJECTED_GAMMA`]. On the QP's feasible set of those
+//! orthonormal basis of the span of the independent rows (Gram–Schmidt with
+//! reorthogonalization, O(n·k·r) per iteration; dependent rows are left out of Q and of the γ
+//! term), with the same δ schedule and γ up to [`PROJECTED_GAMMA`]. On the QP's feasible set of those
 //! rows the QP step is then the Newton step of the reduced Hessian shifted by δ, and no step
 //! across an active row is shortened. A shift of H alone (or of the reduced Hessian over the
 //! equalities only) also damps the directions the active inequalities block, every iteration:
