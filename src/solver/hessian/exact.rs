@@ -35,8 +35,8 @@
 //! (equalities and expected-active inequalities): `H + δ(I − QQᵀ) + γ·Σₖuₖuₖᵀ`, Q an
 //! orthonormal basis of the span of the independent rows (Gram–Schmidt with
 //! reorthogonalization, O(n·k·r) per iteration; dependent rows are left out of Q and of the γ
-//! term), with the same δ schedule and γ up to [`PROJECTED_GAMMA`]. On the QP's feasible set of those
-//! rows the QP step is then the Newton step of the reduced Hessian shifted by δ, and no step
+//! term), with the same δ schedule and γ up to [`PROJECTED_GAMMA`]. On the QP's feasible set of
+//! those rows the QP step is then the Newton step of the reduced Hessian shifted by δ, and no step
 //! across an active row is shortened. A shift of H alone (or of the reduced Hessian over the
 //! equalities only) also damps the directions the active inequalities block, every iteration:
 //! HS114 (variables from 1.5 to 16,000, a bilinear objective) crawled to its iteration limit
