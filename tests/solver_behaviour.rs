@@ -718,3 +718,44 @@ fn large_natural_multipliers_are_followed_from_the_first_qp() {
         "{seen:?}"
     );
 }
+
+/// A strictly convex quadratic with its exact Hessian: one Newton step lands on the minimizer
+/// and the solve ends there on arrival. The first derivatives are evaluated once per point
+/// (the start's unscaled evaluation that chooses the scales serves iteration 0 too) and the
+/// Hessian only where a QP uses it (the start), not at the point where the solve ends.
+#[test]
+fn a_solve_ending_on_arrival_evaluates_what_it_uses_only() {
+    let nlp = Small {
+        x0: vec![0.0, 0.0],
+        xl: vec![-INF; 2],
+        xu: vec![INF; 2],
+        cl: vec![],
+        cu: vec![],
+        values: Box::new(|x, _| {
+            Ok((x[0] - 1.0).powi(2) + 2.0 * (x[1] + 2.0).powi(2) + x[0] * x[1])
+        }),
+        derivatives: Box::new(|x, g, _| {
+            g[0] = 2.0 * (x[0] - 1.0) + x[1];
+            g[1] = 4.0 * (x[1] + 2.0) + x[0];
+        }),
+        hessian: Some(Box::new(|_, sigma, _, h| {
+            h.copy_from_slice(&[2.0 * sigma, sigma, 4.0 * sigma]);
+        })),
+    };
+    let s = solve(
+        &nlp,
+        &Options {
+            hessian: HessianMode::Exact,
+            ..quiet()
+        },
+    );
+    assert_eq!(s.status, Status::Optimal);
+    assert_eq!(s.iterations, 1);
+    // ∇f = 0 at x = (16/7, −18/7).
+    assert!((s.x[0] - 16.0 / 7.0).abs() < 1e-9 && (s.x[1] + 18.0 / 7.0).abs() < 1e-9);
+    assert_eq!(
+        s.evaluations.derivatives, 2,
+        "the start and the point reached"
+    );
+    assert_eq!(s.evaluations.hessians, 1, "the start's QP only");
+}

@@ -154,17 +154,25 @@ fn add_fan_disk(
     place: impl Fn(f64, usize, f64) -> Point,
     up: Point,
 ) -> Vec<usize> {
-    let mut ids: BTreeMap<(usize, usize), usize> = BTreeMap::new();
+    // The vertex of fan-disk key (k, g) (g < sides·k on level k ≥ 1), levels in order.
+    let slot = |k: usize, g: usize| {
+        if k == 0 {
+            0
+        } else {
+            1 + sides * k * (k - 1) / 2 + g
+        }
+    };
+    let mut ids: Vec<Option<usize>> = vec![None; slot(levels + 1, 0)];
     if let Some(rim) = rim {
         for (g, &v) in rim.iter().enumerate() {
-            ids.insert((levels, g), v);
+            ids[slot(levels, g)] = Some(v);
         }
     }
     let tris: Vec<[usize; 3]> = fan_disk(sides, levels)
         .into_iter()
         .map(|tri| {
             tri.map(|(k, g)| {
-                *ids.entry((k, g)).or_insert_with(|| {
+                *ids[slot(k, g)].get_or_insert_with(|| {
                     let (rho, p, f) = fan_coords(sides, levels, k, g);
                     b.vertex(place(rho, p, f))
                 })
@@ -172,7 +180,9 @@ fn add_fan_disk(
         })
         .collect();
     add_oriented(b, s, tris, up);
-    (0..sides * levels).map(|g| ids[&(levels, g)]).collect()
+    (0..sides * levels)
+        .map(|g| ids[slot(levels, g)].expect("every rim vertex is a fan-disk corner"))
+        .collect()
 }
 
 /// Adds triangles to surface `s`, all flipped if the first one's normal disagrees with `up`.

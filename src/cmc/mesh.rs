@@ -15,7 +15,7 @@
 //! Degenerate input (an index out of range, a repeated vertex in a triangle, a non-finite
 //! coordinate, a zero-area triangle, a vertex in no triangle) is a [`MeshError`], never a panic.
 
-use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use nalgebra::Vector3;
 
@@ -199,10 +199,18 @@ pub struct Mesh {
     surfaces: Vec<String>,
     flags: Vec<VertexFlags>,
     guides: Vec<Guide>,
+    /// Found once from the triangles and shared by the clones (the connectivity never changes
+    /// after [`Mesh::new`]; a clone that moves the vertices copies only the positions).
+    adjacency: Arc<Adjacency>,
+}
+
+/// A mesh's adjacency, a function of its triangles alone.
+#[derive(Debug)]
+struct Adjacency {
     vertex_triangles: Vec<Vec<usize>>,
     neighbours: Vec<Vec<usize>>,
     edges: Vec<Edge>,
-    /// [`Mesh::is_interior_manifold`] of each vertex, found once from the connectivity.
+    /// [`Mesh::is_interior_manifold`] of each vertex.
     interior_manifold: Vec<bool>,
 }
 
@@ -263,26 +271,30 @@ impl Mesh {
             }
         }
         let mut vertex_triangles = vec![Vec::new(); n];
-        let mut edge_map: BTreeMap<[usize; 2], Vec<usize>> = BTreeMap::new();
+        // Each triangle's three edges (sorted vertex pair, triangle), then sorted by the pair
+        // (stably: a pair's triangles stay in index order): the edges in pair order.
+        let mut sides: Vec<([usize; 2], usize)> = Vec::with_capacity(3 * triangles.len());
         for (t, tri) in triangles.iter().enumerate() {
             for k in 0..3 {
                 vertex_triangles[tri[k]].push(t);
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                edge_map.entry([a.min(b), a.max(b)]).or_default().push(t);
+                sides.push(([a.min(b), a.max(b)], t));
             }
         }
         if let Some(v) = vertex_triangles.iter().position(Vec::is_empty) {
             return Err(MeshError::Unused(v));
         }
+        sides.sort_by_key(|&(pair, _)| pair);
         let mut neighbours = vec![Vec::new(); n];
-        let edges: Vec<Edge> = edge_map
-            .into_iter()
-            .map(|(vertices, triangles)| {
+        let edges: Vec<Edge> = sides
+            .chunk_by(|a, b| a.0 == b.0)
+            .map(|group| {
+                let vertices = group[0].0;
                 neighbours[vertices[0]].push(vertices[1]);
                 neighbours[vertices[1]].push(vertices[0]);
                 Edge {
                     vertices,
-                    triangles,
+                    triangles: group.iter().map(|&(_, t)| t).collect(),
                 }
             })
             .collect();
@@ -305,10 +317,12 @@ impl Mesh {
             surfaces,
             flags,
             guides,
-            vertex_triangles,
-            neighbours,
-            edges,
-            interior_manifold,
+            adjacency: Arc::new(Adjacency {
+                vertex_triangles,
+                neighbours,
+                edges,
+                interior_manifold,
+            }),
         };
         mesh.check_areas()?;
         Ok(mesh)
@@ -400,22 +414,23 @@ impl Mesh {
 
     /// The three corner positions of triangle `t`.
     pub fn corners(&self, t: usize) -> [Point; 3] {
-        self.triangles[t].map(|v| self.positions[v])
+        let [a, b, c] = self.triangles[t];
+        [self.positions[a], self.positions[b], self.positions[c]]
     }
 
     /// Triangles containing vertex `v`.
     pub fn vertex_triangles(&self, v: usize) -> &[usize] {
-        &self.vertex_triangles[v]
+        &self.adjacency.vertex_triangles[v]
     }
 
     /// Vertices sharing an edge with `v`, ascending.
     pub fn neighbours(&self, v: usize) -> &[usize] {
-        &self.neighbours[v]
+        &self.adjacency.neighbours[v]
     }
 
     /// All edges, sorted by vertex pair.
     pub fn edges(&self) -> &[Edge] {
-        &self.edges
+        &self.adjacency.edges
     }
 
     /// Every edge's length, ascending, m.
@@ -437,7 +452,7 @@ impl Mesh {
 
     /// The surfaces whose triangles touch vertex `v`, ascending.
     pub fn vertex_surfaces(&self, v: usize) -> Vec<usize> {
-        let mut s: Vec<usize> = self.vertex_triangles[v]
+        let mut s: Vec<usize> = self.adjacency.vertex_triangles[v]
             .iter()
             .map(|&t| self.triangle_surface[t])
             .collect();
@@ -449,7 +464,7 @@ impl Mesh {
     /// Whether the star of `v` is a closed disk: every edge at `v` is shared by exactly two of
     /// its triangles (so `v` is neither on a boundary nor on a junction).
     pub fn is_interior_manifold(&self, v: usize) -> bool {
-        self.interior_manifold[v]
+        self.adjacency.interior_manifold[v]
     }
 
     /// The surface at whose vertex `v` a curvature constraint applies, if any: `v` is not
@@ -460,7 +475,7 @@ impl Mesh {
         if f.fixed || f.excluded || f.guide.is_some() {
             return None;
         }
-        let star = &self.vertex_triangles[v];
+        let star = &self.adjacency.vertex_triangles[v];
         let s = self.triangle_surface[*star.first()?];
         (star.iter().all(|&t| self.triangle_surface[t] == s) && self.is_interior_manifold(v))
             .then_some(s)
@@ -469,7 +484,7 @@ impl Mesh {
     /// Vertices on junction edges (edges shared by three or more triangles).
     pub fn junction_vertices(&self) -> Vec<usize> {
         let mut v: Vec<usize> = self
-            .edges
+            .edges()
             .iter()
             .filter(|e| e.triangles.len() >= 3)
             .flat_map(|e| e.vertices)
@@ -482,7 +497,7 @@ impl Mesh {
     /// Marks every vertex on a boundary edge (an edge of exactly one triangle) as fixed.
     pub fn fix_boundary(&mut self) {
         let boundary: Vec<usize> = self
-            .edges
+            .edges()
             .iter()
             .filter(|e| e.triangles.len() == 1)
             .flat_map(|e| e.vertices)

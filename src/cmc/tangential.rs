@@ -124,8 +124,8 @@ pub fn relax(
         .collect();
     let star = Star::new(mesh, terms, surface_pressure, weight);
     let mut pos = mesh.positions().to_vec();
-    let mut scratch = Scratch::default();
-    let before = star.total(&pos);
+    let mut scratch = star.scratch(&pos);
+    let before = star.total_with(&pos, &scratch);
     let mut relaxation = Relaxation {
         sweeps: 0,
         last_move: 0.0,
@@ -141,7 +141,7 @@ pub fn relax(
             break;
         }
     }
-    relaxation.energy.1 = star.total(&pos);
+    relaxation.energy.1 = star.total_with(&pos, &scratch);
     (pos, relaxation)
 }
 
@@ -171,11 +171,16 @@ pub fn over_relaxed(
     (unturned && star.total(&over) < energy_start).then_some(over)
 }
 
-/// Per-vertex work space of [`Star::step`]: the area vectors of the vertex's triangles and the
-/// offsets `x − mean of ring` of its smoothing terms at the step's start.
-#[derive(Default)]
+/// Work space of [`Star::step`]: every triangle's area vector and `A_t − p_s V_t` at the
+/// current positions (updated as a vertex moves: a triangle is evaluated once per move of one
+/// of its corners, not once per visit of each corner), the same of the moving vertex's
+/// triangles at its trial position (in [`Mesh::vertex_triangles`] order), and the offsets
+/// `x − mean of ring` of its smoothing terms at the step's start.
 struct Scratch {
     vectors: Vec<Point>,
+    energies: Vec<f64>,
+    trial_vectors: Vec<Point>,
+    trial_energies: Vec<f64>,
     offsets: Vec<Point>,
 }
 
@@ -219,8 +224,27 @@ impl<'a> Star<'a> {
         }
     }
 
+    /// The work space of [`Star::step`] for the positions `pos`.
+    fn scratch(&self, pos: &[Point]) -> Scratch {
+        let (vectors, energies) = (0..self.mesh.triangles().len())
+            .map(|t| {
+                let c = corners(self.mesh, pos, t);
+                let vector = area_vector(&c);
+                (vector, self.area_less_work(&c, t, vector))
+            })
+            .unzip();
+        Scratch {
+            vectors,
+            energies,
+            trial_vectors: Vec::new(),
+            trial_energies: Vec::new(),
+            offsets: Vec::new(),
+        }
+    }
+
     /// Moves vertex `v` by its damped Newton step, in the plane ⊥ `normal` when given;
-    /// returns the move, m.
+    /// returns the move, m. `scratch` ([`Star::scratch`]) holds the triangles at `pos` and
+    /// is kept so.
     fn step(
         &self,
         pos: &mut [Point],
@@ -246,6 +270,10 @@ impl<'a> Star<'a> {
                 .unturned_share(pos, v, step, scratch)
                 .is_some_and(|share| share < old_share)
             {
+                for (k, &t) in self.mesh.vertex_triangles(v).iter().enumerate() {
+                    scratch.vectors[t] = scratch.trial_vectors[k];
+                    scratch.energies[t] = scratch.trial_energies[k];
+                }
                 return step.norm();
             }
             step *= 0.5;
@@ -254,25 +282,30 @@ impl<'a> Star<'a> {
         0.0
     }
 
-    /// The share of `v` ([`Star::share`]) after it moved by `step` when no triangle around `v`
-    /// has turned over against its area vector in `scratch` (in [`Mesh::vertex_triangles`]
-    /// order), else None. A term's offset is linear in `x_v`: `o + c·step` from its offset `o`
-    /// at the start in `scratch`.
+    /// The share of `v` (the terms of E that depend on `x_v`) after it moved by `step` when no triangle around `v`
+    /// has turned over against its area vector in `scratch` (before the move), else None; the
+    /// triangles' area vectors and energies there become `scratch`'s trial ones. A term's
+    /// offset is linear in `x_v`: `o + c·step` from its offset `o` at the start in `scratch`.
     fn unturned_share(
         &self,
         pos: &[Point],
         v: usize,
         step: Point,
-        scratch: &Scratch,
+        scratch: &mut Scratch,
     ) -> Option<f64> {
         let mut triangles = 0.0;
-        for (&t, old) in self.mesh.vertex_triangles(v).iter().zip(&scratch.vectors) {
+        scratch.trial_vectors.clear();
+        scratch.trial_energies.clear();
+        for &t in self.mesh.vertex_triangles(v) {
             let c = corners(self.mesh, pos, t);
             let vector = area_vector(&c);
-            if vector.dot(old) <= 0.0 {
+            if vector.dot(&scratch.vectors[t]) <= 0.0 {
                 return None;
             }
-            triangles += self.area_less_work(&c, t, vector);
+            let energy = self.area_less_work(&c, t, vector);
+            scratch.trial_vectors.push(vector);
+            scratch.trial_energies.push(energy);
+            triangles += energy;
         }
         let terms: f64 = self.terms_of[v]
             .iter()
@@ -290,9 +323,13 @@ impl<'a> Star<'a> {
         self.area_less_work(&c, t, area_vector(&c))
     }
 
-    /// `A_t − p_s V_t` of triangle t with corners `c` and area vector `vector` (m²).
+    /// `A_t − p_s V_t` of triangle t with corners `c` and area vector `vector` (m²); no cone
+    /// volume where `p_s = 0` (the same value: `a − 0·V = a`).
     fn area_less_work(&self, c: &[Point; 3], t: usize, vector: Point) -> f64 {
         let p = self.surface_pressure[self.mesh.triangle_surface()[t]];
+        if p == 0.0 {
+            return vector.norm();
+        }
         vector.norm() - p * cone_volume(c, &Point::zeros())
     }
 
@@ -328,8 +365,8 @@ impl<'a> Star<'a> {
     }
 
     /// Gradient (m) and diagonal Hessian block (dimensionless) of the share w.r.t. `x_v`, and
-    /// the share (m²); `scratch` becomes the area vectors of the triangles around `v` and the
-    /// offsets of its terms.
+    /// the share (m²), from the triangles in `scratch` ([`Star::scratch`] at `pos`); `scratch`'s
+    /// offsets become those of the terms of `v`.
     fn derivatives(
         &self,
         pos: &[Point],
@@ -339,18 +376,21 @@ impl<'a> Star<'a> {
         let mut gradient = Point::zeros();
         let mut hessian = Matrix3::zeros();
         let mut triangles = 0.0;
-        scratch.vectors.clear();
         for &t in self.mesh.vertex_triangles(v) {
             let c = corners(self.mesh, pos, t);
-            let vector = area_vector(&c);
-            scratch.vectors.push(vector);
-            triangles += self.area_less_work(&c, t, vector);
+            let vector = scratch.vectors[t];
+            triangles += scratch.energies[t];
             let p = self.surface_pressure[self.mesh.triangle_surface()[t]];
             let Some(k) = self.mesh.triangles()[t].iter().position(|&u| u == v) else {
                 continue;
             };
             let (area_gradient, area_hessian) = triangle_area_corner_derivatives(&c, &vector, k);
-            gradient += area_gradient - p * cone_volume_corner_gradient(&c, &Point::zeros(), k);
+            // No cone-volume gradient where p = 0 (the same sum: adding −0·g adds ±0).
+            gradient += if p == 0.0 {
+                area_gradient
+            } else {
+                area_gradient - p * cone_volume_corner_gradient(&c, &Point::zeros(), k)
+            };
             hessian += area_hessian;
         }
         scratch.offsets.clear();
@@ -376,16 +416,28 @@ impl<'a> Star<'a> {
         let triangles: f64 = (0..self.mesh.triangles().len())
             .map(|t| self.triangle_energy(pos, t))
             .sum();
-        let terms: f64 = (0..self.terms.len())
+        triangles + self.terms_total(pos)
+    }
+
+    /// [`Star::total`] with the triangles' energies from `scratch` ([`Star::scratch`] at
+    /// `pos`), m².
+    fn total_with(&self, pos: &[Point], scratch: &Scratch) -> f64 {
+        let triangles: f64 = scratch.energies.iter().sum();
+        triangles + self.terms_total(pos)
+    }
+
+    /// The smoothing terms' part of E at `pos`, m².
+    fn terms_total(&self, pos: &[Point]) -> f64 {
+        (0..self.terms.len())
             .map(|k| self.term_energy(pos, k))
-            .sum();
-        triangles + terms
+            .sum()
     }
 }
 
 /// The corners of triangle `t` at `pos`.
 fn corners(mesh: &Mesh, pos: &[Point], t: usize) -> [Point; 3] {
-    mesh.triangles()[t].map(|v| pos[v])
+    let [a, b, c] = mesh.triangles()[t];
+    [pos[a], pos[b], pos[c]]
 }
 
 /// Unit area-weighted normal at a vertex (zero vector if it vanishes).
@@ -494,15 +546,15 @@ mod tests {
         let h = 1e-6;
         let mut pos = mesh.positions().to_vec();
         for v in (0..n).step_by(5) {
-            let mut scratch = Scratch::default();
+            let mut scratch = star.scratch(&pos);
             let (gradient, hessian, share) = star.derivatives(&pos, v, &mut scratch);
             assert_eq!(share, star.share(&pos, v));
-            assert_eq!(scratch.vectors.len(), mesh.vertex_triangles(v).len());
             let centre = pos[v];
             // The trial share from the start's offsets matches the share at the moved vertex.
             let step = Point::new(1e-5, -2e-5, 5e-6);
             pos[v] = centre + step;
-            let trial = star.unturned_share(&pos, v, step, &scratch);
+            let trial = star.unturned_share(&pos, v, step, &mut scratch);
+            assert_eq!(scratch.trial_energies.len(), mesh.vertex_triangles(v).len());
             let moved = star.share(&pos, v);
             pos[v] = centre;
             assert!(
@@ -513,12 +565,12 @@ mod tests {
                 pos[v][a] = centre[a] + h;
                 let (plus, g_plus) = (
                     star.share(&pos, v),
-                    star.derivatives(&pos, v, &mut Scratch::default()).0,
+                    star.derivatives(&pos, v, &mut star.scratch(&pos)).0,
                 );
                 pos[v][a] = centre[a] - h;
                 let (minus, g_minus) = (
                     star.share(&pos, v),
-                    star.derivatives(&pos, v, &mut Scratch::default()).0,
+                    star.derivatives(&pos, v, &mut star.scratch(&pos)).0,
                 );
                 pos[v][a] = centre[a];
                 let slope = (plus - minus) / (2.0 * h);

@@ -207,6 +207,15 @@ pub enum Shape {
         /// Centre (m).
         center: [f64; 3],
     },
+    /// Right circular cone from its apex to the centre of its flat base.
+    Cone {
+        /// Base radius (m).
+        radius: f64,
+        /// Apex (m).
+        apex: [f64; 3],
+        /// Centre of the base (m).
+        base: [f64; 3],
+    },
 }
 
 /// One rigid link and the joint attaching it to its parent.
@@ -529,7 +538,9 @@ impl Model {
 }
 
 /// Rotational inertia about the centre of mass of a uniform solid shape of mass `m` (kg·m²),
-/// in link axes; capsules are treated as solid cylinders of the capsule's full length.
+/// in link axes; capsules are treated as solid cylinders of the capsule's full length. A solid
+/// cone of base radius `r` and height `h` about its centroid: `3/10·m·r²` about its axis,
+/// `3/80·m·(4r² + h²)` across it.
 pub fn shape_inertia(shape: &Shape, m: f64) -> [[f64; 3]; 3] {
     match shape {
         Shape::Box {
@@ -541,25 +552,40 @@ pub fn shape_inertia(shape: &Shape, m: f64) -> [[f64; 3]; 3] {
         ]),
         Shape::Sphere { radius, .. } => diag([0.4 * m * radius * radius; 3]),
         Shape::Capsule { radius, from, to } => {
-            let d = [to[0] - from[0], to[1] - from[1], to[2] - from[2]];
-            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let len = distance(from, to);
             let along = 0.5 * m * radius * radius;
             let across = m * (3.0 * radius * radius + len * len) / 12.0;
-            // I = across·1 + (along − across)·uuᵀ with u the unit axis.
-            let u = if len > 0.0 {
-                d.map(|x| x / len)
-            } else {
-                [0.0, 1.0, 0.0]
-            };
-            let mut i = diag([across; 3]);
-            for r in 0..3 {
-                for s in 0..3 {
-                    i[r][s] += (along - across) * u[r] * u[s];
-                }
-            }
-            i
+            axial_inertia(from, to, along, across)
+        }
+        Shape::Cone { radius, apex, base } => {
+            let h = distance(apex, base);
+            let along = 0.3 * m * radius * radius;
+            let across = 3.0 * m * (4.0 * radius * radius + h * h) / 80.0;
+            axial_inertia(apex, base, along, across)
         }
     }
+}
+
+fn distance(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    (0..3).map(|k| (b[k] - a[k]).powi(2)).sum::<f64>().sqrt()
+}
+
+/// `I = across·1 + (along − across)·uuᵀ` with `u` the unit axis from `a` to `b` (y when they
+/// coincide): a body of revolution's inertia with moments `along` and `across` its axis.
+fn axial_inertia(a: &[f64; 3], b: &[f64; 3], along: f64, across: f64) -> [[f64; 3]; 3] {
+    let len = distance(a, b);
+    let u = if len > 0.0 {
+        [0, 1, 2].map(|k| (b[k] - a[k]) / len)
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let mut i = diag([across; 3]);
+    for r in 0..3 {
+        for s in 0..3 {
+            i[r][s] += (along - across) * u[r] * u[s];
+        }
+    }
+    i
 }
 
 /// The centre of a shape (m, link coordinates).
@@ -567,6 +593,8 @@ pub fn shape_center(shape: &Shape) -> [f64; 3] {
     match shape {
         Shape::Box { center, .. } | Shape::Sphere { center, .. } => *center,
         Shape::Capsule { from, to, .. } => [0, 1, 2].map(|k| 0.5 * (from[k] + to[k])),
+        // The centroid, a quarter of the height up from the base.
+        Shape::Cone { apex, base, .. } => [0, 1, 2].map(|k| 0.25 * apex[k] + 0.75 * base[k]),
     }
 }
 

@@ -117,6 +117,9 @@ fn shape_mesh(shape: &Shape) -> Mesh {
             shapes::capsule(f32s(from), f32s(to), radius as f32, 16)
         }
         Shape::Sphere { radius, center } => shapes::sphere(f32s(center), radius as f32, 16),
+        Shape::Cone { radius, apex, base } => {
+            shapes::cone(f32s(apex), f32s(base), radius as f32, 16)
+        }
     }
 }
 
@@ -215,6 +218,21 @@ fn outline(shape: &Shape, x: &Xform<f64>) -> Vec<[f64; 2]> {
                 ])
             })
             .collect(),
+        Shape::Cone { radius, apex, base } => {
+            // The triangle of apex and base rim, in the link's x–y plane.
+            let d = [base[0] - apex[0], base[1] - apex[1]];
+            let len = d[0].hypot(d[1]);
+            let n = if len > 1e-12 {
+                [-d[1] / len, d[0] / len]
+            } else {
+                [0.0, 1.0]
+            };
+            vec![
+                at(apex),
+                at([base[0] + radius * n[0], base[1] + radius * n[1], base[2]]),
+                at([base[0] - radius * n[0], base[1] - radius * n[1], base[2]]),
+            ]
+        }
     }
 }
 

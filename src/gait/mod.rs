@@ -22,6 +22,7 @@ pub mod export;
 pub mod feasibility;
 pub mod formulation;
 pub mod global;
+pub mod penetration;
 pub mod reduced;
 pub mod restart;
 pub mod shaping;
@@ -313,7 +314,8 @@ fn status_sentence(status: Status, best: trials::TrialStatus) -> &'static str {
         }
         _ => {
             "Not converged: the best motion violates a pose constraint by more than 10× the \
-             file's tolerance; the best point is returned."
+             file's tolerance, or its drawn body passes through the ground; the best point is \
+             returned."
         }
     }
 }
@@ -346,6 +348,8 @@ mod tests {
             start: None,
             end: Some(end),
             fine: None,
+            depth: None,
+            fine_depth: None,
             downgrade: None,
             status,
             solver_status,

@@ -285,6 +285,17 @@ pub enum ShapeSpec {
         #[serde(default, deserialize_with = "crate::spec::arrays::exact")]
         center: [f64; 3],
     },
+    /// A solid right circular cone of base `radius` (m) from its `apex` to its `base` centre (m).
+    Cone {
+        /// Base radius (m).
+        radius: f64,
+        /// Apex (m).
+        #[serde(deserialize_with = "crate::spec::arrays::exact")]
+        apex: [f64; 3],
+        /// Centre of the base (m).
+        #[serde(deserialize_with = "crate::spec::arrays::exact")]
+        base: [f64; 3],
+    },
 }
 
 /// Joint type.
@@ -1372,6 +1383,7 @@ fn build_shape(s: &ShapeSpec) -> Result<Shape, String> {
         ShapeSpec::Box { size, center } => Shape::Box { size, center },
         ShapeSpec::Capsule { radius, from, to } => Shape::Capsule { radius, from, to },
         ShapeSpec::Sphere { radius, center } => Shape::Sphere { radius, center },
+        ShapeSpec::Cone { radius, apex, base } => Shape::Cone { radius, apex, base },
     };
     let ok = match shape {
         Shape::Box { size, center } => {
@@ -1383,11 +1395,18 @@ fn build_shape(s: &ShapeSpec) -> Result<Shape, String> {
         Shape::Sphere { radius, center } => {
             radius > 0.0 && radius.is_finite() && finite_all(&center)
         }
+        Shape::Cone { radius, apex, base } => {
+            radius > 0.0
+                && radius.is_finite()
+                && finite_all(&apex)
+                && finite_all(&base)
+                && apex != base
+        }
     };
     if ok {
         Ok(shape)
     } else {
-        Err("shape sizes must be positive and coordinates finite".into())
+        Err("shape sizes must be positive, coordinates finite and a cone's apex apart from its base".into())
     }
 }
 
@@ -1903,6 +1922,26 @@ min = 0.1
         assert_eq!(times, vec![0.2, 0.5]);
     }
 
+    /// A cone's centre of mass is 3/4 of the way from apex to base; its inertia is the solid
+    /// cone's: 3/10·m·r² along the axis, 3/80·m·(4r² + h²) across it.
+    #[test]
+    fn a_cone_link_has_the_solid_cones_mass_properties() {
+        let text = BASE.replacen(
+            "shape = { type = \"capsule\", radius = 0.02, from = [0, 0, 0], to = [0.3, 0, 0] }",
+            "shape = { type = \"cone\", radius = 0.02, apex = [0, 0, 0], base = [0.3, 0, 0] }",
+            1,
+        );
+        let p = load(&text).unwrap();
+        let arm = &p.model.links[1].inertia;
+        assert!((arm.com.0[0] - 0.225).abs() < 1e-15 && arm.com.0[1] == 0.0);
+        let i = arm.inertia_com.0;
+        let (m, r, h) = (0.5, 0.02, 0.3);
+        assert!((i[0][0] - 0.3 * m * r * r).abs() < 1e-15);
+        let across = 3.0 * m * (4.0 * r * r + h * h) / 80.0;
+        assert!((i[1][1] - across).abs() < 1e-15 && (i[2][2] - across).abs() < 1e-15);
+        assert_eq!(i[0][1], 0.0);
+    }
+
     #[test]
     fn errors_point_at_the_key() {
         let cases = [
@@ -1915,6 +1954,11 @@ min = 0.1
             ),
             ("time = 0.5", "time = 0.5004", "multiple of dt"),
             ("min = 0.1", "mni = 0.1", "did you mean `min`"),
+            (
+                "shape = { type = \"capsule\", radius = 0.02, from = [0, 0, 0], to = [0.3, 0, 0] }",
+                "shape = { type = \"cone\", radius = 0.02, apex = [0, 0, 0], base = [0, 0, 0] }",
+                "a cone's apex apart from its base",
+            ),
             (
                 "limits = [-1.0, 1.0]",
                 "limits = [1.0, -1.0]",

@@ -44,6 +44,11 @@
 //! - Unimproved: otherwise, if the violation sum did not fall below 99.9% of the start's;
 //! - Failure: otherwise.
 //!
+//! A Success or Marginal is then confirmed at `dt/4` ([`crate::gait::step_check`]) and on its
+//! drawn body: if any link's shape passes more than [`crate::gait::penetration::DEPTH_TOLERANCE`]
+//! deeper below the ground than the contact points at `dt` or `dt/4`, the trial is a Failure
+//! ([`crate::gait::penetration`]).
+//!
 //! Cost is `∫ΣF²dt` (N²·s, seed eq. 3.1).
 
 use std::fmt::Write as _;
@@ -58,6 +63,7 @@ use super::continuation::stage_problems;
 use super::feasibility::{Feasibility, FeasibilitySettings, restore};
 use super::formulation::Formulation;
 use super::global::{GlobalReport, search};
+use super::penetration::{Penetration, judge};
 use super::shaping::shape;
 use super::spec::{Problem, StartKind};
 use super::step_check::confirm;
@@ -146,7 +152,12 @@ pub struct TrialResult {
     /// The final motion's assessment at `dt/4` ([`crate::gait::step_check`]); `None` unless
     /// the trial is a Success or Marginal at `dt`.
     pub fine: Option<Assessment>,
-    /// Why the class at `dt` fell at `dt/4`, when it did.
+    /// The drawn shapes' deepest point below the ground at `dt` ([`crate::gait::penetration`]);
+    /// `None` if the rollout failed.
+    pub depth: Option<Penetration>,
+    /// The same at `dt/4`.
+    pub fine_depth: Option<Penetration>,
+    /// Why the class at `dt` fell at `dt/4` or by the drawn shapes' depth, when it did.
     pub downgrade: Option<String>,
     /// Classification (confirmed at `dt/4`).
     pub status: TrialStatus,
@@ -627,6 +638,11 @@ pub(super) fn finish(
         classify(start.as_ref(), end.as_ref(), tol),
         tol,
     );
+    let depth = judge(problem, &x, check.status);
+    let downgrade = match (check.downgrade, depth.downgrade) {
+        (Some(a), Some(b)) => Some(format!("{a}; {b}")),
+        (a, b) => a.or(b),
+    };
     TrialResult {
         trial,
         origin: String::new(),
@@ -635,8 +651,10 @@ pub(super) fn finish(
         start,
         end,
         fine: check.fine,
-        downgrade: check.downgrade,
-        status: check.status,
+        depth: depth.coarse,
+        fine_depth: depth.fine,
+        downgrade,
+        status: depth.status,
         solver_status: solution.status,
         iterations,
         seconds: clock.elapsed().as_secs_f64(),
@@ -873,14 +891,32 @@ fn max_text(a: Option<&Assessment>) -> String {
     a.map_or("-".to_string(), |a| format!("{:.2e}", a.max()))
 }
 
+/// The drawn shapes' deepest point below the ground as table text in mm ("-" when the rollout
+/// failed).
+fn depth_text(p: Option<&Penetration>) -> String {
+    p.map_or("-".to_string(), |p| format!("{:.2}", 1e3 * p.deepest.depth))
+}
+
+/// The larger excess of the shapes' depth over the contact points' at `dt` and `dt/4` as table
+/// text in mm ([`crate::gait::penetration`]; "-" when neither rollout ran).
+fn excess_text(r: &TrialResult) -> String {
+    [r.depth, r.fine_depth]
+        .iter()
+        .flatten()
+        .map(|p| p.excess.depth)
+        .reduce(f64::max)
+        .map_or("-".to_string(), |d| format!("{:.2}", 1e3 * d))
+}
+
 /// The table of the seed's Table 3.7 as text, with the largest violation at the file's step
-/// and at `dt/4` ([`crate::gait::step_check`]), followed by the reason of every class that fell
-/// at `dt/4`.
+/// and at `dt/4` ([`crate::gait::step_check`]), the drawn shapes' deepest point below the
+/// ground at both and its largest excess over the contact points' ([`crate::gait::penetration`],
+/// mm), followed by the reason of every class that fell at `dt/4` or by that excess.
 pub fn table(results: &[TrialResult], tol: f64) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:>5}  {:<14}  {:>12}  {:>8}  {:>12}  {:>9}  {:>9}  {:>8}  {:>8}  {:>5}  {:<10}  solver",
+        "{:>5}  {:<14}  {:>12}  {:>8}  {:>12}  {:>9}  {:>9}  {:>8}  {:>8}  {:>9}  {:>8}  {:>8}  {:>5}  {:<10}  solver",
         "trial",
         "start",
         "cost N²s",
@@ -888,6 +924,9 @@ pub fn table(results: &[TrialResult], tol: f64) -> String {
         "sum viol.",
         "max dt",
         "max dt/4",
+        "depth mm",
+        "dt/4 mm",
+        "beyond mm",
         "global s",
         "time s",
         "iter",
@@ -900,7 +939,7 @@ pub fn table(results: &[TrialResult], tol: f64) -> String {
             .map_or("-".to_string(), |a| a.violated(tol).to_string());
         let _ = writeln!(
             s,
-            "{:>5}  {:<14}  {:>12.4}  {:>8}  {:>12.3e}  {:>9}  {:>9}  {:>8}  {:>8.2}  {:>5}  {:<10}  {:?}",
+            "{:>5}  {:<14}  {:>12.4}  {:>8}  {:>12.3e}  {:>9}  {:>9}  {:>8}  {:>8}  {:>9}  {:>8}  {:>8.2}  {:>5}  {:<10}  {:?}",
             r.trial,
             r.origin,
             r.cost(),
@@ -908,6 +947,9 @@ pub fn table(results: &[TrialResult], tol: f64) -> String {
             r.violation_sum(),
             max_text(r.end.as_ref()),
             max_text(r.fine.as_ref()),
+            depth_text(r.depth.as_ref()),
+            depth_text(r.fine_depth.as_ref()),
+            excess_text(r),
             r.global
                 .as_ref()
                 .map_or("-".to_string(), |g| format!("{:.2}", g.seconds)),
@@ -939,6 +981,8 @@ pub fn table_json(results: &[TrialResult], tol: f64) -> serde_json::Value {
                     "violation_sum": r.violation_sum(),
                     "max_violation": r.end.as_ref().map(|a| a.max()),
                     "max_violation_quarter_step": r.fine.as_ref().map(|a| a.max()),
+                    "depth": r.depth,
+                    "depth_quarter_step": r.fine_depth,
                     "downgrade": r.downgrade,
                     "global": r.global.as_ref().map(|g| serde_json::json!({
                         "seconds": g.seconds,

@@ -27,21 +27,38 @@ fn frame(axis: V3) -> (V3, V3) {
 /// Degenerate input (a = b) gives a sphere of radius `r` at `a`, so zero-length beams still show.
 pub fn cylinder(a: [f32; 3], b: [f32; 3], r: f32, segments: usize) -> Mesh {
     let (pa, pb) = (V3::from(a), V3::from(b));
-    let axis = pb - pa;
-    if axis.norm() <= f32::EPSILON * (1.0 + pa.norm()) {
+    if (pb - pa).norm() <= f32::EPSILON * (1.0 + pa.norm()) {
         return sphere(a, r, segments.max(6));
     }
-    let axis = axis.normalize();
+    frustum(pa, pb, [r, r], segments)
+}
+
+/// A solid cone with its apex at `apex` and a flat base of radius `r` centred at `base`, with
+/// `segments` facets around; `apex` and `base` must differ.
+pub fn cone(apex: [f32; 3], base: [f32; 3], r: f32, segments: usize) -> Mesh {
+    frustum(V3::from(apex), V3::from(base), [0.0, r], segments)
+}
+
+/// A closed frustum from `pa` (radius `r[0]`) to `pb` (radius `r[1]`), `pa ≠ pb`: the side
+/// with normals perpendicular to its slant, and a flat cap on each end of nonzero radius.
+fn frustum(pa: V3, pb: V3, r: [f32; 2], segments: usize) -> Mesh {
+    let length = (pb - pa).norm();
+    let axis = (pb - pa).normalize();
     let (u, v) = frame(axis);
     let s = segments.max(3);
     let mut mesh = Mesh::default();
-    // Side: two rings with radial normals.
-    for end in [pa, pb] {
+    // Side: two rings with normals across the slant (radial on a cylinder).
+    for (end, radius) in [(pa, r[0]), (pb, r[1])] {
         for k in 0..s {
             let t = TAU * k as f32 / s as f32;
             let radial = u * t.cos() + v * t.sin();
-            mesh.positions.push(arr(end + radial * r));
-            mesh.normals.push(arr(radial));
+            mesh.positions.push(arr(end + radial * radius));
+            let normal = if r[0] == r[1] {
+                radial
+            } else {
+                (radial * length - axis * (r[1] - r[0])).normalize()
+            };
+            mesh.normals.push(arr(normal));
         }
     }
     for k in 0..s {
@@ -51,14 +68,17 @@ pub fn cylinder(a: [f32; 3], b: [f32; 3], r: f32, segments: usize) -> Mesh {
             .extend_from_slice(&[k0, k1, s + k1, k0, s + k1, s + k0]);
     }
     // Caps: a centre vertex and a ring with axial normals.
-    for (end, normal) in [(pa, -axis), (pb, axis)] {
+    for (end, normal, radius) in [(pa, -axis, r[0]), (pb, axis, r[1])] {
+        if radius == 0.0 {
+            continue;
+        }
         let centre = mesh.positions.len() as u32;
         mesh.positions.push(arr(end));
         mesh.normals.push(arr(normal));
         for k in 0..s {
             let t = TAU * k as f32 / s as f32;
             mesh.positions
-                .push(arr(end + (u * t.cos() + v * t.sin()) * r));
+                .push(arr(end + (u * t.cos() + v * t.sin()) * radius));
             mesh.normals.push(arr(normal));
         }
         for k in 0..s as u32 {
@@ -231,6 +251,15 @@ mod tests {
         );
         let cube = cuboid([0.5; 3], [1.0, 2.0, 3.0]);
         assert!((volume(&cube) - 48.0).abs() < 1e-4, "{}", volume(&cube));
+        // πr²h/3, either way up.
+        for (apex, base) in [
+            ([0.0; 3], [0.0, 0.0, 3.0]),
+            ([1.0, 3.0, 0.0], [1.0, 0.0, 0.0]),
+        ] {
+            let c = cone(apex, base, 1.0, 64);
+            let exact = PI;
+            assert!((volume(&c) - exact).abs() < 0.01 * exact, "{}", volume(&c));
+        }
     }
 
     #[test]
@@ -238,6 +267,7 @@ mod tests {
         for m in [
             cylinder([0.0; 3], [1.0, 1.0, 1.0], 0.2, 8),
             capsule([0.0; 3], [0.0, 1.0, 0.0], 0.1, 8),
+            cone([0.0; 3], [0.14, 0.0, 0.0], 0.04, 8),
         ] {
             assert_eq!(m.positions.len(), m.normals.len());
             assert!(

@@ -201,17 +201,29 @@ impl<'a> Evaluator<'a> {
         {
             return d.clone();
         }
-        let result = self.raw_derivatives(x).map(|mut d| {
-            for g in &mut d.grad {
-                *g *= self.scale_f;
-            }
-            for (k, v) in d.jac.iter_mut().enumerate() {
-                *v *= self.scale_c[self.jac_rows[k]];
-            }
-            d
-        });
+        let result = self.raw_derivatives(x).map(|d| self.scaled(d));
         self.cache_derivatives = Some((x.to_vec(), result.clone()));
         result
+    }
+
+    /// Scaled first derivatives at x from the unscaled ones `raw` at x (cached, as from
+    /// [`Self::derivatives`]): the evaluation that chose the scales ([`Self::set_scaling`])
+    /// serves the start's scaled derivatives too, with no second evaluation.
+    pub fn seed_derivatives(&mut self, x: &[f64], raw: Derivatives) -> Derivatives {
+        let scaled = self.scaled(raw);
+        self.cache_derivatives = Some((x.to_vec(), Ok(scaled.clone())));
+        scaled
+    }
+
+    /// `d` scaled: the gradient by `scale_f`, each Jacobian entry by its row's scale.
+    fn scaled(&self, mut d: Derivatives) -> Derivatives {
+        for g in &mut d.grad {
+            *g *= self.scale_f;
+        }
+        for (k, v) in d.jac.iter_mut().enumerate() {
+            *v *= self.scale_c[self.jac_rows[k]];
+        }
+        d
     }
 
     /// Values of the scaled Lagrangian Hessian `s_f∇²f + Σ λ̃ᵢ sᵢ ∇²cᵢ` (pattern order).

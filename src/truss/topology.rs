@@ -378,7 +378,7 @@ fn remove_crossings(joints: &[Joint], beams: BeamForces) -> BeamForces {
 }
 
 /// Step 4: removes dangling free joints (at most one beam) with their beam until none is
-/// left, then, when merging, one tension run at a time ([`merge_tension_run`]) while that
+/// left, then, when merging, one tension run at a time ([`merge_straight_run`]) while that
 /// leaves none dangling; `alive` marks the joints that remain.
 fn remove_dangling(
     joints: &[Joint],

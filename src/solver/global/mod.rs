@@ -4,7 +4,7 @@
 //!
 //! - [`anneal`]: ASA-style simulated annealing; returns the best state as a [`Solution`]
 //!   (never `Optimal`: annealing proves nothing) plus [`AnnealStats`].
-//! - [`multistart`] / [`multistart_with`]: local solves from the problem's start and K
+//! - [`multistart()`] / [`multistart_with`]: local solves from the problem's start and K
 //!   perturbed or annealed starts, in parallel, keeping the best feasible result.
 //! - [`optimize`]: dispatches a [`GlobalMethod`] (what a `[global]` table asks for).
 //!

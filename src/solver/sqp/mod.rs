@@ -155,6 +155,9 @@ struct Sqp<'a> {
     endgame: bool,
     /// A Newton step on the active set failed its line search at the current point.
     endgame_refused: bool,
+    /// The exact Hessian at the current point is still to be evaluated (see
+    /// `update_model`): before the next QP, unless the solve ends on arrival.
+    hessian_due: bool,
 }
 
 /// What an iteration decided; the loop acts on nothing else.
@@ -244,6 +247,7 @@ fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
         newton_base: None,
         endgame: false,
         endgame_refused: false,
+        hessian_due: false,
     };
     sqp.run()
 }
@@ -284,12 +288,19 @@ impl Sqp<'_> {
         };
         loop {
             let jac = self.jacobian(&state.point.derivatives.jac);
-            if let Some(lambda) = state.arrival_multipliers.take() {
-                let (kkt, _) = self.kkt(&state.point, &jac, &lambda);
+            let arrival = state.arrival_multipliers.take();
+            if let Some(lambda) = &arrival {
+                let (kkt, _) = self.kkt(&state.point, &jac, lambda);
                 if self.converged(kkt) {
                     self.record(&state, kkt);
-                    return self.finish(Status::Optimal, &state.point, Some(&lambda));
+                    return self.finish(Status::Optimal, &state.point, Some(lambda));
                 }
+            }
+            if std::mem::take(&mut self.hessian_due)
+                && let Err(e) = self.update_exact(&state.point)
+            {
+                let status = self.eval_status(&e);
+                return self.finish(status, &state.point, arrival.as_deref());
             }
             let step = self.choose_step(&state.point, &jac);
             self.watch_exact_weights(&mut state);

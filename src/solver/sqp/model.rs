@@ -106,11 +106,13 @@ impl Sqp<'_> {
         Ok(())
     }
 
-    /// Quasi-Newton update with the step `prev → next` at the new multipliers, or the exact
-    /// Hessian at `next`.
+    /// Quasi-Newton update with the step `prev → next` at the new multipliers; the exact
+    /// Hessian at `next` is left due (`hessian_due`: evaluated when the next iteration's QP
+    /// needs it, not when the solve ends on arrival there).
     pub(super) fn update_model(&mut self, prev: &Point, next: &Point) -> Result<(), EvalError> {
         if !self.model.is_quasi_newton() {
-            return self.update_exact(next);
+            self.hessian_due = true;
+            return Ok(());
         }
         let s: Vec<f64> = next.x.iter().zip(&prev.x).map(|(a, b)| a - b).collect();
         let gl_next = self.lagrangian_gradient(next);

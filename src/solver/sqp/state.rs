@@ -238,10 +238,7 @@ impl Sqp<'_> {
             .ev
             .values(&x)
             .map_err(|_| (Status::EvaluationError, x.clone()))?;
-        let derivatives = self
-            .ev
-            .derivatives(&x)
-            .map_err(|_| (Status::EvaluationError, x.clone()))?;
+        let derivatives = self.ev.seed_derivatives(&x, raw);
         Ok(Point {
             x,
             values,
