@@ -126,6 +126,12 @@ settings! {
     progress_window: usize = 0;
     /// See `progress_window`; in (0, 1).
     progress_tolerance: f64 = 1e-3, valid: open_unit_interval;
+    /// With `progress_window` on: feasible iterations per stretch of a second creep test. The
+    /// solve also ends `SlowProgress` when the objective's decrease over the last stretch is at
+    /// most half its decrease over the stretch before and at most `progress_tolerance`
+    /// (relative): decreases shrinking by ½ or faster per stretch have less than the last one
+    /// left to gain, so the window need not wait. 0 (the default) turns it off.
+    progress_stretch: usize = 0;
     /// Wall-clock limit for one solve in seconds (positive); `None`: unlimited.
     max_time: Option<f64> = None, valid: positive_seconds;
     /// Second-order information (see [`HessianMode`]).

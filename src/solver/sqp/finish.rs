@@ -73,6 +73,7 @@ impl Sqp<'_> {
             state.point.values.f,
             self.options.progress_window,
             self.options.progress_tolerance,
+            self.options.progress_stretch,
         ) {
             return Some(Next::Finish(Status::SlowProgress));
         }

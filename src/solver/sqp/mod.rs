@@ -20,6 +20,12 @@
 //!    (wrong signs show as complementarity), so a point they pass is optimal, and the QP that
 //!    would only confirm it (one factorization, one solve: a third of the QPs of a
 //!    three-iteration cmc round) is skipped. The test costs one Jᵀλ product.
+//!    A caller that follows the solve with a change of model (the truss clean-up rounds) may
+//!    ask for a creep end, `SlowProgress`: near feasibility, the objective falling by less than
+//!    `Options::progress_tolerance` over `Options::progress_window` iterations, or
+//!    (`Options::progress_stretch` = s) its decrease over the last s iterations at most half
+//!    that over the s before and below the tolerance: a geometric tail with ratio ≤ ½ per
+//!    stretch has less than the last stretch's decrease left. Cost: 2s + 1 stored objectives.
 //! 4. Weights ρᵢ of the ℓ1 merit `φ = f + Σ ρᵢ viol(cᵢ)`: Powell's update from the QP
 //!    multipliers, raised where needed so the linearized violation decrease pays for the
 //!    model's objective change (see `merit`).

@@ -1,6 +1,7 @@
 //! The iterate and what the loop remembers between iterations: the start, the acceptable-level
 //! watch, retreats to the least violated iterate, and evaluations at trial points.
 
+use std::collections::VecDeque;
 use std::ops::ControlFlow;
 
 use nalgebra_sparse::CsrMatrix;
@@ -60,28 +61,50 @@ impl AcceptableRun {
 }
 
 /// Feasible iterations in a row and the objective at the start of the current window (see
-/// `Options::progress_window`).
+/// `Options::progress_window`), and the objective over the last two stretches (see
+/// `Options::progress_stretch`).
 #[derive(Default)]
 pub(super) struct ProgressWatch {
     /// Feasible iterations in the current window (0: the last iterate was infeasible).
     length: usize,
     /// Objective (the solver's scaling) at the window's first iterate.
     reference: f64,
+    /// The objective at the last feasible iterates in a row, at most 2·stretch + 1 of them.
+    recent: VecDeque<f64>,
 }
 
 impl ProgressWatch {
     /// Records an iterate with objective `f`; true when `window` feasible iterations in a row
-    /// lowered the objective by no more than `tolerance·max(1, |f₀|)` (never when `window` is 0).
+    /// lowered the objective by no more than `tolerance·max(1, |f₀|)`, or (`stretch` > 0) when
+    /// the decrease over the last `stretch` feasible iterations is at most half the decrease
+    /// over the `stretch` before them and at most `tolerance·max(1, |f|)`: decreases that
+    /// shrink at least geometrically by ½ per stretch leave less than the last one to gain.
+    /// Never when `window` is 0.
     pub(super) fn creeping(
         &mut self,
         feasible: bool,
         f: f64,
         window: usize,
         tolerance: f64,
+        stretch: usize,
     ) -> bool {
         if window == 0 || !feasible {
             self.length = 0;
+            self.recent.clear();
             return false;
+        }
+        if stretch > 0 {
+            self.recent.push_back(f);
+            if self.recent.len() > 2 * stretch + 1 {
+                self.recent.pop_front();
+            }
+            if self.recent.len() == 2 * stretch + 1 {
+                let older = self.recent[0] - self.recent[stretch];
+                let last = self.recent[stretch] - f;
+                if older > 0.0 && last <= 0.5 * older && last <= tolerance * f.abs().max(1.0) {
+                    return true;
+                }
+            }
         }
         if self.length == 0 {
             self.reference = f;
@@ -315,10 +338,20 @@ mod tests {
     /// Feeds objective values (all feasible unless NaN, which stands for an infeasible
     /// iterate) and returns the index of the first iterate judged creeping.
     fn first_creep(values: &[f64], window: usize, tolerance: f64) -> Option<usize> {
+        first_creep_by(values, window, tolerance, 0)
+    }
+
+    /// As `first_creep`, with the geometric test over stretches of `stretch` iterations.
+    fn first_creep_by(
+        values: &[f64],
+        window: usize,
+        tolerance: f64,
+        stretch: usize,
+    ) -> Option<usize> {
         let mut watch = ProgressWatch::default();
         values
             .iter()
-            .position(|&f| watch.creeping(!f.is_nan(), f, window, tolerance))
+            .position(|&f| watch.creeping(!f.is_nan(), f, window, tolerance, stretch))
     }
 
     #[test]
@@ -343,5 +376,28 @@ mod tests {
         // Relative to max(1, |f|): an objective near zero needs an absolute decrease of 1e-3.
         assert_eq!(first_creep(&[1e-6, 0.0, -5e-4, -9e-4], 3, 1e-3), Some(3));
         assert_eq!(first_creep(&[1e-6, 0.0, -5e-4, -2e-3], 3, 1e-3), None);
+    }
+
+    #[test]
+    fn decreases_halving_per_stretch_end_before_the_window() {
+        // Decrements 1, ½, ¼, … (objective 1000 − 2(1 − 2^−k)): over stretches of 2 the
+        // decrease shrinks ×¼, so the test fires at the first iterate with two full stretches
+        // behind it (index 4). The window alone sees a decrease of 2 > 1e-3·1000 over its
+        // first 50 iterations and has not judged a second one by index 59.
+        let geometric: Vec<f64> = (0..60)
+            .map(|k| 1000.0 - 2.0 * (1.0 - 0.5_f64.powi(k)))
+            .collect();
+        assert_eq!(first_creep_by(&geometric, 50, 1e-3, 2), Some(4));
+        assert_eq!(first_creep_by(&geometric, 50, 1e-3, 0), None);
+        // A steady decrease (no shrinking) is left to the window, as is a shrinking one whose
+        // last stretch still gains more than the tolerance (2 per stretch against 1e-3·1000).
+        let steady: Vec<f64> = (0..60).map(|k| 1000.0 - 1e-3 * k as f64).collect();
+        assert_eq!(first_creep_by(&steady, 50, 1e-3, 2), Some(50));
+        let large = [1000.0, 990.0, 980.0, 976.0, 972.0, 970.0, 968.0];
+        assert_eq!(first_creep_by(&large, 50, 1e-3, 2), None);
+        // An infeasible iterate restarts the stretches too.
+        let mut interrupted = geometric.clone();
+        interrupted[3] = f64::NAN;
+        assert_eq!(first_creep_by(&interrupted, 50, 1e-3, 2), Some(8));
     }
 }
