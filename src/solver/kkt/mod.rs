@@ -231,6 +231,17 @@ impl KktSolver {
         self.numeric_factorizations
     }
 
+    /// Returns the solver to the state [`KktSolver::new`] left it in, pattern and analysis kept:
+    /// no factorization held (none kept for [`KktSolver::factor`] to reuse, none counted), S = I
+    /// as the start of [`Equilibration::RuizFromLast`]. The values are left to be overwritten.
+    pub fn forget_factorizations(&mut self) {
+        self.factored = false;
+        self.last = None;
+        self.inertia = Inertia::default();
+        self.scale.fill(1.0);
+        self.numeric_factorizations = 0;
+    }
+
     /// Number of nonzeros in the factor L (a measure of fill-in).
     pub fn factor_nnz(&self) -> usize {
         self.l_values.len()
