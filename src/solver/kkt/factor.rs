@@ -149,6 +149,7 @@ impl KktSolver {
                     &self.shifted,
                     &mut self.l_values,
                     &mut self.up_looking_work,
+                    &mut self.up_looking_filled,
                     reg.pivot_threshold,
                     reg.pivot_replacement,
                 )

@@ -83,8 +83,9 @@ pub struct KktSolver {
     /// Shared with the other solvers of the same pattern (`analysis`).
     analysis: Arc<analysis::Analysis>,
     l_values: Vec<f64>,
-    /// The up-looking factorization's work vector (zero between factorizations).
+    /// The up-looking factorization's work vectors (`x` zero between factorizations).
     up_looking_work: Vec<f64>,
+    up_looking_filled: Vec<usize>,
     factor_mem: MemBuffer,
     solve_mem: MemBuffer,
     /// Right-hand-side columns `solve_mem` is sized for.
@@ -131,6 +132,7 @@ impl KktSolver {
             scale: vec![1.0; dim],
             l_values: vec![0.0; l_len],
             up_looking_work: vec![0.0; dim],
+            up_looking_filled: vec![0; dim],
             analysis,
             factor_mem: MemBuffer::new(factor_req),
             solve_mem: MemBuffer::new(StackReq::any_of(&[solve_req])),

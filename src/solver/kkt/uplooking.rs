@@ -12,7 +12,7 @@
 //! work that depends on the pattern alone moved to the symbolic analysis: faer permutes K
 //! into a new upper-triangle matrix and walks the elimination tree for every row's reach at
 //! every factorization; here the permuted matrix is a list of source positions and each row's
-//! reach, with the position of each `L_kj`, is a stored list. The arithmetic is faer's, in the
+//! reach is a stored list (memory: one index per entry of L and two per entry of K). The arithmetic is faer's, in the
 //! same order (the permuted columns' entries in faer's order, each reach in the order of
 //! faer's walk), so the factors are the same bit for bit (`kkt::tests`); the factor solves
 //! stay faer's. Used when faer's analysis chooses the simplicial factorization (small or very
@@ -30,11 +30,10 @@ pub struct UpLooking {
     entry_ptr: Vec<usize>,
     entry_row: Vec<usize>,
     entry_source: Vec<usize>,
-    /// Row k's reach: entries `reach_ptr[k]..reach_ptr[k+1]` of `reach` (the column j) and
-    /// `reach_position` (the position of `L_kj` in the factor's values).
+    /// Row k's reach: the columns j of `L_kj ≠ 0`, entries `reach_ptr[k]..reach_ptr[k+1]` of
+    /// `reach` (as many as L has entries below its diagonal: the plan's largest part).
     reach_ptr: Vec<usize>,
     reach: Vec<usize>,
-    reach_position: Vec<usize>,
 }
 
 /// A pivot that is zero or not finite after regularization: faer's `ZeroPivot` index (the
@@ -98,8 +97,6 @@ impl UpLooking {
         let mut reach_ptr = Vec::with_capacity(n + 1);
         reach_ptr.push(0);
         let mut reach = Vec::with_capacity(l_row.len().saturating_sub(n));
-        let mut reach_position = Vec::with_capacity(l_row.len().saturating_sub(n));
-        let mut filled: Vec<usize> = l_ptr[..n].to_vec();
         let mut visited = vec![NONE; n];
         let mut stack = vec![0usize; n];
         for k in 0..n {
@@ -119,11 +116,7 @@ impl UpLooking {
                 stack.copy_within(..len, top - len);
                 top -= len;
             }
-            for &j in &stack[top..] {
-                filled[j] += 1;
-                reach.push(j);
-                reach_position.push(filled[j]);
-            }
+            reach.extend_from_slice(&stack[top..]);
             reach_ptr.push(reach.len());
         }
         Some(UpLooking {
@@ -132,20 +125,22 @@ impl UpLooking {
             entry_source,
             reach_ptr,
             reach,
-            reach_position,
         })
     }
 
     /// Factors the matrix whose lower-triangle values (in the analysed pattern's order) are
     /// `values` into `l_values` (faer's simplicial layout for `symbolic`), replacing a pivot
     /// with `|d| ≤ epsilon` by `±delta` (its sign; none when `delta` is 0). `x` is a work
-    /// vector of length n, zero on entry and on a successful return.
+    /// vector of length n, zero on entry and on a successful return; `filled` one of length n
+    /// (each column's last position written).
+    #[allow(clippy::too_many_arguments)]
     pub fn factor(
         &self,
         symbolic: &SymbolicCholesky<usize>,
         values: &[f64],
         l_values: &mut [f64],
         x: &mut [f64],
+        filled: &mut [usize],
         epsilon: f64,
         delta: f64,
     ) -> Result<(), ZeroPivot> {
@@ -154,6 +149,7 @@ impl UpLooking {
         };
         let (l_ptr, l_row) = (factor.col_ptr(), factor.row_idx());
         let (epsilon, delta) = (epsilon.abs(), delta.abs());
+        filled.copy_from_slice(&l_ptr[..x.len()]);
         for k in 0..x.len() {
             let entries = self.entry_ptr[k]..self.entry_ptr[k + 1];
             for (&i, &p) in self.entry_row[entries.clone()]
@@ -164,12 +160,10 @@ impl UpLooking {
             }
             let mut d = x[k];
             x[k] = 0.0;
-            let reach = self.reach_ptr[k]..self.reach_ptr[k + 1];
-            for (&j, &position) in self.reach[reach.clone()]
-                .iter()
-                .zip(&self.reach_position[reach])
-            {
+            for &j in &self.reach[self.reach_ptr[k]..self.reach_ptr[k + 1]] {
                 let start = l_ptr[j];
+                filled[j] += 1;
+                let position = filled[j];
                 let xj = x[j];
                 x[j] = 0.0;
                 let lkj = xj * (1.0 / l_values[start]);
