@@ -28,6 +28,7 @@ use crate::solver::{Evaluations, IterationRecord, Options, Solution, Status};
 use super::Problem;
 use super::area::total_area;
 use super::nlp::CmcNlp;
+use super::prolong::prolong;
 use super::remesh::equiangulate;
 use super::subdivide::subdivide;
 
@@ -89,6 +90,9 @@ pub fn levels(resolution: usize, coarse: usize) -> (usize, Vec<usize>) {
 /// resolution's NLP started from the last subdivision; `None` when there is nothing to do
 /// (no `coarse_resolution`, or it is not below the resolution).
 pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Staged>, Error> {
+    if let Some(coarse) = problem.prolonged_resolution() {
+        return prolonged(problem, options, coarse).map(Some);
+    }
     let Some(coarse) = problem.coarse_resolution() else {
         return Ok(None);
     };
@@ -160,6 +164,60 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
         evaluations,
         stopped: None,
     }))
+}
+
+/// One coarse level at resolution `coarse`, solved without edge flips, its solution
+/// prolonged onto the generator's own start at the problem's resolution ([`prolong`]): the
+/// full resolution's NLP on the file's triangulation, started near its answer.
+fn prolonged(problem: &Problem, options: &Options, coarse: usize) -> Result<Staged, Error> {
+    let runtime = |what: &str, e: &dyn std::fmt::Display| {
+        Error::Runtime(format!("{}: {what}: {e}", problem.name))
+    };
+    let mut nlp = problem.with_resolution(coarse).build()?;
+    let coarse_start = nlp.mesh().clone();
+    let solution = nlp.solve(options, "level 1");
+    let mesh = nlp
+        .mesh_at(&solution.x)
+        .map_err(|e| runtime("coarse mesh", &e))?;
+    let stages = vec![Stage {
+        resolution: coarse,
+        vertices: mesh.vertex_count(),
+        status: format!("{:?}", solution.status),
+        iterations: solution.iterations,
+        area: total_area(&mesh),
+    }];
+    let (iterations, log, evaluations) = (
+        solution.iterations,
+        solution.log.clone(),
+        solution.evaluations.clone(),
+    );
+    if !usable(solution.status, solution.max_violation, options) {
+        return Ok(Staged {
+            nlp,
+            stages,
+            log,
+            iterations,
+            evaluations,
+            stopped: Some(solution),
+        });
+    }
+    let fine = problem.build()?;
+    let mut start = fine.mesh().clone();
+    let positions =
+        prolong(&coarse_start, &mesh, &start).map_err(|e| runtime("prolongation", &e))?;
+    start
+        .set_positions(positions)
+        .map_err(|e| runtime("prolonged mesh", &e))?;
+    Ok(Staged {
+        nlp: fine
+            .remeshed(start)
+            .map_err(|e| runtime("prolonged mesh", &e))?,
+        stages,
+        log,
+        iterations,
+        evaluations,
+        stopped: None,
+    })
 }
 
 /// A level's solution is refined when it succeeded or stalled feasible (a stall here is
