@@ -248,6 +248,39 @@ mod tests {
     }
 
     #[test]
+    fn cube_film_starts_from_its_coarse_solution_on_the_generators_triangulation() {
+        // Resolution 6: a coarse level at 2, prolonged onto the generator's resolution-6 start
+        // (same triangles, fixed wires in place), which it starts below in area, and the solve
+        // from there ends Optimal no higher than the solve from the generator's start.
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("problems/cmc/cube_frame_film.toml");
+        let problem = crate::cmc::load(&path).unwrap().with_resolution(6);
+        assert_eq!(problem.prolonged_resolution(), Some(2));
+        let mut options = problem.spec.file.solver.clone();
+        options.verbosity = 0;
+        let mut staged = coarse_to_fine(&problem, &options).unwrap().unwrap();
+        assert!(staged.stopped.is_none());
+        assert_eq!(staged.stages.len(), 1);
+        assert_eq!(staged.stages[0].resolution, 2);
+        assert_eq!(staged.stages[0].status, "Optimal");
+        let mut direct = problem.build().unwrap();
+        let (prolonged, generated) = (staged.nlp.mesh(), direct.mesh());
+        assert_eq!(prolonged.triangles(), generated.triangles());
+        for (v, flags) in generated.flags().iter().enumerate() {
+            if flags.fixed {
+                assert_eq!(prolonged.positions()[v], generated.positions()[v]);
+            }
+        }
+        assert!(total_area(prolonged) < total_area(generated));
+        let area = |nlp: &CmcNlp, x: &[f64]| total_area(&nlp.mesh_at(x).unwrap());
+        let from_coarse = staged.nlp.solve(&options, "");
+        let from_start = direct.solve(&options, "");
+        assert_eq!(from_coarse.status, Status::Optimal);
+        assert_eq!(from_start.status, Status::Optimal);
+        assert!(area(&staged.nlp, &from_coarse.x) <= area(&direct, &from_start.x));
+    }
+
+    #[test]
     fn octahedral_film_refines_to_the_generators_counts() {
         // Quadrilateral film at resolution 2 from resolution 1: one coarse level, then the ×2
         // subdivision has the vertex, triangle, wire and junction counts of the generator's

@@ -211,7 +211,10 @@ mod tests {
         let moved = prolong(&coarse, &solved, &fine).unwrap();
         for (v, (p, q)) in fine.positions().iter().zip(&moved).enumerate() {
             let expected = if fine.flags()[v].fixed { *p } else { map(p) };
-            assert!((expected - q).norm() < 1e-14, "vertex {v}: {expected} vs {q}");
+            assert!(
+                (expected - q).norm() < 1e-14,
+                "vertex {v}: {expected} vs {q}"
+            );
         }
     }
 
