@@ -189,7 +189,7 @@ fn prolonged(problem: &Problem, options: &Options, coarse: usize) -> Result<Stag
     let (iterations, log, evaluations) = (
         solution.iterations,
         solution.log.clone(),
-        solution.evaluations.clone(),
+        solution.evaluations,
     );
     if !usable(solution.status, solution.max_violation, options) {
         return Ok(Staged {
