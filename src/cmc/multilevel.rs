@@ -1,6 +1,9 @@
 //! Coarse-to-fine starts (`[quality] coarse_resolution`): the problem is first solved at a
 //! coarse resolution, and its solution, uniformly subdivided ([`super::subdivide`]), is the
-//! start of the next finer solve, up to the problem's resolution.
+//! start of the next finer solve, up to the problem's resolution. Where the shape prolongs
+//! instead (`Problem::prolonged_resolution`), one coarse level is solved without flips and its
+//! solution carried onto the generator's own start at the full resolution
+//! ([`super::prolong`]: same triangulation as the file's).
 //!
 //! Why: on a fine start far from the film's shape (the octahedral frame's flat partition walls
 //! meet at 75°–160° instead of 120°), the junction lines must travel across many rows of
