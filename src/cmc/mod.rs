@@ -33,6 +33,7 @@ pub mod octahedron;
 pub mod orientation;
 pub mod polygon_complex;
 pub mod preview;
+pub mod prolong;
 pub mod refinement;
 pub mod remesh;
 pub mod restart;
@@ -133,6 +134,19 @@ impl Problem {
             .or_else(|| file.shape.default_coarse_resolution(self.resolution))
     }
 
+    /// The coarse level whose solution is prolonged onto the generator's own start at this
+    /// resolution ([`multilevel`], [`prolong`]): the shape's default
+    /// ([`spec::ShapeSpec::default_prolonged_resolution`]) unless the file sets `[quality]
+    /// coarse_resolution` (then that level, refined by subdivision).
+    pub fn prolonged_resolution(&self) -> Option<usize> {
+        let file = &self.spec.file;
+        match file.quality.coarse_resolution {
+            Some(_) => None,
+            None => file.shape.default_prolonged_resolution(self.resolution),
+        }
+        .filter(|&coarse| coarse >= 1 && coarse < self.resolution)
+    }
+
     /// The same problem at another refinement level (reduced versions for CI).
     pub fn with_resolution(&self, resolution: usize) -> Problem {
         Problem {
@@ -168,11 +182,16 @@ impl Problem {
 }
 
 impl Problem {
-    /// The NLP the main solve starts from: [`Problem::build`], or with `[quality]
-    /// coarse_resolution` the refined coarse solution ([`multilevel`], the coarse levels solved
-    /// silently with the file's `[solver]` options). Used to hand the same start to other
-    /// programs (Surface Evolver).
+    /// The start mesh's NLP to hand to other programs (Surface Evolver): [`Problem::build`],
+    /// or with `[quality] coarse_resolution` the subdivided coarse solution ([`multilevel`],
+    /// the coarse levels solved silently with the file's `[solver]` options), another
+    /// triangulation than the generator's. A coarse level prolonged onto the generator's own
+    /// start ([`Problem::prolonged_resolution`]) is part of the solve, not of the start: the
+    /// generator's start then.
     pub fn start(&self) -> Result<CmcNlp, Error> {
+        if self.prolonged_resolution().is_some() {
+            return self.build();
+        }
         let mut options = self.spec.file.solver.clone();
         options.verbosity = 0;
         match multilevel::coarse_to_fine(self, &options)? {

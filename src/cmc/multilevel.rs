@@ -1,6 +1,9 @@
 //! Coarse-to-fine starts (`[quality] coarse_resolution`): the problem is first solved at a
 //! coarse resolution, and its solution, uniformly subdivided ([`super::subdivide`]), is the
-//! start of the next finer solve, up to the problem's resolution.
+//! start of the next finer solve, up to the problem's resolution. Where the shape prolongs
+//! instead (`Problem::prolonged_resolution`), one coarse level is solved without flips and its
+//! solution carried onto the generator's own start at the full resolution
+//! ([`super::prolong`]: same triangulation as the file's).
 //!
 //! Why: on a fine start far from the film's shape (the octahedral frame's flat partition walls
 //! meet at 75°–160° instead of 120°), the junction lines must travel across many rows of
@@ -28,6 +31,7 @@ use crate::solver::{Evaluations, IterationRecord, Options, Solution, Status};
 use super::Problem;
 use super::area::total_area;
 use super::nlp::CmcNlp;
+use super::prolong::prolong;
 use super::remesh::equiangulate;
 use super::subdivide::subdivide;
 
@@ -89,6 +93,9 @@ pub fn levels(resolution: usize, coarse: usize) -> (usize, Vec<usize>) {
 /// resolution's NLP started from the last subdivision; `None` when there is nothing to do
 /// (no `coarse_resolution`, or it is not below the resolution).
 pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Staged>, Error> {
+    if let Some(coarse) = problem.prolonged_resolution() {
+        return prolonged(problem, options, coarse).map(Some);
+    }
     let Some(coarse) = problem.coarse_resolution() else {
         return Ok(None);
     };
@@ -162,6 +169,60 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
     }))
 }
 
+/// One coarse level at resolution `coarse`, solved without edge flips, its solution
+/// prolonged onto the generator's own start at the problem's resolution ([`prolong`]): the
+/// full resolution's NLP on the file's triangulation, started near its answer.
+fn prolonged(problem: &Problem, options: &Options, coarse: usize) -> Result<Staged, Error> {
+    let runtime = |what: &str, e: &dyn std::fmt::Display| {
+        Error::Runtime(format!("{}: {what}: {e}", problem.name))
+    };
+    let mut nlp = problem.with_resolution(coarse).build()?;
+    let coarse_start = nlp.mesh().clone();
+    let solution = nlp.solve(options, "level 1");
+    let mesh = nlp
+        .mesh_at(&solution.x)
+        .map_err(|e| runtime("coarse mesh", &e))?;
+    let stages = vec![Stage {
+        resolution: coarse,
+        vertices: mesh.vertex_count(),
+        status: format!("{:?}", solution.status),
+        iterations: solution.iterations,
+        area: total_area(&mesh),
+    }];
+    let (iterations, log, evaluations) = (
+        solution.iterations,
+        solution.log.clone(),
+        solution.evaluations,
+    );
+    if !usable(solution.status, solution.max_violation, options) {
+        return Ok(Staged {
+            nlp,
+            stages,
+            log,
+            iterations,
+            evaluations,
+            stopped: Some(solution),
+        });
+    }
+    let fine = problem.build()?;
+    let mut start = fine.mesh().clone();
+    let positions =
+        prolong(&coarse_start, &mesh, &start).map_err(|e| runtime("prolongation", &e))?;
+    start
+        .set_positions(positions)
+        .map_err(|e| runtime("prolonged mesh", &e))?;
+    Ok(Staged {
+        nlp: fine
+            .remeshed(start)
+            .map_err(|e| runtime("prolonged mesh", &e))?,
+        stages,
+        log,
+        iterations,
+        evaluations,
+        stopped: None,
+    })
+}
+
 /// A level's solution is refined when it succeeded or stalled feasible (a stall here is
 /// usually a triangle folded flat, which the next level's flips and solve repair).
 fn usable(status: Status, max_violation: f64, options: &Options) -> bool {
@@ -187,6 +248,39 @@ mod tests {
         assert_eq!(levels(8, 1), (1, vec![2, 2, 2]));
         assert_eq!(levels(5, 2), (1, vec![5]));
         assert_eq!(levels(3, 3), (3, vec![]));
+    }
+
+    #[test]
+    fn cube_film_starts_from_its_coarse_solution_on_the_generators_triangulation() {
+        // Resolution 6: a coarse level at 2, prolonged onto the generator's resolution-6 start
+        // (same triangles, fixed wires in place), which it starts below in area, and the solve
+        // from there ends Optimal no higher than the solve from the generator's start.
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("problems/cmc/cube_frame_film.toml");
+        let problem = crate::cmc::load(&path).unwrap().with_resolution(6);
+        assert_eq!(problem.prolonged_resolution(), Some(2));
+        let mut options = problem.spec.file.solver.clone();
+        options.verbosity = 0;
+        let mut staged = coarse_to_fine(&problem, &options).unwrap().unwrap();
+        assert!(staged.stopped.is_none());
+        assert_eq!(staged.stages.len(), 1);
+        assert_eq!(staged.stages[0].resolution, 2);
+        assert_eq!(staged.stages[0].status, "Optimal");
+        let mut direct = problem.build().unwrap();
+        let (prolonged, generated) = (staged.nlp.mesh(), direct.mesh());
+        assert_eq!(prolonged.triangles(), generated.triangles());
+        for (v, flags) in generated.flags().iter().enumerate() {
+            if flags.fixed {
+                assert_eq!(prolonged.positions()[v], generated.positions()[v]);
+            }
+        }
+        assert!(total_area(prolonged) < total_area(generated));
+        let area = |nlp: &CmcNlp, x: &[f64]| total_area(&nlp.mesh_at(x).unwrap());
+        let from_coarse = staged.nlp.solve(&options, "");
+        let from_start = direct.solve(&options, "");
+        assert_eq!(from_coarse.status, Status::Optimal);
+        assert_eq!(from_start.status, Status::Optimal);
+        assert!(area(&staged.nlp, &from_coarse.x) <= area(&direct, &from_start.x));
     }
 
     #[test]
