@@ -80,6 +80,11 @@ pub fn assemble_dense(n: usize, rows: &[usize], cols: &[usize], values: &[f64]) 
 pub struct Convexified {
     /// The positive definite matrix handed to the QP.
     pub matrix: DMatrix<f64>,
+    /// Its Cholesky factor L (`matrix = L Lᵀ`) in the lower triangle, the number for number
+    /// that nalgebra's `cholesky` gives; the strict upper triangle is not part of it (it holds
+    /// `matrix`'s). The definiteness test computes it, so that the dense QP need not factor
+    /// `matrix` again.
+    pub factor: DMatrix<f64>,
     /// The shift δ, relative to `max(1, maxᵢ|Hᵢᵢ|)` (0 when none was needed).
     pub shift: f64,
     /// The weight γ (absolute) of the term `γ·Σₖ uₖuₖᵀ` over the unit rows `uₖ = aₖ/‖aₖ‖`,
@@ -199,10 +204,11 @@ fn gram_of(unit: &DMatrix<f64>) -> DMatrix<f64> {
     gram
 }
 
-/// `h` as it is (no shift, no row term).
-fn unmodified(h: &DMatrix<f64>) -> Convexified {
+/// `h` as it is (no shift, no row term), with its Cholesky factor.
+fn unmodified(h: &DMatrix<f64>, factor: DMatrix<f64>) -> Convexified {
     Convexified {
         matrix: h.clone(),
+        factor,
         shift: 0.0,
         row_weight: 0.0,
         weighted: Vec::new(),
@@ -222,8 +228,10 @@ fn augmented(
     }
     GAMMAS.iter().find_map(|g| {
         let augmented = h + gram * (g * scale);
-        safely_definite(&augmented, scale_of(&augmented)).then(|| Convexified {
+        let factor = definite_factor(&augmented, scale_of(&augmented))?;
+        Some(Convexified {
             matrix: augmented,
+            factor,
             shift: 0.0,
             row_weight: g * scale,
             weighted: kept.to_vec(),
@@ -245,15 +253,19 @@ pub fn scale_of(h: &DMatrix<f64>) -> f64 {
     h.diagonal().iter().fold(1.0_f64, |a, v| a.max(v.abs()))
 }
 
-/// Positive definite with every squared Cholesky pivot above `PIVOT_MIN·scale`. Only the
-/// answer is needed, not the factor: a left-looking factorization of a copy (column j of L
-/// from the columns before it, over contiguous column slices) that stops at the first pivot
-/// below the bound, so a failed trial of the δ or γ schedules costs only the columns up to it.
-fn safely_definite(h: &DMatrix<f64>, scale: f64) -> bool {
+/// The Cholesky factor of `h` if it is positive definite with every squared pivot above
+/// `PIVOT_MIN·scale`, else None: a left-looking factorization of a copy (column j of L from the
+/// columns before it, over contiguous column slices) that stops at the first pivot below the
+/// bound, so a failed trial of the δ or γ schedules costs only the columns up to it. L is in
+/// the lower triangle, the strict upper triangle keeps h's entries. The operations are
+/// nalgebra's `cholesky` (the same left-looking column updates `c − Lⱼₖ·v`, the same square
+/// roots and divisions), so the factor is the same to the bit and the dense QP takes it
+/// instead of factoring h again ([`Convexified::factor`]).
+fn definite_factor(h: &DMatrix<f64>, scale: f64) -> Option<DMatrix<f64>> {
     let n = h.nrows();
     let bound = PIVOT_MIN * scale;
-    let mut l = h.clone();
-    let l = l.as_mut_slice();
+    let mut factor = h.clone();
+    let l = factor.as_mut_slice();
     for j in 0..n {
         let (before, rest) = l.split_at_mut(j * n);
         let column = &mut rest[j..n];
@@ -268,14 +280,15 @@ fn safely_definite(h: &DMatrix<f64>, scale: f64) -> bool {
         }
         let pivot = column[0];
         if pivot.is_nan() || pivot < bound {
-            return false;
+            return None;
         }
         let root = pivot.sqrt();
+        column[0] = root;
         for c in &mut column[1..] {
             *c /= root;
         }
     }
-    true
+    Some(factor)
 }
 
 impl InertiaShift {
@@ -291,16 +304,17 @@ impl InertiaShift {
         gram: &DMatrix<f64>,
         projector: &DMatrix<f64>,
         scale: f64,
-    ) -> Option<(DMatrix<f64>, f64, f64)> {
-        let ((matrix, weight), delta) = shift_schedule(self.last, |delta| {
+    ) -> Option<(DMatrix<f64>, DMatrix<f64>, f64, f64)> {
+        let ((matrix, factor, weight), delta) = shift_schedule(self.last, |delta| {
             let shifted = h + projector * (delta * scale);
             GAMMAS.iter().chain(&[PROJECTED_GAMMA]).find_map(|g| {
                 let augmented = &shifted + gram * (g * scale);
-                safely_definite(&augmented, scale).then_some((augmented, g * scale))
+                let factor = definite_factor(&augmented, scale)?;
+                Some((augmented, factor, g * scale))
             })
         })?;
         self.last = delta;
-        Some((matrix, delta, weight))
+        Some((matrix, factor, delta, weight))
     }
 
     /// Last δ used (0 when none was needed).
@@ -342,9 +356,9 @@ impl InertiaShift {
             }
             None => h,
         };
-        if safely_definite(h, scale) {
+        if let Some(factor) = definite_factor(h, scale) {
             self.last = 0.0;
-            return Some(unmodified(h));
+            return Some(unmodified(h, factor));
         }
         // The independent rows, scaled to unit length so that a short row counts as much as a
         // long one, and the projector onto their null space.
@@ -363,9 +377,9 @@ impl InertiaShift {
         let flipped;
         let h = if flip.iter().any(|&f| f > 0.0) {
             flipped = h + DMatrix::from_diagonal(&DVector::from_vec(flip));
-            if safely_definite(&flipped, scale) {
+            if let Some(factor) = definite_factor(&flipped, scale) {
                 self.last = 0.0;
-                return Some(unmodified(&flipped));
+                return Some(unmodified(&flipped, factor));
             }
             if let Some(found) = augmented(&flipped, &gram, &kept, scale) {
                 return Some(found);
@@ -376,11 +390,12 @@ impl InertiaShift {
         };
         let mut base = (h.clone(), 0.0, Vec::new());
         if !kept.is_empty() {
-            if let Some((matrix, shift, row_weight)) =
+            if let Some((matrix, factor, shift, row_weight)) =
                 self.projected_shift(h, &gram, &projector, scale)
             {
                 return Some(Convexified {
                     matrix,
+                    factor,
                     shift,
                     row_weight,
                     weighted: kept,
@@ -397,16 +412,18 @@ impl InertiaShift {
             }
         }
         let base_scale = scale_of(&base.0);
-        let (matrix, delta) = shift_schedule(self.last, |delta| {
+        let ((matrix, factor), delta) = shift_schedule(self.last, |delta| {
             let mut shifted = base.0.clone();
             for i in 0..h.nrows() {
                 shifted[(i, i)] += delta * scale;
             }
-            safely_definite(&shifted, base_scale).then_some(shifted)
+            let factor = definite_factor(&shifted, base_scale)?;
+            Some((shifted, factor))
         })?;
         self.last = delta;
         Some(Convexified {
             matrix,
+            factor,
             shift: delta,
             row_weight: base.1,
             weighted: base.2,
@@ -500,6 +517,28 @@ mod tests {
         // The sparse Gram matrix is the dense product.
         let gram = gram_of(&rows);
         assert!((&gram - rows.tr_mul(&rows)).amax() < 1e-13);
+    }
+
+    #[test]
+    fn the_definiteness_test_factor_is_nalgebras_cholesky_to_the_bit() {
+        // A dense SPD matrix with exact zeros in it (skipped columns), and an indefinite one.
+        let b = DMatrix::from_fn(9, 9, |i, j| {
+            if (i + 2 * j) % 5 == 0 {
+                0.0
+            } else {
+                ((i * 7 + j * 3) % 11) as f64 / 11.0 - 0.4
+            }
+        });
+        let h = &b * b.transpose() + DMatrix::identity(9, 9) * 0.05;
+        let factor = definite_factor(&h, scale_of(&h)).expect("positive definite");
+        let reference = h.clone().cholesky().unwrap().unpack_dirty();
+        assert_eq!(factor.lower_triangle(), reference.lower_triangle());
+        assert!(
+            (factor.lower_triangle() * factor.lower_triangle().transpose() - &h).amax() < 1e-12
+        );
+        let mut indefinite = h.clone();
+        indefinite[(4, 4)] = -1.0;
+        assert!(definite_factor(&indefinite, scale_of(&indefinite)).is_none());
     }
 
     #[test]

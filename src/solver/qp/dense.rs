@@ -449,6 +449,28 @@ fn iteration_cap(n: usize, m: usize) -> usize {
 /// Solves the QP with a dense positive definite `h`. `preferred` lists constraint ids to try
 /// first (the previous working set). A non-positive-definite `h` gives `QpStatus::Numerical`.
 pub fn solve(h: &DMatrix<f64>, problem: &QpProblem, preferred: &[ConstraintId]) -> DenseQpResult {
+    solve_factored(h, None, problem, preferred)
+}
+
+/// [`solve`] with the Cholesky factor L of `h` (`h = L Lᵀ`, L in the lower triangle, the
+/// strict upper triangle ignored) already computed, as nalgebra's `cholesky` computes it: the
+/// same iterates without factoring `h` again.
+pub fn solve_with_factor(
+    h: &DMatrix<f64>,
+    factor: &DMatrix<f64>,
+    problem: &QpProblem,
+    preferred: &[ConstraintId],
+) -> DenseQpResult {
+    solve_factored(h, Some(factor), problem, preferred)
+}
+
+/// [`solve`], factoring `h` unless its factor is given.
+fn solve_factored(
+    h: &DMatrix<f64>,
+    factor: Option<&DMatrix<f64>>,
+    problem: &QpProblem,
+    preferred: &[ConstraintId],
+) -> DenseQpResult {
     let n = problem.g.len();
     let m = problem.a.nrows();
     let fail = |status| DenseQpResult {
@@ -466,7 +488,7 @@ pub fn solve(h: &DMatrix<f64>, problem: &QpProblem, preferred: &[ConstraintId]) 
     {
         return fail(QpStatus::Infeasible);
     }
-    let Some(mut dual) = DualIteration::start(h, problem, preferred) else {
+    let Some(mut dual) = DualIteration::start(h, factor, problem, preferred) else {
         return fail(QpStatus::Numerical);
     };
     if let Err(status) = dual.add_equalities() {
@@ -501,21 +523,32 @@ struct DualIteration<'a> {
 }
 
 impl<'a> DualIteration<'a> {
-    /// The start: `J = L⁻ᵀ` (so that `J Jᵀ = H⁻¹`) from the Cholesky factor `L` of `h`, the
-    /// unconstrained minimizer `x = −H⁻¹g` and an empty active set; `None` when `h` is not
-    /// positive definite.
+    /// The start: `J = L⁻ᵀ` (so that `J Jᵀ = H⁻¹`) from the Cholesky factor `L` of `h` (given,
+    /// or computed here), the unconstrained minimizer `x = −H⁻¹g` and an empty active set;
+    /// `None` when `h` is not positive definite.
     fn start(
         h: &DMatrix<f64>,
+        factor: Option<&DMatrix<f64>>,
         problem: &'a QpProblem<'a>,
         preferred: &[ConstraintId],
     ) -> Option<Self> {
         let n = problem.g.len();
         let m = problem.a.nrows();
-        let chol = h.clone().cholesky()?;
+        let computed;
+        let lower = match factor {
+            Some(l) => l,
+            None => {
+                computed = h.clone().cholesky()?.unpack_dirty();
+                &computed
+            }
+        };
         let cons = Constraints::new(problem);
-        let j = inverse_of_upper(&chol.l().transpose());
-        let g = DVector::from_column_slice(problem.g);
-        let x = -chol.solve(&g);
+        let j = inverse_of_upper(&lower.lower_triangle().transpose());
+        // −H⁻¹g by the two triangular solves of nalgebra's `Cholesky::solve`.
+        let mut x = DVector::from_column_slice(problem.g);
+        lower.solve_lower_triangular_unchecked_mut(&mut x);
+        lower.ad_solve_lower_triangular_unchecked_mut(&mut x);
+        let x = -x;
         let mut is_preferred = vec![false; cons.count()];
         for &id in preferred {
             if id < cons.count() {
