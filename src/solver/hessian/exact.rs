@@ -117,8 +117,9 @@ const PROJECTED_GAMMA: f64 = 1e6;
 /// module header for why it is large, and not larger).
 pub const FALLBACK_GAMMA: f64 = 1e4;
 
-/// The rows' independent subset and `I − QQᵀ`, Q an orthonormal basis of their span (`rows`
-/// k×n, unit or any scaling): the projector onto their null space. Q by classical Gram–Schmidt
+/// The rows' independent subset and Q, an orthonormal basis of their span (`rows` k×n, unit or
+/// any scaling), from which [`RowBasis::projector`] forms the projector `I − QQᵀ` onto their
+/// null space when it is needed. Q by classical Gram–Schmidt
 /// with reorthogonalization where the first pass cancelled (CGS2, "twice is enough":
 /// orthogonal to working precision like two passes of modified Gram–Schmidt) over the unit
 /// rows in order, O(n·k·r); a row within
@@ -127,7 +128,7 @@ pub const FALLBACK_GAMMA: f64 = 1e4;
 /// unshifted.) The basis is held as the rows of a k×n matrix, so that both projections run
 /// over contiguous columns, the first one over the row's nonzeros only (a truss balance row
 /// has a handful), and `QQᵀ` is one matrix product.
-fn independent_rows(rows: &DMatrix<f64>) -> (Vec<usize>, DMatrix<f64>) {
+fn independent_rows(rows: &DMatrix<f64>) -> RowBasis {
     let (k, n) = rows.shape();
     let mut basis = DMatrix::<f64>::zeros(k, n);
     let mut kept = Vec::new();
@@ -174,10 +175,27 @@ fn independent_rows(rows: &DMatrix<f64>) -> (Vec<usize>, DMatrix<f64>) {
             kept.push(index);
         }
     }
-    let q = basis.rows(0, kept.len());
-    let mut projector = DMatrix::identity(n, n);
-    projector.gemm(-1.0, &q.transpose(), &q, 1.0);
-    (kept, projector)
+    RowBasis { kept, basis }
+}
+
+/// The independent rows found by [`independent_rows`] and the orthonormal basis of their span.
+struct RowBasis {
+    /// Indices of the independent rows, in order.
+    kept: Vec<usize>,
+    /// Q: its first `kept.len()` rows are the basis vectors (the rest is unused).
+    basis: DMatrix<f64>,
+}
+
+impl RowBasis {
+    /// `I − QQᵀ`, the projector onto the rows' null space: one matrix product, formed only
+    /// where a shift on the null space is tried (the floor, or the projected shift).
+    fn projector(&self) -> DMatrix<f64> {
+        let n = self.basis.ncols();
+        let q = self.basis.rows(0, self.kept.len());
+        let mut projector = DMatrix::identity(n, n);
+        projector.gemm(-1.0, &q.transpose(), &q, 1.0);
+        projector
+    }
 }
 
 /// `UᵀU` for the rows U (k×n) over each row's nonzeros only: a truss's balance rows have a
@@ -347,10 +365,11 @@ impl InertiaShift {
         }
         let scale = scale_of(h);
         // The rows' basis, computed once: for the floor now, or below if h needs correcting.
-        let mut basis = (floor > 0.0).then(|| independent_rows(rows));
+        let basis = (floor > 0.0).then(|| independent_rows(rows));
+        let mut projector = basis.as_ref().map(RowBasis::projector);
         let damped;
-        let h = match &basis {
-            Some((_, projector)) => {
+        let h = match &projector {
+            Some(projector) => {
                 damped = h + projector * floor;
                 &damped
             }
@@ -361,14 +380,15 @@ impl InertiaShift {
             return Some(unmodified(h, factor));
         }
         // The independent rows, scaled to unit length so that a short row counts as much as a
-        // long one, and the projector onto their null space.
-        let (kept, projector) = basis.take().unwrap_or_else(|| independent_rows(rows));
-        let mut unit = rows.select_rows(&kept);
+        // long one.
+        let basis = basis.unwrap_or_else(|| independent_rows(rows));
+        let kept = &basis.kept;
+        let mut unit = rows.select_rows(kept);
         for mut r in unit.row_iter_mut() {
             r /= r.norm();
         }
         let gram = gram_of(&unit);
-        if let Some(found) = augmented(h, &gram, &kept, scale) {
+        if let Some(found) = augmented(h, &gram, kept, scale) {
             return Some(found);
         }
         // Negative diagonal entries flipped (see `qp::sparse`'s convexification): a separable
@@ -381,7 +401,7 @@ impl InertiaShift {
                 self.last = 0.0;
                 return Some(unmodified(&flipped, factor));
             }
-            if let Some(found) = augmented(&flipped, &gram, &kept, scale) {
+            if let Some(found) = augmented(&flipped, &gram, kept, scale) {
                 return Some(found);
             }
             &flipped
@@ -390,15 +410,16 @@ impl InertiaShift {
         };
         let mut base = (h.clone(), 0.0, Vec::new());
         if !kept.is_empty() {
+            let projector = projector.get_or_insert_with(|| basis.projector());
             if let Some((matrix, factor, shift, row_weight)) =
-                self.projected_shift(h, &gram, &projector, scale)
+                self.projected_shift(h, &gram, projector, scale)
             {
                 return Some(Convexified {
                     matrix,
                     factor,
                     shift,
                     row_weight,
-                    weighted: kept,
+                    weighted: kept.clone(),
                 });
             }
             let equality_rows = kept.iter().take_while(|&&k| k < equalities).count();
@@ -507,8 +528,9 @@ mod tests {
                 0.5, -1.0, 0.25, 2.0, 1.0, -3.0,
             ],
         );
-        let (kept, projector) = independent_rows(&rows);
-        assert_eq!(kept, vec![0, 1, 4]);
+        let basis = independent_rows(&rows);
+        assert_eq!(basis.kept, vec![0, 1, 4]);
+        let projector = basis.projector();
         // P is symmetric, idempotent, of rank n − 3, and annihilates every row.
         assert!((&projector - projector.transpose()).amax() < 1e-14);
         assert!((&projector * &projector - &projector).amax() < 1e-13);
