@@ -104,26 +104,22 @@ impl<'a> Constraints<'a> {
     }
 
     /// Jᵀaᵢ for row `i` of A: the sum of aᵢⱼ times row j of J (the dense product's numbers,
-    /// [`dense_dot_tail`]).
+    /// [`dense_dot_tail`]). Column by column of J, with the eight partial sums on the stack.
     fn jt_times_row(&self, i: usize, j: &DMatrix<f64>) -> DVector<f64> {
         let (cols, vals) = self.row(i);
         let tail = dense_dot_tail(cols, self.n);
-        let width = j.ncols();
-        let mut partial = DMatrix::<f64>::zeros(width, 8);
-        for (&c, &a) in cols[..tail].iter().zip(vals) {
-            for col in 0..width {
-                partial[(col, c % 8)] += j[(c, col)] * a;
+        let n = j.nrows().max(1);
+        let mut out = DVector::<f64>::zeros(j.ncols());
+        for (column, o) in j.as_slice().chunks_exact(n).zip(out.iter_mut()) {
+            let mut partial = [0.0; 8];
+            for (&c, &a) in cols[..tail].iter().zip(vals) {
+                partial[c % 8] += column[c] * a;
             }
-        }
-        let mut out = DVector::<f64>::zeros(width);
-        for p in 0..4 {
-            for col in 0..width {
-                out[col] += partial[(col, p)] + partial[(col, p + 4)];
+            for p in 0..4 {
+                *o += partial[p] + partial[p + 4];
             }
-        }
-        for (&c, &a) in cols[tail..].iter().zip(&vals[tail..]) {
-            for col in 0..width {
-                out[col] += j[(c, col)] * a;
+            for (&c, &a) in cols[tail..].iter().zip(&vals[tail..]) {
+                *o += column[c] * a;
             }
         }
         out
