@@ -239,6 +239,9 @@ fn solve_on(
     Ok(prune(&ground, forces, lp, &settings.symmetry))
 }
 
+/// What [`lp_forces`] returns: the ground structure, forces, report and the last LP's members.
+type SolvedLp = (Structure, Vec<Vec<f64>>, LpReport, Vec<Beam>);
+
 /// The LP of [`solve_on`]: the ground structure with the members pricing added (appended), its
 /// forces (N, `[case][beam]`, symmetrized), the LP's report and the last LP's members in its
 /// column order.
@@ -249,7 +252,7 @@ fn lp_forces(
     self_weight: bool,
     grow: Option<(&FullConnectivity, bool)>,
     interrupt: &Interrupt,
-) -> Result<(Structure, Vec<Vec<f64>>, LpReport, Vec<Beam>), LpError> {
+) -> Result<SolvedLp, LpError> {
     let scaled = Scaled::new(structure, settings, usable);
     let (sub, force_scale, cost_scale) = (&scaled.structure, scaled.force_scale, scaled.cost_scale);
     let price = |length: f64| scaled.price(length, settings, self_weight);
