@@ -19,6 +19,7 @@ use faer::sparse::SparseColMatRef;
 use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::cholesky::{SymbolicCholeskyRaw, supernodal};
 
+use super::uplooking::ZeroPivot;
 use super::{KktError, KktSolver};
 
 /// The matrix values and regularization of the factorization currently held.
@@ -102,6 +103,12 @@ impl KktSolver {
     /// bit): an inertia test followed by the step's factorization of the same matrix, or a
     /// second-order correction of the same QP, costs one comparison of the values.
     pub fn factor(&mut self, reg: Regularization) -> Result<Inertia, KktError> {
+        self.factor_using(reg, false)
+    }
+
+    /// [`KktSolver::factor`], by faer's own numeric factorization when `faer_only` (for the
+    /// tests that compare the two) or when the analysis is supernodal, else by `uplooking`.
+    fn factor_using(&mut self, reg: Regularization, faer_only: bool) -> Result<Inertia, KktError> {
         if self
             .last
             .as_ref()
@@ -135,31 +142,19 @@ impl KktSolver {
                     -reg.dual
                 };
         }
-        let pattern = SymbolicSparseColMatRef::new_checked(
-            self.dim,
-            self.dim,
-            &self.col_ptr,
-            None,
-            &self.row_idx,
-        );
-        let matrix = SparseColMatRef::new(pattern, &self.shifted);
-        let regularization = LdltRegularization {
-            dynamic_regularization_signs: None,
-            dynamic_regularization_delta: reg.pivot_replacement,
-            dynamic_regularization_epsilon: reg.pivot_threshold,
-        };
-        let stack = MemStack::new(&mut self.factor_mem);
-        let result = self.symbolic.factorize_numeric_ldlt(
-            &mut self.l_values,
-            matrix,
-            faer::Side::Lower,
-            regularization,
-            Par::Seq,
-            stack,
-            Default::default(),
-        );
-        if let Err(faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index }) = result {
-            return Err(KktError::Breakdown(index));
+        match (&self.analysis.up_looking, faer_only) {
+            (Some(plan), false) => plan
+                .factor(
+                    &self.analysis.symbolic,
+                    &self.shifted,
+                    &mut self.l_values,
+                    &mut self.up_looking_work,
+                    &mut self.up_looking_filled,
+                    reg.pivot_threshold,
+                    reg.pivot_replacement,
+                )
+                .map_err(|ZeroPivot(index)| KktError::Breakdown(index))?,
+            _ => self.factor_by_faer(reg)?,
         }
         let mut inertia = Inertia::default();
         let mut count = |d: f64| {
@@ -173,7 +168,7 @@ impl KktSolver {
                 inertia.regularized += 1;
             }
         };
-        match self.symbolic.raw() {
+        match self.analysis.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => {
                 for &p in &s.col_ptr()[..self.dim] {
                     count(self.l_values[p]);
@@ -200,6 +195,37 @@ impl KktSolver {
         last.values.extend_from_slice(&self.values);
         self.last = Some(last);
         Ok(inertia)
+    }
+
+    /// faer's numeric factorization of `shifted` into `l_values`.
+    fn factor_by_faer(&mut self, reg: Regularization) -> Result<(), KktError> {
+        let pattern = SymbolicSparseColMatRef::new_checked(
+            self.dim,
+            self.dim,
+            &self.col_ptr,
+            None,
+            &self.row_idx,
+        );
+        let matrix = SparseColMatRef::new(pattern, &self.shifted);
+        let regularization = LdltRegularization {
+            dynamic_regularization_signs: None,
+            dynamic_regularization_delta: reg.pivot_replacement,
+            dynamic_regularization_epsilon: reg.pivot_threshold,
+        };
+        let stack = MemStack::new(&mut self.factor_mem);
+        let result = self.analysis.symbolic.factorize_numeric_ldlt(
+            &mut self.l_values,
+            matrix,
+            faer::Side::Lower,
+            regularization,
+            Par::Seq,
+            stack,
+            Default::default(),
+        );
+        if let Err(faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index }) = result {
+            return Err(KktError::Breakdown(index));
+        }
+        Ok(())
     }
 
     /// Computes the Ruiz scaling of `values` into `scale` and writes `S values S` into
@@ -266,8 +292,28 @@ impl KktSolver {
 
 #[cfg(test)]
 impl KktSolver {
+    /// [`KktSolver::factor`] by faer's numeric factorization whatever the analysis, the
+    /// factors held forgotten first (so that they are computed).
+    pub(crate) fn factor_by_faer_only(&mut self, reg: Regularization) -> Result<Inertia, KktError> {
+        self.last = None;
+        self.factor_using(reg, true)
+    }
+
+    /// The factor's values (faer's layout).
+    pub(crate) fn factor_values(&self) -> &[f64] {
+        &self.l_values
+    }
+
+    /// True when the numeric factorization is `uplooking`'s.
+    pub(crate) fn is_up_looking(&self) -> bool {
+        self.analysis.up_looking.is_some()
+    }
+
     /// True when the symbolic analysis chose the supernodal (blocked) factorization.
     pub(crate) fn is_supernodal(&self) -> bool {
-        matches!(self.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
+        matches!(
+            self.analysis.symbolic.raw(),
+            SymbolicCholeskyRaw::Supernodal(_)
+        )
     }
 }

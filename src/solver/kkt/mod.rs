@@ -7,7 +7,9 @@
 //! K is given by its lower triangle (row ≥ col) in compressed sparse columns, with every
 //! diagonal entry present in the pattern. Factorization adds a static regularization
 //! `+δ_p` on the primal diagonal and `−δ_d` on the dual diagonal, then computes `LDLᵀ` without
-//! pivoting under an approximate-minimum-degree ordering (faer's sparse LDLᵀ). When
+//! pivoting under an approximate-minimum-degree ordering (faer's sparse LDLᵀ; when faer's
+//! analysis chooses its simplicial factorization, the same arithmetic by `uplooking`, with the
+//! permutation and the elimination-tree walks done once per pattern). When
 //! `H + D_p + δ_p I ≻ 0` and `D_d + δ_d I ≻ 0` the matrix is quasi-definite, so this
 //! factorization exists and is stable for every symmetric ordering (Vanderbei 1995,
 //! "Symmetric quasi-definite matrices", SIAM J. Optim. 5(1)).
@@ -29,17 +31,18 @@
 //! correction (Wächter & Biegler 2006, §3.1).
 //!
 //! Split by verb: construction and symbolic analysis here, `factor.rs` the numeric
-//! factorization and inertia, `solve.rs` the refined solves and the product with K.
+//! factorization and inertia (`uplooking.rs` its simplicial kernel), `solve.rs` the refined
+//! solves and the product with K.
 
 mod analysis;
 mod factor;
 mod solve;
+mod uplooking;
 
 use std::sync::Arc;
 
 use faer::Par;
 use faer::dyn_stack::{MemBuffer, StackReq};
-use faer::sparse::linalg::cholesky::SymbolicCholesky;
 
 pub use factor::{Equilibration, Inertia, Regularization};
 pub use solve::SolveReport;
@@ -78,8 +81,11 @@ pub struct KktSolver {
     /// The equilibrating diagonal S of the last factorization.
     scale: Vec<f64>,
     /// Shared with the other solvers of the same pattern (`analysis`).
-    symbolic: Arc<SymbolicCholesky<usize>>,
+    analysis: Arc<analysis::Analysis>,
     l_values: Vec<f64>,
+    /// The up-looking factorization's work vectors (`x` zero between factorizations).
+    up_looking_work: Vec<f64>,
+    up_looking_filled: Vec<usize>,
     factor_mem: MemBuffer,
     solve_mem: MemBuffer,
     /// Right-hand-side columns `solve_mem` is sized for.
@@ -109,7 +115,8 @@ impl KktSolver {
         let dim = n_primal + n_dual;
         let diag_pos = check_pattern(dim, &col_ptr, &row_idx)?;
         let nnz = row_idx.len();
-        let symbolic = analysis::analyse(dim, &col_ptr, &row_idx)?;
+        let analysis = analysis::analyse(dim, &col_ptr, &row_idx)?;
+        let symbolic = &analysis.symbolic;
         let factor_req =
             symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default());
         let solve_req = symbolic.solve_in_place_scratch::<f64>(1, Par::Seq);
@@ -123,8 +130,10 @@ impl KktSolver {
             diag_pos,
             shifted: vec![0.0; nnz],
             scale: vec![1.0; dim],
-            symbolic,
             l_values: vec![0.0; l_len],
+            up_looking_work: vec![0.0; dim],
+            up_looking_filled: vec![0; dim],
+            analysis,
             factor_mem: MemBuffer::new(factor_req),
             solve_mem: MemBuffer::new(StackReq::any_of(&[solve_req])),
             solve_columns: 1,
@@ -229,6 +238,17 @@ impl KktSolver {
     /// regularization already factored keeps the factors and does not count.
     pub fn numeric_factorizations(&self) -> usize {
         self.numeric_factorizations
+    }
+
+    /// Returns the solver to the state [`KktSolver::new`] left it in, pattern and analysis kept:
+    /// no factorization held (none kept for [`KktSolver::factor`] to reuse, none counted), S = I
+    /// as the start of [`Equilibration::RuizFromLast`]. The values are left to be overwritten.
+    pub fn forget_factorizations(&mut self) {
+        self.factored = false;
+        self.last = None;
+        self.inertia = Inertia::default();
+        self.scale.fill(1.0);
+        self.numeric_factorizations = 0;
     }
 
     /// Number of nonzeros in the factor L (a measure of fill-in).

@@ -66,7 +66,7 @@ impl KktSolver {
         for (x, s) in rhs.iter_mut().zip(&self.scale) {
             *x *= s;
         }
-        let factor = LdltRef::new(&self.symbolic, &self.l_values);
+        let factor = LdltRef::new(&self.analysis.symbolic, &self.l_values);
         let stack = MemStack::new(&mut self.solve_mem);
         let n = rhs.len();
         factor.solve_in_place_with_conj(
@@ -86,7 +86,8 @@ impl KktSolver {
     pub fn solve_factored_columns(&mut self, rhs: &mut [f64], columns: usize) {
         if columns > self.solve_columns {
             self.solve_mem = MemBuffer::new(
-                self.symbolic
+                self.analysis
+                    .symbolic
                     .solve_in_place_scratch::<f64>(columns, Par::Seq),
             );
             self.solve_columns = columns;
@@ -96,7 +97,7 @@ impl KktSolver {
                 *x *= s;
             }
         }
-        let factor = LdltRef::new(&self.symbolic, &self.l_values);
+        let factor = LdltRef::new(&self.analysis.symbolic, &self.l_values);
         let stack = MemStack::new(&mut self.solve_mem);
         factor.solve_in_place_with_conj(
             Conj::No,

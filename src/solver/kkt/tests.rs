@@ -368,16 +368,103 @@ fn a_pattern_analysed_before_shares_its_analysis_and_the_results_are_the_same() 
     let mut first = build(n, m, &rows, &cols, &vals);
     let expected = solution_of(&mut first);
     let mut again = build(n, m, &rows, &cols, &vals);
-    assert!(std::sync::Arc::ptr_eq(&first.symbolic, &again.symbolic));
+    assert!(std::sync::Arc::ptr_eq(&first.analysis, &again.analysis));
     assert_eq!(solution_of(&mut again), expected);
     // As many other patterns as are remembered: the first is forgotten, analysed anew, and
     // gives the same answer bit for bit.
     for k in 0..super::analysis::REMEMBERED {
         let (rows, cols, vals, _) = random_quasi_definite(&mut rng, n + 1 + k, m, 0.1);
         let other = build(n + 1 + k, m, &rows, &cols, &vals);
-        assert!(!std::sync::Arc::ptr_eq(&first.symbolic, &other.symbolic));
+        assert!(!std::sync::Arc::ptr_eq(&first.analysis, &other.analysis));
     }
     let mut anew = build(n, m, &rows, &cols, &vals);
-    assert!(!std::sync::Arc::ptr_eq(&first.symbolic, &anew.symbolic));
+    assert!(!std::sync::Arc::ptr_eq(&first.analysis, &anew.analysis));
     assert_eq!(solution_of(&mut anew), expected);
+}
+
+#[test]
+fn the_up_looking_factorization_gives_faers_factors_bit_for_bit() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let mut compared = 0;
+    for &(n, m, density) in &[
+        (5, 2, 0.5),
+        (40, 15, 0.1),
+        (120, 60, 0.03),
+        (300, 10, 0.01),
+        (20, 0, 0.2),
+        (80, 30, 0.05),
+    ] {
+        let (rows, cols, vals, _) = random_quasi_definite(&mut rng, n, m, density);
+        let mut kkt = build(n, m, &rows, &cols, &vals);
+        if !kkt.is_up_looking() {
+            continue;
+        }
+        // Indefinite primal blocks too (random diagonal signs: negative pivots, large growth),
+        // a pivot at the replacement threshold, and every equilibration.
+        let plain = kkt.values().to_vec();
+        for trial in 0..4 {
+            let values = kkt.values_mut();
+            values.copy_from_slice(&plain);
+            if trial >= 2 {
+                for c in 0..n {
+                    let p = kkt.diagonal_position(c);
+                    let sign = if rng.random::<f64>() < 0.3 {
+                        -0.05
+                    } else {
+                        1.0
+                    };
+                    kkt.values_mut()[p] *= sign;
+                }
+            }
+            let reg = Regularization {
+                pivot_threshold: if trial == 3 { 1e-2 } else { 1e-13 },
+                equilibration: [
+                    Equilibration::Ruiz,
+                    Equilibration::Off,
+                    Equilibration::RuizFromLast,
+                    Equilibration::Ruiz,
+                ][trial],
+                ..Regularization::default()
+            };
+            let ours = kkt.factor(reg);
+            let factors = kkt.factor_values().to_vec();
+            let faers = kkt.factor_by_faer_only(reg);
+            assert_eq!(ours, faers, "n={n} m={m} trial {trial}");
+            let same = factors
+                .iter()
+                .zip(kkt.factor_values())
+                .all(|(a, b)| a.to_bits() == b.to_bits());
+            assert!(same, "n={n} m={m} trial {trial}: factors differ");
+            compared += 1;
+        }
+    }
+    assert!(compared >= 16, "only {compared} factorizations compared");
+}
+
+#[test]
+fn the_up_looking_factorization_reports_a_zero_pivot_where_faer_does() {
+    // [[1, 1], [1, 1]]: the second pivot is exactly 0 with no replacement.
+    let (rows, cols) = (vec![0, 1, 1], vec![0, 0, 1]);
+    let mut kkt = build(2, 0, &rows, &cols, &[1.0, 1.0, 1.0]);
+    assert!(kkt.is_up_looking());
+    let reg = Regularization {
+        primal: 0.0,
+        pivot_threshold: 0.0,
+        pivot_replacement: 0.0,
+        equilibration: Equilibration::Off,
+        ..Regularization::default()
+    };
+    let ours = kkt.factor(reg);
+    assert!(
+        matches!(ours, Err(super::KktError::Breakdown(_))),
+        "{ours:?}"
+    );
+    assert_eq!(ours, kkt.factor_by_faer_only(reg));
+    // The work vector is clean again: the next factorization is right.
+    kkt.values_mut()[2] = 2.0;
+    let inertia = kkt.factor(reg).unwrap();
+    assert_eq!((inertia.positive, inertia.negative), (2, 0));
+    let factors = kkt.factor_values().to_vec();
+    kkt.factor_by_faer_only(reg).unwrap();
+    assert_eq!(factors, kkt.factor_values());
 }

@@ -44,7 +44,9 @@
 //! Use from an SQP: keep one [`SparseQp`] for the whole NLP solve and call
 //! [`SparseQp::solve`] each major iteration; the symbolic analysis is redone only when the
 //! sparsity of H or A changes (bound values and the infinite/finite/fixed pattern of the bounds
-//! may change freely). There is no warm start: an interior-point method starts from its own
+//! may change freely); a solver that is dropped leaves its Newton system to the next solver of
+//! the same pattern on its thread (`kept.rs`: the same steps, bit for bit, without rebuilding
+//! the system). There is no warm start: an interior-point method starts from its own
 //! interior point (d = 0 pushed at least min(1, ¼ width) inside finite bounds), and typically
 //! needs 10–30 iterations whatever the previous working set was. On `Infeasible` the returned
 //! d is the last iterate (not a least-infeasible point): an elastic QP must be solved instead.
@@ -56,6 +58,7 @@
 
 mod certificates;
 mod convexification;
+mod kept;
 mod layout;
 mod newton;
 mod operators;
@@ -163,6 +166,15 @@ pub struct SparseQp {
     system: Option<NewtonSystem>,
     layout: Layout,
     ws: Workspace,
+}
+
+impl Drop for SparseQp {
+    /// Leaves the Newton system to the next solver of its pattern on this thread (`kept`).
+    fn drop(&mut self) {
+        if let Some(system) = self.system.take() {
+            kept::keep(system);
+        }
+    }
 }
 
 impl Default for SparseQp {
@@ -335,8 +347,10 @@ impl SparseQp {
         }
         info.reused_symbolic = self.system.as_ref().is_some_and(|s| s.matches(qp));
         if !info.reused_symbolic {
-            self.system = None;
-            match NewtonSystem::new(qp) {
+            if let Some(other) = self.system.take() {
+                kept::keep(other);
+            }
+            match kept::take(qp).map_or_else(|| NewtonSystem::new(qp), Ok) {
                 Ok(system) => self.system = Some(system),
                 Err(_) => return (fail(QpStatus::Numerical), info),
             }

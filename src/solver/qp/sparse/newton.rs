@@ -180,6 +180,21 @@ impl NewtonSystem {
             && self.a_cols == cols
     }
 
+    /// Returns the system to the state [`NewtonSystem::new`] left it in (pattern, positions and
+    /// buffers kept): no factors, the default dual regularization of the Newton solves.
+    pub fn reset(&mut self) {
+        self.kkt.forget_factorizations();
+        self.capacitance = None;
+        self.strong_dual = false;
+        self.strong_step = false;
+        self.factored_strong = false;
+    }
+
+    /// Entries of the KKT factor L.
+    pub fn factor_nnz(&self) -> usize {
+        self.kkt.factor_nnz()
+    }
+
     /// Dimension n + m.
     pub fn dim(&self) -> usize {
         self.n + self.m
