@@ -209,7 +209,7 @@ fn solve_on(
     interrupt: &Interrupt,
 ) -> Result<LayoutStart, LpError> {
     let mut usable = usable.to_vec();
-    let (mut ground, mut forces, mut lp) =
+    let (mut ground, mut forces, mut lp, mut columns) =
         lp_forces(structure, settings, &usable, self_weight, grow, interrupt)?;
     for _ in 0..RUN_PASSES {
         usable.resize(ground.beams.len(), true);
@@ -222,16 +222,29 @@ fn solve_on(
             break;
         };
         usable.resize(merged.beams.len(), true);
+        // No member added where none was before: the LP on `merged` is the one just solved,
+        // column for column, and would return the same forces.
+        let unchanged = (merged.beams.iter().zip(&usable))
+            .filter_map(|(b, &u)| u.then_some(*b))
+            .eq(columns.iter().copied());
+        if unchanged {
+            break;
+        }
         let (added, solves) = (lp.members_added, lp.solves);
-        (ground, forces, lp) = lp_forces(&merged, settings, &usable, self_weight, grow, interrupt)?;
+        (ground, forces, lp, columns) =
+            lp_forces(&merged, settings, &usable, self_weight, grow, interrupt)?;
         lp.members_added += added;
         lp.solves += solves;
     }
     Ok(prune(&ground, forces, lp, &settings.symmetry))
 }
 
+/// What [`lp_forces`] returns: the ground structure, forces, report and the last LP's members.
+type SolvedLp = (Structure, Vec<Vec<f64>>, LpReport, Vec<Beam>);
+
 /// The LP of [`solve_on`]: the ground structure with the members pricing added (appended), its
-/// forces (N, `[case][beam]`, symmetrized) and the LP's report.
+/// forces (N, `[case][beam]`, symmetrized), the LP's report and the last LP's members in its
+/// column order.
 fn lp_forces(
     structure: &Structure,
     settings: &Settings,
@@ -239,7 +252,7 @@ fn lp_forces(
     self_weight: bool,
     grow: Option<(&FullConnectivity, bool)>,
     interrupt: &Interrupt,
-) -> Result<(Structure, Vec<Vec<f64>>, LpReport), LpError> {
+) -> Result<SolvedLp, LpError> {
     let scaled = Scaled::new(structure, settings, usable);
     let (sub, force_scale, cost_scale) = (&scaled.structure, scaled.force_scale, scaled.cost_scale);
     let price = |length: f64| scaled.price(length, settings, self_weight);
@@ -297,7 +310,7 @@ fn lp_forces(
         members_added: layouts.added,
         solves: layouts.iterations,
     };
-    Ok((ground, forces, report))
+    Ok((ground, forces, report, layouts.beams))
 }
 
 /// The ground structure of the start's LPs in O(1) numbers: the usable beams, the loads divided

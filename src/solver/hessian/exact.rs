@@ -80,6 +80,11 @@ pub fn assemble_dense(n: usize, rows: &[usize], cols: &[usize], values: &[f64]) 
 pub struct Convexified {
     /// The positive definite matrix handed to the QP.
     pub matrix: DMatrix<f64>,
+    /// Its Cholesky factor L (`matrix = L Lᵀ`) in the lower triangle, the number for number
+    /// that nalgebra's `cholesky` gives; the strict upper triangle is not part of it (it holds
+    /// `matrix`'s). The definiteness test computes it, so that the dense QP need not factor
+    /// `matrix` again.
+    pub factor: DMatrix<f64>,
     /// The shift δ, relative to `max(1, maxᵢ|Hᵢᵢ|)` (0 when none was needed).
     pub shift: f64,
     /// The weight γ (absolute) of the term `γ·Σₖ uₖuₖᵀ` over the unit rows `uₖ = aₖ/‖aₖ‖`,
@@ -112,8 +117,9 @@ const PROJECTED_GAMMA: f64 = 1e6;
 /// module header for why it is large, and not larger).
 pub const FALLBACK_GAMMA: f64 = 1e4;
 
-/// The rows' independent subset and `I − QQᵀ`, Q an orthonormal basis of their span (`rows`
-/// k×n, unit or any scaling): the projector onto their null space. Q by classical Gram–Schmidt
+/// The rows' independent subset and Q, an orthonormal basis of their span (`rows` k×n, unit or
+/// any scaling), from which [`RowBasis::projector`] forms the projector `I − QQᵀ` onto their
+/// null space when it is needed. Q by classical Gram–Schmidt
 /// with reorthogonalization where the first pass cancelled (CGS2, "twice is enough":
 /// orthogonal to working precision like two passes of modified Gram–Schmidt) over the unit
 /// rows in order, O(n·k·r); a row within
@@ -122,7 +128,7 @@ pub const FALLBACK_GAMMA: f64 = 1e4;
 /// unshifted.) The basis is held as the rows of a k×n matrix, so that both projections run
 /// over contiguous columns, the first one over the row's nonzeros only (a truss balance row
 /// has a handful), and `QQᵀ` is one matrix product.
-fn independent_rows(rows: &DMatrix<f64>) -> (Vec<usize>, DMatrix<f64>) {
+fn independent_rows(rows: &DMatrix<f64>) -> RowBasis {
     let (k, n) = rows.shape();
     let mut basis = DMatrix::<f64>::zeros(k, n);
     let mut kept = Vec::new();
@@ -169,10 +175,27 @@ fn independent_rows(rows: &DMatrix<f64>) -> (Vec<usize>, DMatrix<f64>) {
             kept.push(index);
         }
     }
-    let q = basis.rows(0, kept.len());
-    let mut projector = DMatrix::identity(n, n);
-    projector.gemm(-1.0, &q.transpose(), &q, 1.0);
-    (kept, projector)
+    RowBasis { kept, basis }
+}
+
+/// The independent rows found by [`independent_rows`] and the orthonormal basis of their span.
+struct RowBasis {
+    /// Indices of the independent rows, in order.
+    kept: Vec<usize>,
+    /// Q: its first `kept.len()` rows are the basis vectors (the rest is unused).
+    basis: DMatrix<f64>,
+}
+
+impl RowBasis {
+    /// `I − QQᵀ`, the projector onto the rows' null space: one matrix product, formed only
+    /// where a shift on the null space is tried (the floor, or the projected shift).
+    fn projector(&self) -> DMatrix<f64> {
+        let n = self.basis.ncols();
+        let q = self.basis.rows(0, self.kept.len());
+        let mut projector = DMatrix::identity(n, n);
+        projector.gemm(-1.0, &q.transpose(), &q, 1.0);
+        projector
+    }
 }
 
 /// `UᵀU` for the rows U (k×n) over each row's nonzeros only: a truss's balance rows have a
@@ -199,10 +222,11 @@ fn gram_of(unit: &DMatrix<f64>) -> DMatrix<f64> {
     gram
 }
 
-/// `h` as it is (no shift, no row term).
-fn unmodified(h: &DMatrix<f64>) -> Convexified {
+/// `h` as it is (no shift, no row term), with its Cholesky factor.
+fn unmodified(h: &DMatrix<f64>, factor: DMatrix<f64>) -> Convexified {
     Convexified {
         matrix: h.clone(),
+        factor,
         shift: 0.0,
         row_weight: 0.0,
         weighted: Vec::new(),
@@ -222,8 +246,10 @@ fn augmented(
     }
     GAMMAS.iter().find_map(|g| {
         let augmented = h + gram * (g * scale);
-        safely_definite(&augmented, scale_of(&augmented)).then(|| Convexified {
+        let factor = definite_factor(&augmented, scale_of(&augmented))?;
+        Some(Convexified {
             matrix: augmented,
+            factor,
             shift: 0.0,
             row_weight: g * scale,
             weighted: kept.to_vec(),
@@ -245,15 +271,19 @@ pub fn scale_of(h: &DMatrix<f64>) -> f64 {
     h.diagonal().iter().fold(1.0_f64, |a, v| a.max(v.abs()))
 }
 
-/// Positive definite with every squared Cholesky pivot above `PIVOT_MIN·scale`. Only the
-/// answer is needed, not the factor: a left-looking factorization of a copy (column j of L
-/// from the columns before it, over contiguous column slices) that stops at the first pivot
-/// below the bound, so a failed trial of the δ or γ schedules costs only the columns up to it.
-fn safely_definite(h: &DMatrix<f64>, scale: f64) -> bool {
+/// The Cholesky factor of `h` if it is positive definite with every squared pivot above
+/// `PIVOT_MIN·scale`, else None: a left-looking factorization of a copy (column j of L from the
+/// columns before it, over contiguous column slices) that stops at the first pivot below the
+/// bound, so a failed trial of the δ or γ schedules costs only the columns up to it. L is in
+/// the lower triangle, the strict upper triangle keeps h's entries. The operations are
+/// nalgebra's `cholesky` (the same left-looking column updates `c − Lⱼₖ·v`, the same square
+/// roots and divisions), so the factor is the same to the bit and the dense QP takes it
+/// instead of factoring h again ([`Convexified::factor`]).
+fn definite_factor(h: &DMatrix<f64>, scale: f64) -> Option<DMatrix<f64>> {
     let n = h.nrows();
     let bound = PIVOT_MIN * scale;
-    let mut l = h.clone();
-    let l = l.as_mut_slice();
+    let mut factor = h.clone();
+    let l = factor.as_mut_slice();
     for j in 0..n {
         let (before, rest) = l.split_at_mut(j * n);
         let column = &mut rest[j..n];
@@ -268,14 +298,15 @@ fn safely_definite(h: &DMatrix<f64>, scale: f64) -> bool {
         }
         let pivot = column[0];
         if pivot.is_nan() || pivot < bound {
-            return false;
+            return None;
         }
         let root = pivot.sqrt();
+        column[0] = root;
         for c in &mut column[1..] {
             *c /= root;
         }
     }
-    true
+    Some(factor)
 }
 
 impl InertiaShift {
@@ -291,16 +322,17 @@ impl InertiaShift {
         gram: &DMatrix<f64>,
         projector: &DMatrix<f64>,
         scale: f64,
-    ) -> Option<(DMatrix<f64>, f64, f64)> {
-        let ((matrix, weight), delta) = shift_schedule(self.last, |delta| {
+    ) -> Option<(DMatrix<f64>, DMatrix<f64>, f64, f64)> {
+        let ((matrix, factor, weight), delta) = shift_schedule(self.last, |delta| {
             let shifted = h + projector * (delta * scale);
             GAMMAS.iter().chain(&[PROJECTED_GAMMA]).find_map(|g| {
                 let augmented = &shifted + gram * (g * scale);
-                safely_definite(&augmented, scale).then_some((augmented, g * scale))
+                let factor = definite_factor(&augmented, scale)?;
+                Some((augmented, factor, g * scale))
             })
         })?;
         self.last = delta;
-        Some((matrix, delta, weight))
+        Some((matrix, factor, delta, weight))
     }
 
     /// Last δ used (0 when none was needed).
@@ -333,28 +365,30 @@ impl InertiaShift {
         }
         let scale = scale_of(h);
         // The rows' basis, computed once: for the floor now, or below if h needs correcting.
-        let mut basis = (floor > 0.0).then(|| independent_rows(rows));
+        let basis = (floor > 0.0).then(|| independent_rows(rows));
+        let mut projector = basis.as_ref().map(RowBasis::projector);
         let damped;
-        let h = match &basis {
-            Some((_, projector)) => {
+        let h = match &projector {
+            Some(projector) => {
                 damped = h + projector * floor;
                 &damped
             }
             None => h,
         };
-        if safely_definite(h, scale) {
+        if let Some(factor) = definite_factor(h, scale) {
             self.last = 0.0;
-            return Some(unmodified(h));
+            return Some(unmodified(h, factor));
         }
         // The independent rows, scaled to unit length so that a short row counts as much as a
-        // long one, and the projector onto their null space.
-        let (kept, projector) = basis.take().unwrap_or_else(|| independent_rows(rows));
-        let mut unit = rows.select_rows(&kept);
+        // long one.
+        let basis = basis.unwrap_or_else(|| independent_rows(rows));
+        let kept = &basis.kept;
+        let mut unit = rows.select_rows(kept);
         for mut r in unit.row_iter_mut() {
             r /= r.norm();
         }
         let gram = gram_of(&unit);
-        if let Some(found) = augmented(h, &gram, &kept, scale) {
+        if let Some(found) = augmented(h, &gram, kept, scale) {
             return Some(found);
         }
         // Negative diagonal entries flipped (see `qp::sparse`'s convexification): a separable
@@ -363,11 +397,11 @@ impl InertiaShift {
         let flipped;
         let h = if flip.iter().any(|&f| f > 0.0) {
             flipped = h + DMatrix::from_diagonal(&DVector::from_vec(flip));
-            if safely_definite(&flipped, scale) {
+            if let Some(factor) = definite_factor(&flipped, scale) {
                 self.last = 0.0;
-                return Some(unmodified(&flipped));
+                return Some(unmodified(&flipped, factor));
             }
-            if let Some(found) = augmented(&flipped, &gram, &kept, scale) {
+            if let Some(found) = augmented(&flipped, &gram, kept, scale) {
                 return Some(found);
             }
             &flipped
@@ -376,14 +410,16 @@ impl InertiaShift {
         };
         let mut base = (h.clone(), 0.0, Vec::new());
         if !kept.is_empty() {
-            if let Some((matrix, shift, row_weight)) =
-                self.projected_shift(h, &gram, &projector, scale)
+            let projector = projector.get_or_insert_with(|| basis.projector());
+            if let Some((matrix, factor, shift, row_weight)) =
+                self.projected_shift(h, &gram, projector, scale)
             {
                 return Some(Convexified {
                     matrix,
+                    factor,
                     shift,
                     row_weight,
-                    weighted: kept,
+                    weighted: kept.clone(),
                 });
             }
             let equality_rows = kept.iter().take_while(|&&k| k < equalities).count();
@@ -397,16 +433,18 @@ impl InertiaShift {
             }
         }
         let base_scale = scale_of(&base.0);
-        let (matrix, delta) = shift_schedule(self.last, |delta| {
+        let ((matrix, factor), delta) = shift_schedule(self.last, |delta| {
             let mut shifted = base.0.clone();
             for i in 0..h.nrows() {
                 shifted[(i, i)] += delta * scale;
             }
-            safely_definite(&shifted, base_scale).then_some(shifted)
+            let factor = definite_factor(&shifted, base_scale)?;
+            Some((shifted, factor))
         })?;
         self.last = delta;
         Some(Convexified {
             matrix,
+            factor,
             shift: delta,
             row_weight: base.1,
             weighted: base.2,
@@ -490,8 +528,9 @@ mod tests {
                 0.5, -1.0, 0.25, 2.0, 1.0, -3.0,
             ],
         );
-        let (kept, projector) = independent_rows(&rows);
-        assert_eq!(kept, vec![0, 1, 4]);
+        let basis = independent_rows(&rows);
+        assert_eq!(basis.kept, vec![0, 1, 4]);
+        let projector = basis.projector();
         // P is symmetric, idempotent, of rank n − 3, and annihilates every row.
         assert!((&projector - projector.transpose()).amax() < 1e-14);
         assert!((&projector * &projector - &projector).amax() < 1e-13);
@@ -500,6 +539,28 @@ mod tests {
         // The sparse Gram matrix is the dense product.
         let gram = gram_of(&rows);
         assert!((&gram - rows.tr_mul(&rows)).amax() < 1e-13);
+    }
+
+    #[test]
+    fn the_definiteness_test_factor_is_nalgebras_cholesky_to_the_bit() {
+        // A dense SPD matrix with exact zeros in it (skipped columns), and an indefinite one.
+        let b = DMatrix::from_fn(9, 9, |i, j| {
+            if (i + 2 * j) % 5 == 0 {
+                0.0
+            } else {
+                ((i * 7 + j * 3) % 11) as f64 / 11.0 - 0.4
+            }
+        });
+        let h = &b * b.transpose() + DMatrix::identity(9, 9) * 0.05;
+        let factor = definite_factor(&h, scale_of(&h)).expect("positive definite");
+        let reference = h.clone().cholesky().unwrap().unpack_dirty();
+        assert_eq!(factor.lower_triangle(), reference.lower_triangle());
+        assert!(
+            (factor.lower_triangle() * factor.lower_triangle().transpose() - &h).amax() < 1e-12
+        );
+        let mut indefinite = h.clone();
+        indefinite[(4, 4)] = -1.0;
+        assert!(definite_factor(&indefinite, scale_of(&indefinite)).is_none());
     }
 
     #[test]

@@ -104,26 +104,22 @@ impl<'a> Constraints<'a> {
     }
 
     /// Jᵀaᵢ for row `i` of A: the sum of aᵢⱼ times row j of J (the dense product's numbers,
-    /// [`dense_dot_tail`]).
+    /// [`dense_dot_tail`]). Column by column of J, with the eight partial sums on the stack.
     fn jt_times_row(&self, i: usize, j: &DMatrix<f64>) -> DVector<f64> {
         let (cols, vals) = self.row(i);
         let tail = dense_dot_tail(cols, self.n);
-        let width = j.ncols();
-        let mut partial = DMatrix::<f64>::zeros(width, 8);
-        for (&c, &a) in cols[..tail].iter().zip(vals) {
-            for col in 0..width {
-                partial[(col, c % 8)] += j[(c, col)] * a;
+        let n = j.nrows().max(1);
+        let mut out = DVector::<f64>::zeros(j.ncols());
+        for (column, o) in j.as_slice().chunks_exact(n).zip(out.iter_mut()) {
+            let mut partial = [0.0; 8];
+            for (&c, &a) in cols[..tail].iter().zip(vals) {
+                partial[c % 8] += column[c] * a;
             }
-        }
-        let mut out = DVector::<f64>::zeros(width);
-        for p in 0..4 {
-            for col in 0..width {
-                out[col] += partial[(col, p)] + partial[(col, p + 4)];
+            for p in 0..4 {
+                *o += partial[p] + partial[p + 4];
             }
-        }
-        for (&c, &a) in cols[tail..].iter().zip(&vals[tail..]) {
-            for col in 0..width {
-                out[col] += j[(c, col)] * a;
+            for (&c, &a) in cols[tail..].iter().zip(&vals[tail..]) {
+                *o += column[c] * a;
             }
         }
         out
@@ -423,22 +419,52 @@ impl ActiveSet {
 /// `U⁻¹` for an upper triangular `u` with a positive diagonal (a Cholesky factor's `Lᵀ`).
 /// Column k solves `U x = eₖ` by back substitution over rows `0..=k` only (the rest of x is
 /// zero): n³/6 multiply-adds instead of a full solve's n³/2, in the same order of operations
-/// as `solve_upper_triangular` (so the same numbers).
+/// as `solve_upper_triangular` (so the same numbers). Columns are solved in pairs, each with
+/// its own operations in that order: the pair's two chains of divisions overlap, and each
+/// column of U is read once for both.
 fn inverse_of_upper(u: &DMatrix<f64>) -> DMatrix<f64> {
     let n = u.nrows();
     let mut inv = DMatrix::zeros(n, n);
-    for k in 0..n {
-        let mut x = inv.column_mut(k);
-        x[k] = 1.0;
+    let u = u.as_slice();
+    let column = |i: usize| &u[i * n..i * n + i];
+    for (pair, block) in inv.as_mut_slice().chunks_mut(2 * n).enumerate() {
+        let k = 2 * pair;
+        let (a, b) = block.split_at_mut(n);
+        a[k] = 1.0;
+        if b.is_empty() {
+            back_substitute(a, k, u, n);
+            continue;
+        }
+        // Column k + 1 alone down to row k, then both columns together.
+        b[k + 1] = 1.0;
+        let coeff = b[k + 1] / u[(k + 1) * n + k + 1];
+        b[k + 1] = coeff;
+        for (x, &ur) in b[..k + 1].iter_mut().zip(column(k + 1)) {
+            *x += -coeff * ur;
+        }
         for i in (0..=k).rev() {
-            let coeff = x[i] / u[(i, i)];
-            x[i] = coeff;
-            for r in 0..i {
-                x[r] += -coeff * u[(r, i)];
+            let diagonal = u[i * n + i];
+            let (ca, cb) = (a[i] / diagonal, b[i] / diagonal);
+            a[i] = ca;
+            b[i] = cb;
+            for ((xa, xb), &ur) in a[..i].iter_mut().zip(&mut b[..i]).zip(column(i)) {
+                *xa += -ca * ur;
+                *xb += -cb * ur;
             }
         }
     }
     inv
+}
+
+/// Back substitution of `U x = x` over rows `0..=k` (U column-major in `u`, n×n), in place.
+fn back_substitute(x: &mut [f64], k: usize, u: &[f64], n: usize) {
+    for i in (0..=k).rev() {
+        let coeff = x[i] / u[i * n + i];
+        x[i] = coeff;
+        for (xr, &ur) in x[..i].iter_mut().zip(&u[i * n..i * n + i]) {
+            *xr += -coeff * ur;
+        }
+    }
 }
 
 /// Iteration cap of the dual active-set loop, in additions plus drops.
@@ -449,6 +475,28 @@ fn iteration_cap(n: usize, m: usize) -> usize {
 /// Solves the QP with a dense positive definite `h`. `preferred` lists constraint ids to try
 /// first (the previous working set). A non-positive-definite `h` gives `QpStatus::Numerical`.
 pub fn solve(h: &DMatrix<f64>, problem: &QpProblem, preferred: &[ConstraintId]) -> DenseQpResult {
+    solve_factored(h, None, problem, preferred)
+}
+
+/// [`solve`] with the Cholesky factor L of `h` (`h = L Lᵀ`, L in the lower triangle, the
+/// strict upper triangle ignored) already computed, as nalgebra's `cholesky` computes it: the
+/// same iterates without factoring `h` again.
+pub fn solve_with_factor(
+    h: &DMatrix<f64>,
+    factor: &DMatrix<f64>,
+    problem: &QpProblem,
+    preferred: &[ConstraintId],
+) -> DenseQpResult {
+    solve_factored(h, Some(factor), problem, preferred)
+}
+
+/// [`solve`], factoring `h` unless its factor is given.
+fn solve_factored(
+    h: &DMatrix<f64>,
+    factor: Option<&DMatrix<f64>>,
+    problem: &QpProblem,
+    preferred: &[ConstraintId],
+) -> DenseQpResult {
     let n = problem.g.len();
     let m = problem.a.nrows();
     let fail = |status| DenseQpResult {
@@ -466,7 +514,7 @@ pub fn solve(h: &DMatrix<f64>, problem: &QpProblem, preferred: &[ConstraintId]) 
     {
         return fail(QpStatus::Infeasible);
     }
-    let Some(mut dual) = DualIteration::start(h, problem, preferred) else {
+    let Some(mut dual) = DualIteration::start(h, factor, problem, preferred) else {
         return fail(QpStatus::Numerical);
     };
     if let Err(status) = dual.add_equalities() {
@@ -501,21 +549,32 @@ struct DualIteration<'a> {
 }
 
 impl<'a> DualIteration<'a> {
-    /// The start: `J = L⁻ᵀ` (so that `J Jᵀ = H⁻¹`) from the Cholesky factor `L` of `h`, the
-    /// unconstrained minimizer `x = −H⁻¹g` and an empty active set; `None` when `h` is not
-    /// positive definite.
+    /// The start: `J = L⁻ᵀ` (so that `J Jᵀ = H⁻¹`) from the Cholesky factor `L` of `h` (given,
+    /// or computed here), the unconstrained minimizer `x = −H⁻¹g` and an empty active set;
+    /// `None` when `h` is not positive definite.
     fn start(
         h: &DMatrix<f64>,
+        factor: Option<&DMatrix<f64>>,
         problem: &'a QpProblem<'a>,
         preferred: &[ConstraintId],
     ) -> Option<Self> {
         let n = problem.g.len();
         let m = problem.a.nrows();
-        let chol = h.clone().cholesky()?;
+        let computed;
+        let lower = match factor {
+            Some(l) => l,
+            None => {
+                computed = h.clone().cholesky()?.unpack_dirty();
+                &computed
+            }
+        };
         let cons = Constraints::new(problem);
-        let j = inverse_of_upper(&chol.l().transpose());
-        let g = DVector::from_column_slice(problem.g);
-        let x = -chol.solve(&g);
+        let j = inverse_of_upper(&lower.lower_triangle().transpose());
+        // −H⁻¹g by the two triangular solves of nalgebra's `Cholesky::solve`.
+        let mut x = DVector::from_column_slice(problem.g);
+        lower.solve_lower_triangular_unchecked_mut(&mut x);
+        lower.ad_solve_lower_triangular_unchecked_mut(&mut x);
+        let x = -x;
         let mut is_preferred = vec![false; cons.count()];
         for &id in preferred {
             if id < cons.count() {
@@ -984,13 +1043,16 @@ mod tests {
     #[test]
     fn the_triangular_inverse_is_the_full_solve_to_the_bit() {
         let mut rng = ChaCha8Rng::seed_from_u64(7);
-        let b = DMatrix::from_fn(9, 9, |_, _| rng.random_range(-1.0..1.0));
-        let h = &b * b.transpose() + DMatrix::identity(9, 9) * 0.1;
-        let u = h.cholesky().expect("positive definite").l().transpose();
-        let inv = inverse_of_upper(&u);
-        let full = u.solve_upper_triangular(&DMatrix::identity(9, 9)).unwrap();
-        assert_eq!(inv, full);
-        assert!((&u * &inv - DMatrix::identity(9, 9)).amax() < 1e-12);
+        // Odd and even orders: columns are solved in pairs.
+        for n in [1, 8, 9] {
+            let b = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
+            let h = &b * b.transpose() + DMatrix::identity(n, n) * 0.1;
+            let u = h.cholesky().expect("positive definite").l().transpose();
+            let inv = inverse_of_upper(&u);
+            let full = u.solve_upper_triangular(&DMatrix::identity(n, n)).unwrap();
+            assert_eq!(inv, full);
+            assert!((&u * &inv - DMatrix::identity(n, n)).amax() < 1e-12);
+        }
     }
 
     #[test]

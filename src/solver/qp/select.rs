@@ -97,6 +97,8 @@ pub struct WarmStart {
     /// The solver of [`WarmStart::newton_step`] (its own, so that its solves leave the main
     /// solver's state alone).
     newton: Option<Box<SparseQp>>,
+    /// A dense Hessian and its Cholesky factor (see [`WarmStart::keep_factor`]).
+    factored: Option<(DMatrix<f64>, DMatrix<f64>)>,
 }
 
 impl fmt::Debug for WarmStart {
@@ -160,6 +162,14 @@ impl WarmStart {
     /// The current shift floor (see [`WarmStart::set_shift_floor`]).
     pub fn shift_floor(&self) -> f64 {
         self.shift_floor
+    }
+
+    /// Keeps the Cholesky factor L of the dense Hessian `h` (`h = L Lᵀ`, L in the lower
+    /// triangle as nalgebra's `cholesky` computes it, the strict upper triangle ignored): a
+    /// dense solve whose Hessian equals `h` entry for entry takes it instead of factoring
+    /// again (the SQP's convexification has just factored the matrix in its definiteness test).
+    pub fn keep_factor(&mut self, h: DMatrix<f64>, factor: DMatrix<f64>) {
+        self.factored = Some((h, factor));
     }
 
     /// Puts back the state taken by [`WarmStart::snapshot`].
@@ -326,7 +336,13 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
         for i in 0..n {
             shifted[(i, i)] += shift;
         }
-        let result = dense::solve(&shifted, problem, &warm.working_set);
+        let factor = (warm.factored.as_ref())
+            .filter(|(kept, _)| *kept == shifted)
+            .map(|(_, factor)| factor);
+        let result = match factor {
+            Some(factor) => dense::solve_with_factor(&shifted, factor, problem, &warm.working_set),
+            None => dense::solve(&shifted, problem, &warm.working_set),
+        };
         if result.solution.status == QpStatus::Numerical && convexify && shift < 1e20 {
             shift = if shift == 0.0 { base } else { shift * 10.0 };
             continue;
@@ -573,6 +589,11 @@ mod tests {
 
     /// min ½dᵀHd + gᵀd s.t. d₀ + d₁ ≥ 1, −1 ≤ d ≤ 1 with H given three ways.
     fn solve_with(h: QpHessian) -> QpSolution {
+        solve_warm(h, &mut WarmStart::default())
+    }
+
+    /// [`solve_with`] from the warm start `warm`.
+    fn solve_warm(h: QpHessian, warm: &mut WarmStart) -> QpSolution {
         let mut coo = CooMatrix::new(1, 2);
         coo.push(0, 0, 1.0);
         coo.push(0, 1, 1.0);
@@ -586,7 +607,38 @@ mod tests {
             bl: &[1.0],
             bu: &[f64::INFINITY],
         };
-        solve(&problem, &mut WarmStart::default(), 1e-9)
+        solve(&problem, warm, 1e-9)
+    }
+
+    #[test]
+    fn a_kept_factor_serves_only_its_own_matrix() {
+        let h = DMatrix::from_row_slice(2, 2, &[3.0, 1.0, 1.0, 2.0]);
+        let reference = solve_with(QpHessian::Dense(&h));
+        // The factor of h gives the same solution to the bit.
+        let mut warm = WarmStart::default();
+        let factor = h.clone().cholesky().unwrap().unpack_dirty();
+        warm.keep_factor(h.clone(), factor);
+        let again = solve_warm(QpHessian::Dense(&h), &mut warm);
+        assert_eq!(
+            (again.d, again.lambda),
+            (reference.d.clone(), reference.lambda.clone())
+        );
+        // A factor kept for another matrix is not used (it would give another step).
+        let mut warm = WarmStart::default();
+        let other = DMatrix::from_row_slice(2, 2, &[30.0, 0.0, 0.0, 20.0]);
+        let wrong = other.clone().cholesky().unwrap().unpack_dirty();
+        warm.keep_factor(other, wrong.clone());
+        let again = solve_warm(QpHessian::Dense(&h), &mut warm);
+        assert_eq!(
+            (again.d, again.lambda),
+            (reference.d.clone(), reference.lambda.clone())
+        );
+        let mut misused = WarmStart::default();
+        misused.keep_factor(h.clone(), wrong);
+        assert_ne!(
+            solve_warm(QpHessian::Dense(&h), &mut misused).d,
+            reference.d
+        );
     }
 
     #[test]

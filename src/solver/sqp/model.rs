@@ -82,6 +82,8 @@ impl Sqp<'_> {
                     })
                 })
                 .collect();
+            self.warm
+                .keep_factor(convexified.matrix.clone(), convexified.factor);
             *dense = Some(convexified.matrix);
         } else {
             let worst = point
