@@ -513,8 +513,9 @@ impl ShapeSpec {
     /// resolution 6, the 8-round cap at 12 and 22), from the prolonged coarse solution in 2–3
     /// rounds: CPU at resolutions 6 / 12 / 22 (792 / 3,168 / 10,648 facets, `flip_rounds = 0`)
     /// 26.5 / 93 / 405 → 19.2 / 52 / 160 ms, areas 0.004–0.027 % lower, 0.001 / 0.003 % above
-    /// the area formulation's minimum on the same triangulation at 792 / 10,648 facets (docs/notes/cmc.md). A coarse level of 1 segment per
-    /// wire (resolutions 3–5) or of half the resolution took more iterations than none. The
+    /// the area formulation's minimum on the same triangulation at 792 / 10,648 facets
+    /// (docs/notes/cmc.md). A coarse level of 1 segment per wire (resolutions 3–5) or of half
+    /// the resolution took more iterations than none. The
     /// cube frame with a bubble, whose start already holds the bubble's volume, gained nothing
     /// (resolution 8: 14 → 16 iterations): no coarse level.
     pub fn default_prolonged_resolution(&self, resolution: usize) -> Option<usize> {
