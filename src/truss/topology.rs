@@ -397,7 +397,7 @@ fn remove_crossings(joints: &[Joint], beams: BeamForces) -> BeamForces {
     kept.into_iter().map(|k| beams[k].clone()).collect()
 }
 
-/// Step 4: removes dangling free joints (at most one beam) with their beam until none is
+/// Step 5: removes dangling free joints (at most one beam) with their beam until none is
 /// left, then, when merging, one tension run at a time ([`merge_straight_run`]) while that
 /// leaves none dangling; `alive` marks the joints that remain.
 fn remove_dangling(
@@ -436,7 +436,7 @@ fn remove_dangling(
     }
 }
 
-/// Step 5: the structure of the `alive` joints, renumbered in order, and its beams sorted,
+/// Step 6: the structure of the `alive` joints, renumbered in order, and its beams sorted,
 /// with their forces as start values (case-major, `cases` load cases).
 fn renumber(
     joints: &[Joint],
@@ -503,14 +503,15 @@ fn merge_straight_run(
         };
         let far = |k: usize| beams[k].0.ends[0] + beams[k].0.ends[1] - i;
         let (a, b) = (far(k1), far(k2));
-        let (u, v) = (
-            joints[a].position - joint.position,
-            joints[b].position - joint.position,
-        );
-        let bent = u.cross(&v).norm() > RUN_ANGLE.sin() * u.norm() * v.norm() || u.dot(&v) >= 0.0;
-        let too_long = max_length.is_some_and(|l| (u - v).norm() > l);
+        let too_long =
+            max_length.is_some_and(|l| (joints[a].position - joints[b].position).norm() > l);
         let same_sign = sign(&beams[k1].1) != 0 && sign(&beams[k1].1) == sign(&beams[k2].1);
-        (a != b && same_sign && !bent && !too_long).then_some((i, k1, k2, Beam::new(a, b)))
+        (a != b && same_sign && straight_through(joints, a, i, b) && !too_long).then_some((
+            i,
+            k1,
+            k2,
+            Beam::new(a, b),
+        ))
     });
     let (joint, k1, k2, merged) = run?;
     let force: Vec<f64> = (beams[k1].1.iter().zip(&beams[k2].1))
@@ -526,8 +527,19 @@ fn merge_straight_run(
     Some(joint)
 }
 
-/// Step 4 (module header): removes the first beam a–b of `beams` along which a joint c lies, joined to a and b by beams collinear within [`RUN_ANGLE`], and adds its force to
-/// those two. Returns whether one was found.
+/// Whether the path a–c–b runs straight through joint c: the directions from c to a and to b
+/// opposite within [`RUN_ANGLE`].
+fn straight_through(joints: &[Joint], a: usize, c: usize, b: usize) -> bool {
+    let (u, v) = (
+        joints[a].position - joints[c].position,
+        joints[b].position - joints[c].position,
+    );
+    u.cross(&v).norm() <= RUN_ANGLE.sin() * u.norm() * v.norm() && u.dot(&v) < 0.0
+}
+
+/// Step 4 (module header): removes the first beam a–b of `beams` along which a joint c lies,
+/// joined to a and b by beams collinear within [`RUN_ANGLE`], and adds its force to those two.
+/// Returns whether one was found.
 fn merge_overlap(joints: &[Joint], beams: &mut BeamForces) -> bool {
     let index: BTreeMap<Beam, usize> = (beams.iter().enumerate())
         .map(|(k, (b, _))| (*b, k))
@@ -544,13 +556,7 @@ fn merge_overlap(joints: &[Joint], beams: &mut BeamForces) -> bool {
             let (Some(&ac), Some(&cb)) = path else {
                 return None;
             };
-            let (u, v) = (
-                joints[a].position - joints[c].position,
-                joints[b].position - joints[c].position,
-            );
-            let bent =
-                u.cross(&v).norm() > RUN_ANGLE.sin() * u.norm() * v.norm() || u.dot(&v) >= 0.0;
-            (!bent).then_some((k, ac, cb))
+            straight_through(joints, a, c, b).then_some((k, ac, cb))
         })
     });
     let Some((k, ac, cb)) = found else {
