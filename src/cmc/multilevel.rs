@@ -30,6 +30,7 @@ use crate::solver::{Evaluations, IterationRecord, Options, Solution, Status};
 
 use super::Problem;
 use super::area::total_area;
+use super::mesh::Mesh;
 use super::nlp::CmcNlp;
 use super::prolong::prolong;
 use super::remesh::equiangulate;
@@ -48,6 +49,25 @@ pub struct Stage {
     pub iterations: usize,
     /// Total area after the level's solves, m².
     pub area: f64,
+}
+
+impl Stage {
+    /// The record of a level at `resolution` whose last solve ended at `mesh` with `solution`,
+    /// after `iterations` in all.
+    fn of(resolution: usize, mesh: &Mesh, solution: &Solution, iterations: usize) -> Stage {
+        Stage {
+            resolution,
+            vertices: mesh.vertex_count(),
+            status: format!("{:?}", solution.status),
+            iterations,
+            area: total_area(mesh),
+        }
+    }
+}
+
+/// A runtime error of `problem`'s coarse levels: `what` failed with `e`.
+fn runtime_error(problem: &Problem, what: &str, e: &dyn std::fmt::Display) -> Error {
+    Error::Runtime(format!("{}: {what}: {e}", problem.name))
 }
 
 /// The NLP whose start is the subdivided coarse solution, with the coarse levels' records.
@@ -103,9 +123,7 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
         return Ok(None);
     }
     let (first, factors) = levels(problem.resolution, coarse);
-    let runtime = |what: &str, e: &dyn std::fmt::Display| {
-        Error::Runtime(format!("{}: {what}: {e}", problem.name))
-    };
+    let runtime = |what: &str, e: &dyn std::fmt::Display| runtime_error(problem, what, e);
     let mut nlp = problem.with_resolution(first).build()?;
     let (mut stages, mut log, mut evaluations) = (Vec::new(), Vec::new(), Evaluations::default());
     let mut resolution = first;
@@ -136,13 +154,7 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
         let mesh = nlp
             .mesh_at(&solution.x)
             .map_err(|e| runtime("coarse mesh", &e))?;
-        stages.push(Stage {
-            resolution,
-            vertices: mesh.vertex_count(),
-            status: format!("{:?}", solution.status),
-            iterations,
-            area: total_area(&mesh),
-        });
+        stages.push(Stage::of(resolution, &mesh, &solution, iterations));
         if !usable(solution.status, solution.max_violation, options) {
             return Ok(Some(Staged {
                 nlp,
@@ -173,22 +185,14 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
 /// prolonged onto the generator's own start at the problem's resolution ([`prolong`]): the
 /// full resolution's NLP on the file's triangulation, started near its answer.
 fn prolonged(problem: &Problem, options: &Options, coarse: usize) -> Result<Staged, Error> {
-    let runtime = |what: &str, e: &dyn std::fmt::Display| {
-        Error::Runtime(format!("{}: {what}: {e}", problem.name))
-    };
+    let runtime = |what: &str, e: &dyn std::fmt::Display| runtime_error(problem, what, e);
     let mut nlp = problem.with_resolution(coarse).build()?;
     let coarse_start = nlp.mesh().clone();
     let solution = nlp.solve(options, "level 1");
     let mesh = nlp
         .mesh_at(&solution.x)
         .map_err(|e| runtime("coarse mesh", &e))?;
-    let stages = vec![Stage {
-        resolution: coarse,
-        vertices: mesh.vertex_count(),
-        status: format!("{:?}", solution.status),
-        iterations: solution.iterations,
-        area: total_area(&mesh),
-    }];
+    let stages = vec![Stage::of(coarse, &mesh, &solution, solution.iterations)];
     let (iterations, log, evaluations) = (
         solution.iterations,
         solution.log.clone(),
