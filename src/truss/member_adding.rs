@@ -444,6 +444,18 @@ mod tests {
         Structure { joints, beams }
     }
 
+    /// The test growth rule: no member joins two anchors.
+    fn not_between_anchors(s: &Structure, b: Beam) -> bool {
+        let [a, c] = b.ends;
+        !(s.joints[a].is_anchor() && s.joints[c].is_anchor())
+    }
+
+    /// The test closure: the members sorted.
+    fn sorted(mut beams: Vec<Beam>) -> Vec<Beam> {
+        beams.sort();
+        beams
+    }
+
     fn unit_price(length: f64) -> MemberPrice {
         MemberPrice {
             cost: (length, 0.5 * length),
@@ -466,17 +478,10 @@ mod tests {
         )
         .unwrap();
         let sparse = cantilever(nx, ny, 4);
-        let admits = |b: Beam| {
-            let [a, c] = b.ends;
-            !(sparse.joints[a].is_anchor() && sparse.joints[c].is_anchor())
-        };
-        let close = |mut beams: Vec<Beam>| {
-            beams.sort();
-            beams
-        };
+        let admits = |b: Beam| not_between_anchors(&sparse, b);
         let growth = Growth {
             admits: &admits,
-            close: &close,
+            close: &sorted,
         };
         let grown = solve(
             &sparse,
@@ -571,17 +576,10 @@ mod tests {
         .cases[0]
             .volume;
         let sparse = cantilever(nx, ny, 4);
-        let admits = |b: Beam| {
-            let [a, c] = b.ends;
-            !(sparse.joints[a].is_anchor() && sparse.joints[c].is_anchor())
-        };
-        let close = |mut beams: Vec<Beam>| {
-            beams.sort();
-            beams
-        };
+        let admits = |b: Beam| not_between_anchors(&sparse, b);
         let growth = Growth {
             admits: &admits,
-            close: &close,
+            close: &sorted,
         };
         let method = LpMethod::InteriorFace;
         let grown = solve(
