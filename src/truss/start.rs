@@ -122,7 +122,8 @@ pub struct LpReport {
     pub members: usize,
     /// Members added by pricing (every pass).
     pub members_added: usize,
-    /// LP solves per case (every pass).
+    /// LP solves per case (every pass; member adding's pricing LPs by the simplex and the
+    /// interior-point solves alike).
     pub solves: usize,
 }
 
