@@ -245,7 +245,7 @@ mod tests {
     fn unwritable_destination_is_an_io_error() {
         let file = std::env::temp_dir().join(format!("optimize-notadir-{}", std::process::id()));
         fs::write(&file, b"x").unwrap();
-        let err = write_run(&file.join("sub"), &[]).unwrap_err();
+        let err = write_run::<Artifact>(&file.join("sub"), &[]).unwrap_err();
         assert_eq!(err.exit_code(), 1);
         fs::remove_file(&file).unwrap();
     }
