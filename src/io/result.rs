@@ -68,6 +68,29 @@ impl Layout {
         Ok(())
     }
 
+    /// Opens a container with `bracket`; `frame` is its entry in `open`.
+    fn begin<W: ?Sized + io::Write>(
+        &mut self,
+        w: &mut W,
+        frame: Option<Option<bool>>,
+        bracket: &[u8],
+    ) -> io::Result<()> {
+        self.element(w, true)?;
+        self.open.push(frame);
+        self.has_value = false;
+        w.write_all(bracket)
+    }
+
+    /// Closes the innermost container with `bracket`, on a line of its own after members
+    /// written one per line (an object's, or an array's of containers).
+    fn end<W: ?Sized + io::Write>(&mut self, w: &mut W, bracket: &[u8]) -> io::Result<()> {
+        let lines = !matches!(self.open.pop(), Some(Some(Some(false) | None)));
+        if lines && self.has_value {
+            self.break_line(w, self.open.len())?;
+        }
+        w.write_all(bracket)
+    }
+
     /// Writes a due array element's separator before a plain value.
     fn plain<W: ?Sized + io::Write>(&mut self, w: &mut W) -> io::Result<()> {
         self.element(w, false)
@@ -115,18 +138,11 @@ impl Formatter for Layout {
     }
 
     fn begin_array<W: ?Sized + io::Write>(&mut self, w: &mut W) -> io::Result<()> {
-        self.element(w, true)?;
-        self.open.push(Some(None));
-        self.has_value = false;
-        w.write_all(b"[")
+        self.begin(w, Some(None), b"[")
     }
 
     fn end_array<W: ?Sized + io::Write>(&mut self, w: &mut W) -> io::Result<()> {
-        let lines = self.open.pop() == Some(Some(Some(true)));
-        if lines && self.has_value {
-            self.break_line(w, self.open.len())?;
-        }
-        w.write_all(b"]")
+        self.end(w, b"]")
     }
 
     fn begin_array_value<W: ?Sized + io::Write>(
@@ -144,18 +160,11 @@ impl Formatter for Layout {
     }
 
     fn begin_object<W: ?Sized + io::Write>(&mut self, w: &mut W) -> io::Result<()> {
-        self.element(w, true)?;
-        self.open.push(None);
-        self.has_value = false;
-        w.write_all(b"{")
+        self.begin(w, None, b"{")
     }
 
     fn end_object<W: ?Sized + io::Write>(&mut self, w: &mut W) -> io::Result<()> {
-        self.open.pop();
-        if self.has_value {
-            self.break_line(w, self.open.len())?;
-        }
-        w.write_all(b"}")
+        self.end(w, b"}")
     }
 
     fn begin_object_key<W: ?Sized + io::Write>(
