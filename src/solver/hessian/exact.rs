@@ -72,7 +72,7 @@
 //! them back, or γ ≫ 1 times an infeasibility would enter the next Hessian and the penalty
 //! weights.
 
-use nalgebra::{DMatrix, DVector, DVectorView};
+use nalgebra::{DMatrix, DVector};
 
 /// Dense symmetric matrix from lower-triangle triplets (duplicates summed).
 pub fn assemble_dense(n: usize, rows: &[usize], cols: &[usize], values: &[f64]) -> DMatrix<f64> {
@@ -150,28 +150,32 @@ fn independent_rows(rows: &DMatrix<f64>) -> RowBasis {
     let (k, n) = rows.shape();
     let mut basis = DMatrix::<f64>::zeros(k, n);
     let mut kept = Vec::new();
-    let mut v = DVector::<f64>::zeros(n);
-    let mut c = DVector::<f64>::zeros(k);
-    for (index, row) in rows.row_iter().enumerate() {
-        let norm = row.norm();
+    let mut v = vec![0.0; n];
+    let mut c = vec![0.0; k];
+    let entries = rows.as_slice();
+    for index in 0..k {
+        // Row `index` (entry i at i·k + index); its norm as nalgebra's of a row view: the
+        // squares summed one column after the other.
+        let row = (0..n).map(|i| entries[i * k + index]);
+        let norm = row.clone().fold(0.0, |sum, x| sum + x * x).sqrt();
         if norm == 0.0 || !norm.is_finite() {
             continue;
         }
         let r = kept.len();
-        for (vi, x) in v.iter_mut().zip(row.iter()) {
+        for (vi, x) in v.iter_mut().zip(row) {
             *vi = x / norm;
         }
         for pass in 0..2 {
             // The second pass only when the first removed more than half of the row's square
             // norm (Daniel, Gragg, Kaufman & Stewart 1976): otherwise the cancellation that
             // loses orthogonality has not happened.
-            if pass == 1 && v.norm_squared() > 0.5 {
+            if pass == 1 && dense_dot(&v, &v) > 0.5 {
                 break;
             }
             // Column i of the basis matrix: every basis vector's entry i, the first r in use.
             let q = basis.as_slice();
             let column = |i: usize| &q[i * k..i * k + r];
-            let c = &mut c.as_mut_slice()[..r];
+            let c = &mut c[..r];
             c.fill(0.0);
             for (i, &vi) in v.iter().enumerate() {
                 if vi != 0.0 {
@@ -180,12 +184,11 @@ fn independent_rows(rows: &DMatrix<f64>) -> RowBasis {
                     }
                 }
             }
-            let c = DVectorView::from_slice(c, r);
             for (i, vi) in v.iter_mut().enumerate() {
-                *vi -= DVectorView::from_slice(column(i), r).dot(&c);
+                *vi -= dense_dot(column(i), c);
             }
         }
-        let residual = v.norm();
+        let residual = dense_dot(&v, &v).sqrt();
         if residual > RANK_TOLERANCE {
             for (i, vi) in v.iter().enumerate() {
                 basis[(r, i)] = vi / residual;
@@ -194,6 +197,37 @@ fn independent_rows(rows: &DMatrix<f64>) -> RowBasis {
         }
     }
     RowBasis { kept, basis }
+}
+
+/// `aᵀb` for slices of equal length as nalgebra's `dot` of two dynamic vectors computes it (so
+/// the same number): eight partial sums over blocks of eight, added to 0 as (s₀ + s₄),
+/// (s₁ + s₅), (s₂ + s₆), (s₃ + s₇), then the tail one by one. Its norms are `dense_dot(v, v)`
+/// (`norm_squared`, 0 + the dot) and its square root.
+fn dense_dot(a: &[f64], b: &[f64]) -> f64 {
+    let blocks = a.len() / 8 * 8;
+    let mut partial = [0.0; 8];
+    for (x, y) in a[..blocks].chunks_exact(8).zip(b[..blocks].chunks_exact(8)) {
+        for p in 0..8 {
+            partial[p] += x[p] * y[p];
+        }
+    }
+    let mut sum = 0.0;
+    for p in 0..4 {
+        sum += partial[p] + partial[p + 4];
+    }
+    for (x, y) in a[blocks..].iter().zip(&b[blocks..]) {
+        sum += x * y;
+    }
+    sum
+}
+
+/// `a + s·b` entry by entry (the numbers of nalgebra's `a + b * s`).
+fn plus_scaled(a: &DMatrix<f64>, b: &DMatrix<f64>, s: f64) -> DMatrix<f64> {
+    let mut sum = a.clone();
+    for (x, &y) in sum.as_mut_slice().iter_mut().zip(b.as_slice()) {
+        *x += y * s;
+    }
+    sum
 }
 
 /// The independent rows found by [`independent_rows`] and the orthonormal basis of their span.
@@ -263,10 +297,13 @@ fn augmented(
         return None;
     }
     GAMMAS.iter().find_map(|g| {
-        let augmented = h + gram * (g * scale);
-        let factor = definite_factor(&augmented, scale_of(&augmented))?;
+        // `scale_of` the sum, from its diagonal.
+        let sum_scale = (0..h.nrows()).fold(1.0_f64, |a, i| {
+            a.max((h[(i, i)] + gram[(i, i)] * (g * scale)).abs())
+        });
+        let factor = definite_factor_of_sum(h, Some((gram, g * scale)), sum_scale)?;
         Some(Convexified {
-            matrix: augmented,
+            matrix: plus_scaled(h, gram, g * scale),
             factor,
             shift: 0.0,
             row_weight: g * scale,
@@ -298,11 +335,39 @@ pub fn scale_of(h: &DMatrix<f64>) -> f64 {
 /// roots and divisions), so the factor is the same to the bit and the dense QP takes it
 /// instead of factoring h again ([`Convexified::factor`]).
 fn definite_factor(h: &DMatrix<f64>, scale: f64) -> Option<DMatrix<f64>> {
+    definite_factor_of_sum(h, None, scale)
+}
+
+/// [`definite_factor`] of `h + s·b` (`extra = (b, s)`, the numbers of [`plus_scaled`]) without
+/// forming the sum: each column is formed when the factorization reaches it, so a failed trial
+/// of the γ schedule forms only the columns up to its failure.
+fn definite_factor_of_sum(
+    h: &DMatrix<f64>,
+    extra: Option<(&DMatrix<f64>, f64)>,
+    scale: f64,
+) -> Option<DMatrix<f64>> {
     let n = h.nrows();
     let bound = PIVOT_MIN * scale;
-    let mut factor = h.clone();
-    let l = factor.as_mut_slice();
+    let entry = |i: usize, j: usize| match extra {
+        Some((b, s)) => h[(i, j)] + b[(i, j)] * s,
+        None => h[(i, j)],
+    };
+    // A pivot is its diagonal entry less squares (each subtraction of a square can only lower
+    // it, in floating point too): a diagonal entry below the bound fails the factorization.
+    if (0..n).any(|i| {
+        let d = entry(i, i);
+        d.is_nan() || d < bound
+    }) {
+        return None;
+    }
+    let mut l = Vec::with_capacity(n * n);
     for j in 0..n {
+        l.extend_from_slice(&h.as_slice()[j * n..(j + 1) * n]);
+        if let Some((b, s)) = extra {
+            for (x, &y) in l[j * n..].iter_mut().zip(&b.as_slice()[j * n..(j + 1) * n]) {
+                *x += y * s;
+            }
+        }
         let (before, rest) = l.split_at_mut(j * n);
         let column = &mut rest[j..n];
         for k in 0..j {
@@ -324,7 +389,7 @@ fn definite_factor(h: &DMatrix<f64>, scale: f64) -> Option<DMatrix<f64>> {
             *c /= root;
         }
     }
-    Some(factor)
+    Some(DMatrix::from_vec(n, n, l))
 }
 
 impl InertiaShift {
@@ -344,11 +409,10 @@ impl InertiaShift {
         started: bool,
     ) -> Option<(DMatrix<f64>, DMatrix<f64>, f64, f64)> {
         let ((matrix, factor, weight), delta) = shift_schedule(self.last, started, |delta| {
-            let shifted = h + projector * (delta * scale);
+            let shifted = plus_scaled(h, projector, delta * scale);
             GAMMAS.iter().chain(&[PROJECTED_GAMMA]).find_map(|g| {
-                let augmented = &shifted + gram * (g * scale);
-                let factor = definite_factor(&augmented, scale)?;
-                Some((augmented, factor, g * scale))
+                let factor = definite_factor_of_sum(&shifted, Some((gram, g * scale)), scale)?;
+                Some((plus_scaled(&shifted, gram, g * scale), factor, g * scale))
             })
         })?;
         self.last = delta;
@@ -391,7 +455,7 @@ impl InertiaShift {
         let damped;
         let h = match &projector {
             Some(projector) => {
-                damped = h + projector * floor;
+                damped = plus_scaled(h, projector, floor);
                 &damped
             }
             None => h,
@@ -595,6 +659,22 @@ mod tests {
         // The sparse Gram matrix is the dense product.
         let gram = gram_of(&rows);
         assert!((&gram - rows.tr_mul(&rows)).amax() < 1e-13);
+    }
+
+    #[test]
+    fn the_slice_kernels_are_nalgebras_to_the_bit() {
+        // Lengths around the blocks of eight, values of mixed signs and magnitudes.
+        for len in [0, 1, 7, 8, 9, 16, 23, 89] {
+            let a = DVector::from_fn(len, |i, _| {
+                ((i * 37 % 11) as f64 - 5.3) * 1.7e-3_f64.powi(i as i32 % 3)
+            });
+            let b = DVector::from_fn(len, |i, _| ((i * 13 % 7) as f64 - 2.9) / 3.0);
+            assert_eq!(dense_dot(a.as_slice(), b.as_slice()), a.dot(&b));
+            assert_eq!(dense_dot(a.as_slice(), a.as_slice()).sqrt(), a.norm());
+        }
+        let h = DMatrix::from_fn(9, 9, |i, j| (i as f64 - 2.0 * j as f64) / 7.0);
+        let g = DMatrix::from_fn(9, 9, |i, j| ((i * j) % 5) as f64 / 3.0 - 0.4);
+        assert_eq!(plus_scaled(&h, &g, 1e3 / 7.0), &h + &g * (1e3 / 7.0));
     }
 
     #[test]
