@@ -10,7 +10,7 @@ use serde_json::ser::{CompactFormatter, Formatter};
 use crate::outcome::{Artifact, Headline, ResultSummary};
 use crate::solver::IterationRecord;
 
-/// `result.json`: the summary, pretty-printed ([`Layout`]: two-space indents, each array of
+/// `result.json`: the summary, pretty-printed (`Layout`: two-space indents, each array of
 /// plain values on one line, so a mesh's vertices go one `[x, y, z]` per line).
 pub fn summary_json(summary: &ResultSummary) -> Artifact {
     let mut bytes = Vec::new();

@@ -89,8 +89,8 @@ pub struct Rounds {
     pub reports: Vec<RoundReport>,
     /// Rounds solved.
     pub rounds_run: usize,
-    /// The round whose design is reported: the last round of the best [`Standing`] any round
-    /// reached (the last one, unless an earlier one ended better).
+    /// The round whose design is reported: the last round of the best standing (`Standing`)
+    /// any round reached (the last one, unless an earlier one ended better).
     pub result_round: usize,
     /// SQP iterations over all rounds.
     pub iterations: usize,
