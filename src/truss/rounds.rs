@@ -118,9 +118,9 @@ pub fn solve_rounds(
     let mut logs: Vec<Vec<IterationRecord>> = Vec::new();
     let mut solution: Solution;
     let mut round = 0;
-    // Each round's standing, and the model, solution and number of the last round of the best.
+    // Each round's standing, and the model and solution of the round reported so far.
     let mut standings: Vec<Standing> = Vec::new();
-    let mut best: Option<(TrussNlp, Solution, usize)> = None;
+    let mut best: Option<(TrussNlp, Solution)> = None;
     // Iterations the current round spent before its clean-up check or creep end that changed
     // nothing (0: none yet).
     let mut checked = 0;
@@ -183,11 +183,10 @@ pub fn solve_rounds(
         checked = 0;
         round += 1;
         let optimal = solution.status == Status::Optimal;
-        let standing = Standing::of(solution.status);
-        if standings.iter().all(|&s| s <= standing) {
-            best = Some((nlp.clone(), solution.clone(), round));
+        standings.push(Standing::of(solution.status));
+        if reported_round(&standings) == round {
+            best = Some((nlp.clone(), solution.clone()));
         }
-        standings.push(standing);
         if round == rounds || solution.status == Status::Interrupted {
             break;
         }
@@ -215,9 +214,7 @@ pub fn solve_rounds(
             .map_err(|e| Error::Runtime(format!("round {round}: {e}")))?;
     }
     let result_round = reported_round(&standings);
-    if let Some((best_nlp, best_solution, best_round)) = best
-        && best_round == result_round
-    {
+    if let Some((best_nlp, best_solution)) = best {
         nlp = best_nlp;
         solution = best_solution;
     }

@@ -551,7 +551,9 @@ fn shift_schedule<T>(
     let mut delta = match (first, started) {
         (true, false) => DELTA_0,
         (true, true) => DELTA_0_LATER,
-        (false, _) => (last / 3.0).max(DELTA_MIN),
+        // δ_min was tried above: the next one up, as the growth below would take.
+        (false, _) if last / 3.0 <= DELTA_MIN => 8.0 * DELTA_MIN,
+        (false, _) => last / 3.0,
     };
     while delta <= DELTA_MAX {
         if let Some(found) = works(delta) {
