@@ -2,7 +2,7 @@
 //! (README: 0 converged, 1 runtime failure, 2 usage or problem-file error, 3 not converged,
 //! 130 interrupted).
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::{Arc, Mutex};
@@ -80,7 +80,9 @@ fn main() -> ExitCode {
         // A check never touches the solved run beside it.
         dir.push(CHECK_FOLDER);
     }
-    let written = match optimize::io::write_outcome(&dir, &outcome) {
+    // result.json's text, printed as is by --json (one serialization for both).
+    let summary = optimize::io::result::summary_json(&outcome.summary);
+    let written = match optimize::io::write_outcome(&dir, &outcome, &summary) {
         Ok(paths) => paths,
         Err(e) => {
             eprintln!("error: {e}");
@@ -91,9 +93,8 @@ fn main() -> ExitCode {
         opts.log.line(&statistics(&outcome));
     }
     if common.json {
-        match serde_json::to_string_pretty(&outcome.summary) {
-            Ok(text) => println!("{text}"),
-            Err(e) => eprintln!("error: cannot print the summary: {e}"),
+        if let Err(e) = std::io::stdout().lock().write_all(&summary.bytes) {
+            eprintln!("error: cannot print the summary: {e}");
         }
     } else if !opts.quiet {
         report(&outcome, &written);

@@ -334,13 +334,19 @@ fn double_bubble_volumes(a: f64, beta: f64) -> (f64, f64) {
 pub fn standard_double_bubble(v_left: f64, v_right: f64) -> (f64, f64, f64) {
     let ratio = v_right / v_left;
     let (mut lo, mut hi) = (0.0, PI / 3.0 - 1e-9);
+    // Bisection until a step leaves the bracket as it was (adjacent floats: every later step
+    // would repeat it), at most 200 steps.
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
         let (l, r) = double_bubble_volumes(1.0, mid);
+        let before = (lo, hi);
         if r / l < ratio {
             lo = mid;
         } else {
             hi = mid;
+        }
+        if (lo, hi) == before {
+            break;
         }
     }
     let beta = 0.5 * (lo + hi);

@@ -51,6 +51,7 @@ mod testing;
 mod truth_tests;
 
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 
 use crate::application::{Application, CheckCase};
@@ -77,6 +78,10 @@ pub struct Problem {
     name: String,
     spec: spec::CmcSpec,
     resolution: usize,
+    /// The start shape and chords at `resolution`, built once by [`load_source`] to check the
+    /// geometry and reused by [`Problem::build`]; None after [`Problem::with_resolution`]
+    /// changed the level.
+    built: Option<Arc<(generators::Shape, Vec<nlp::Chord>)>>,
 }
 
 /// Reads, parses and validates a CMC problem file, and builds its start mesh once to report
@@ -99,13 +104,13 @@ pub fn load_source(source: Source) -> Result<Problem, InputError> {
         .file
         .resolution
         .unwrap_or_else(|| spec.file.shape.default_resolution());
-    let problem = Problem {
+    let built = spec.build(resolution)?;
+    Ok(Problem {
         name,
         spec,
         resolution,
-    };
-    problem.spec.build(problem.resolution)?;
-    Ok(problem)
+        built: Some(Arc::new(built)),
+    })
 }
 
 impl Problem {
@@ -149,15 +154,20 @@ impl Problem {
 
     /// The same problem at another refinement level (reduced versions for CI).
     pub fn with_resolution(&self, resolution: usize) -> Problem {
+        let resolution = resolution.max(1);
         Problem {
-            resolution: resolution.max(1),
+            resolution,
+            built: self.built.clone().filter(|_| resolution == self.resolution),
             ..self.clone()
         }
     }
 
     /// Builds the start mesh and the NLP.
     pub fn build(&self) -> Result<CmcNlp, Error> {
-        let (shape, chords) = self.spec.build(self.resolution)?;
+        let (shape, chords) = match &self.built {
+            Some(built) => (built.0.clone(), built.1.clone()),
+            None => self.spec.build(self.resolution)?,
+        };
         let pressures = self.spec.pressures(&shape)?;
         let volumes = shape
             .volumes

@@ -52,6 +52,11 @@ pub fn svg(mesh: &Mesh, width: f64, caption: &str) -> String {
         r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}">"#
     );
     let _ = writeln!(out, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    // The triangles' common stroke and opacity once, on their group.
+    let _ = writeln!(
+        out,
+        r#"<g stroke="rgb(40,40,40)" stroke-width="0.2" fill-opacity="0.85">"#
+    );
     for t in order {
         let n = area_vector(&mesh.corners(t)).normalize();
         let shade = 0.35 + 0.65 * n.dot(&light).abs();
@@ -60,22 +65,22 @@ pub fn svg(mesh: &Mesh, width: f64, caption: &str) -> String {
         out.push_str(r#"<polygon points=""#);
         for (k, &v) in mesh.triangles()[t].iter().enumerate() {
             let (x, y, _) = pts[v];
-            let gap = if k > 0 { " " } else { "" };
-            let _ = write!(
-                out,
-                "{gap}{:.2},{:.2}",
-                (x - x0) * s + margin,
-                (y - y0) * s + margin
-            );
+            if k > 0 {
+                out.push(' ');
+            }
+            push_tenths(&mut out, (x - x0) * s + margin);
+            out.push(',');
+            push_tenths(&mut out, (y - y0) * s + margin);
         }
-        let _ = writeln!(
-            out,
-            r#"" fill="rgb({},{},{})" stroke="rgb(40,40,40)" stroke-width="0.2" fill-opacity="0.85"/>"#,
-            colour(r),
-            colour(g),
-            colour(b)
-        );
+        out.push_str(r##"" fill="#"##);
+        for c in [r, g, b] {
+            let byte = colour(c);
+            out.push(HEX[usize::from(byte >> 4)]);
+            out.push(HEX[usize::from(byte & 15)]);
+        }
+        out.push_str("\"/>\n");
     }
+    out.push_str("</g>\n");
     let _ = writeln!(
         out,
         r#"<text x="{margin}" y="{:.0}" font-family="sans-serif" font-size="14">{}</text>"#,
@@ -84,6 +89,35 @@ pub fn svg(mesh: &Mesh, width: f64, caption: &str) -> String {
     );
     out.push_str("</svg>\n");
     out
+}
+
+/// Hexadecimal digits of the fill colours.
+const HEX: [char; 16] = [
+    '0', '1', '2', '3', '4', '5', '6', '7', '8', '9', 'a', 'b', 'c', 'd', 'e', 'f',
+];
+
+/// Appends `v` (pixels) rounded to tenths, as `123.4` (digits written directly: the preview
+/// writes two such numbers per corner).
+fn push_tenths(out: &mut String, v: f64) {
+    let tenths = (v * 10.0).round();
+    if tenths < 0.0 {
+        out.push('-');
+    }
+    let mut rest = tenths.abs() as u64;
+    // At most 20 decimal digits in a u64, the last one after the point.
+    let mut digits = [0u8; 20];
+    let mut count = 0;
+    while count < 2 || rest > 0 {
+        digits[count] = (rest % 10) as u8;
+        rest /= 10;
+        count += 1;
+    }
+    for (k, &d) in digits[..count].iter().enumerate().rev() {
+        out.push(char::from(b'0' + d));
+        if k == 1 {
+            out.push('.');
+        }
+    }
 }
 
 #[cfg(test)]
@@ -97,5 +131,15 @@ mod tests {
         assert_eq!(text.matches("<polygon").count(), mesh.triangles().len());
         assert!(text.contains("sphere &lt;test&gt;"));
         assert!(text.ends_with("</svg>\n"));
+    }
+
+    #[test]
+    fn pixels_are_written_in_tenths() {
+        let mut out = String::new();
+        for v in [0.0, 0.04, 12.34, 12.36, 799.96, -3.25, 1e6] {
+            push_tenths(&mut out, v);
+            out.push(' ');
+        }
+        assert_eq!(out, "0.0 0.0 12.3 12.4 800.0 -3.3 1000000.0 ");
     }
 }

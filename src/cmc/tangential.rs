@@ -188,8 +188,10 @@ struct Scratch {
 struct Star<'a> {
     mesh: &'a Mesh,
     terms: &'a [Smoothing],
-    /// The terms whose vertex or ring holds each vertex.
-    terms_of: Vec<Vec<usize>>,
+    /// The terms whose vertex or ring holds vertex v, in increasing order:
+    /// `term_list[term_starts[v]..term_starts[v + 1]]`.
+    term_starts: Vec<usize>,
+    term_list: Vec<usize>,
     /// `PᵀP` of each term.
     gram: Vec<Matrix3<f64>>,
     surface_pressure: &'a [f64],
@@ -203,18 +205,38 @@ impl<'a> Star<'a> {
         surface_pressure: &'a [f64],
         weight: f64,
     ) -> Star<'a> {
-        let mut terms_of: Vec<Vec<usize>> = vec![Vec::new(); mesh.vertex_count()];
-        for (k, term) in terms.iter().enumerate() {
-            for u in term.star() {
-                if !terms_of[u].contains(&k) {
-                    terms_of[u].push(k);
-                }
-            }
+        // Each (vertex, term) pair once, in term order: counted, then placed.
+        let n = mesh.vertex_count();
+        let pairs = || {
+            let mut last = vec![usize::MAX; n];
+            terms
+                .iter()
+                .enumerate()
+                .flat_map(|(k, term)| {
+                    std::iter::once(term.vertex)
+                        .chain(term.ring.iter().copied())
+                        .map(move |u| (u, k))
+                })
+                .filter(move |&(u, k)| std::mem::replace(&mut last[u], k) != k)
+        };
+        let mut term_starts = vec![0; n + 1];
+        for (u, _) in pairs() {
+            term_starts[u + 1] += 1;
+        }
+        for v in 0..n {
+            term_starts[v + 1] += term_starts[v];
+        }
+        let mut next = term_starts.clone();
+        let mut term_list = vec![0; term_starts[n]];
+        for (u, k) in pairs() {
+            term_list[next[u]] = k;
+            next[u] += 1;
         }
         Star {
             mesh,
             terms,
-            terms_of,
+            term_starts,
+            term_list,
             gram: terms
                 .iter()
                 .map(|term| term.projector.transpose() * term.projector)
@@ -222,6 +244,11 @@ impl<'a> Star<'a> {
             surface_pressure,
             weight,
         }
+    }
+
+    /// The terms whose vertex or ring holds `v`, in increasing order.
+    fn terms_of(&self, v: usize) -> &[usize] {
+        &self.term_list[self.term_starts[v]..self.term_starts[v + 1]]
     }
 
     /// The work space of [`Star::step`] for the positions `pos`.
@@ -307,7 +334,8 @@ impl<'a> Star<'a> {
             scratch.trial_energies.push(energy);
             triangles += energy;
         }
-        let terms: f64 = self.terms_of[v]
+        let terms: f64 = self
+            .terms_of(v)
             .iter()
             .zip(&scratch.offsets)
             .map(|(&k, &offset)| {
@@ -358,7 +386,7 @@ impl<'a> Star<'a> {
     /// The smoothing terms' part of the share of `v`, m².
     #[cfg(test)]
     fn terms_share(&self, pos: &[Point], v: usize) -> f64 {
-        self.terms_of[v]
+        self.terms_of(v)
             .iter()
             .map(|&k| self.term_energy(pos, k))
             .sum()
@@ -394,7 +422,7 @@ impl<'a> Star<'a> {
             hessian += area_hessian;
         }
         scratch.offsets.clear();
-        for &k in &self.terms_of[v] {
+        for &k in self.terms_of(v) {
             let term = &self.terms[k];
             let c = term.coefficient(v);
             let pp = self.gram[k];
@@ -403,7 +431,8 @@ impl<'a> Star<'a> {
             gradient += self.weight * c * pp * offset;
             hessian += self.weight * c * c * pp;
         }
-        let terms: f64 = self.terms_of[v]
+        let terms: f64 = self
+            .terms_of(v)
             .iter()
             .zip(&scratch.offsets)
             .map(|(&k, &offset)| self.offset_energy(k, offset))

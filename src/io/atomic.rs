@@ -13,6 +13,7 @@
 //! Tests of the whole binary inject a write failure through the environment variable
 //! [`FAIL_WRITE_AFTER`]; it is unset in normal use.
 
+use std::borrow::Borrow;
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -87,7 +88,7 @@ fn replaceable(dir: &Path) -> Result<bool, Error> {
 
 /// Writes one run's `artifacts` (`result.json` among them, last) as the folder `dir`, replacing
 /// a previous run there as a whole (module header). Returns the paths written, in order.
-pub fn write_run(dir: &Path, artifacts: &[Artifact]) -> Result<Vec<PathBuf>, Error> {
+pub fn write_run<A: Borrow<Artifact>>(dir: &Path, artifacts: &[A]) -> Result<Vec<PathBuf>, Error> {
     if !replaceable(dir)? {
         return Err(Error::Io {
             path: dir.to_path_buf(),
@@ -107,16 +108,19 @@ pub fn write_run(dir: &Path, artifacts: &[Artifact]) -> Result<Vec<PathBuf>, Err
         let _ = fs::remove_dir_all(&staging);
     }
     staged?;
-    Ok(artifacts.iter().map(|a| dir.join(&a.name)).collect())
+    Ok(artifacts
+        .iter()
+        .map(|a| dir.join(&a.borrow().name))
+        .collect())
 }
 
 /// Writes every artifact into the new folder `staging`, then syncs them all (one pass of
 /// writes, then one of syncs: the first sync commits the creation of every file at once,
 /// where syncing each file after its write committed one file at a time).
-fn stage(staging: &Path, artifacts: &[Artifact]) -> Result<(), Error> {
+fn stage<A: Borrow<Artifact>>(staging: &Path, artifacts: &[A]) -> Result<(), Error> {
     fs::create_dir(staging).map_err(io_error(staging))?;
     let mut written = Vec::with_capacity(artifacts.len());
-    for (k, a) in artifacts.iter().enumerate() {
+    for (k, a) in artifacts.iter().map(Borrow::borrow).enumerate() {
         let path = staging.join(&a.name);
         injected_failure(k, artifacts.len()).map_err(io_error(&path))?;
         let file = create_written(&path, &a.bytes).map_err(io_error(&path))?;
@@ -241,7 +245,7 @@ mod tests {
     fn unwritable_destination_is_an_io_error() {
         let file = std::env::temp_dir().join(format!("optimize-notadir-{}", std::process::id()));
         fs::write(&file, b"x").unwrap();
-        let err = write_run(&file.join("sub"), &[]).unwrap_err();
+        let err = write_run::<Artifact>(&file.join("sub"), &[]).unwrap_err();
         assert_eq!(err.exit_code(), 1);
         fs::remove_file(&file).unwrap();
     }

@@ -12,13 +12,17 @@ pub mod svg;
 use std::path::{Path, PathBuf};
 
 use crate::error::Error;
-use crate::outcome::Outcome;
+use crate::outcome::{Artifact, Outcome};
 
-/// Writes a run's files as the folder `dir`: the module's artifacts, then `result.json`, into a
-/// fresh folder moved into place as a whole ([`atomic::write_run`]), so a folder holding a
-/// `result.json` always holds exactly one complete run.
-pub fn write_outcome(dir: &Path, outcome: &Outcome) -> Result<Vec<PathBuf>, Error> {
-    let mut files = outcome.artifacts.clone();
-    files.push(result::summary_json(&outcome.summary));
+/// Writes a run's files as the folder `dir`: the module's artifacts, then `summary` (its
+/// `result.json`, [`result::summary_json`] of the outcome's summary), into a fresh folder moved
+/// into place as a whole ([`atomic::write_run`]), so a folder holding a `result.json` always
+/// holds exactly one complete run.
+pub fn write_outcome(
+    dir: &Path,
+    outcome: &Outcome,
+    summary: &Artifact,
+) -> Result<Vec<PathBuf>, Error> {
+    let files: Vec<&Artifact> = outcome.artifacts.iter().chain([summary]).collect();
     atomic::write_run(dir, &files)
 }

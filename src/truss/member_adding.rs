@@ -21,10 +21,19 @@
 //! images); repeat until none is left. Pricing costs O(n²·cases) per iteration for n joints;
 //! the LP only ever holds the members added.
 //!
+//! Solvers: the LPs whose duals only price are solved by the revised simplex method
+//! ([`super::simplex`], up to `SIMPLEX_ROWS` balance rows), each from the previous LP's optimal
+//! basis: the added columns are nonbasic at 0, so that basis stays primal feasible and only the
+//! added columns that price negative enter (pier_cantilever_linear: 212 pivots cold, then 41,
+//! 4, 2). Once a vertex's duals price every pair out, the same LP is solved once more by the
+//! interior point for its primal solution: the start ([`super::start`]) wants the forces of
+//! the optimal face's interior, spread over tied members, not a vertex's.
+//!
 //! Certificate: at the end no admissible pair has v > `ADD_TOLERANCE` and the members in the
-//! LP have v ≤ v_in (the interior point's residual), so y/(1 + max(v_in, tolerance)) is
-//! feasible for the dual of the LP over every admissible pair and its dual objective is a
-//! lower bound on that LP's optimum ([`Layouts::lower_bound`]).
+//! LP have v ≤ v_in (the residual of the duals that priced), so y/(1 + max(v_in, tolerance))
+//! is feasible for the dual of the LP over every admissible pair and its dual objective is a
+//! lower bound on that LP's optimum ([`Layouts::lower_bound`]). With the simplex, y is the
+//! vertex's and the primal optimum the interior point's on the same LP.
 //!
 //! Admissible pairs: the caller's rule for a pair's ends (anchors, forbidden pairs,
 //! obstacles), and no joint on the segment: q must be the nearest joint to p in its direction.
@@ -37,7 +46,9 @@ use std::collections::{HashMap, HashSet};
 use super::lp::LpError;
 use super::mass::gravity;
 use super::model::{Beam, Structure, Vec3};
+use super::nlp::balance_basis;
 use super::plastic::{self, LpMethod, PlasticLayout};
+use super::simplex::Basic;
 use crate::solver::Interrupt;
 
 /// Violation v above which a member is added (relative to its cost).
@@ -49,6 +60,11 @@ pub const ADD_MIN: usize = 200;
 /// Largest number of LP solves; the growth at least doubles the LP's size on every
 /// iteration that does not end it, so this bound is never reached below a billion members.
 const MAX_ITERATIONS: usize = 30;
+
+/// Most balance rows for which the LPs that only price are solved by the dense revised
+/// simplex method ([`super::simplex`]: O(m²) per pivot, O(m³) per refactorization); larger
+/// LPs (the 3-D layouts) are all solved by the interior point.
+const SIMPLEX_ROWS: usize = 200;
 
 /// The price of one member: LP cost per newton and self-weight per newton.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -83,6 +99,8 @@ pub struct Layouts {
     pub all_pairs: bool,
     /// The largest violation v certified over the priced members (≥ 0).
     pub violation: f64,
+    /// The last simplex basis of each case's LP (empty where none was solved).
+    pub bases: Vec<Vec<BasisKey>>,
 }
 
 impl Layouts {
@@ -94,17 +112,61 @@ impl Layouts {
     }
 }
 
+/// A basic variable of a layout LP by what it is (a member's compression or tension column, or
+/// a balance row's artificial variable), so that a basis carries over to an LP whose members
+/// are numbered otherwise.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum BasisKey {
+    /// The compression column of a member.
+    Compression(Beam),
+    /// The tension column of a member.
+    Tension(Beam),
+    /// The artificial variable of a balance row.
+    Row(usize),
+}
+
+/// A simplex basis of the layout LP on `beams` (columns as in [`plastic::LayoutLp`]) by key.
+fn keys_of(basis: &[Basic], beams: &[Beam]) -> Vec<BasisKey> {
+    (basis.iter())
+        .map(|&k| match k {
+            Basic::Column(j) if j < beams.len() => BasisKey::Compression(beams[j]),
+            Basic::Column(j) => BasisKey::Tension(beams[j - beams.len()]),
+            Basic::Artificial(r) => BasisKey::Row(r),
+        })
+        .collect()
+}
+
+/// The basis of keys on the LP of `beams`; None when a key's member is not among them.
+fn basis_of(keys: &[BasisKey], beams: &[Beam]) -> Option<Vec<Basic>> {
+    let index: HashMap<Beam, usize> = beams.iter().enumerate().map(|(j, b)| (*b, j)).collect();
+    (keys.iter())
+        .map(|&k| match k {
+            BasisKey::Compression(b) => index.get(&b).map(|&j| Basic::Column(j)),
+            BasisKey::Tension(b) => index.get(&b).map(|&j| Basic::Column(beams.len() + j)),
+            BasisKey::Row(r) => Some(Basic::Artificial(r)),
+        })
+        .collect()
+}
+
 /// Solves the layout LP of every case on `structure`'s beams, priced by `price` (by member
 /// length, m); with `growth`, adds violating members until none is left (module header).
 /// `axes` balance directions; loads as in [`plastic::layout_with_costs`]. Should a larger LP
 /// fail (the interior-point method's failure: adding columns keeps an LP feasible), the last
 /// solved one is returned with the largest violation it left, so its bound still holds.
+///
+/// With `growth` and [`LpMethod::InteriorFace`] (and at most `SIMPLEX_ROWS` rows), the LPs
+/// whose duals only price are solved by the revised simplex method, each from the previous
+/// one's optimal basis (per case; the first from `warm` if given, e.g. a previous pass's
+/// [`Layouts::bases`]); once a vertex's duals price every pair out, the same LP is solved by
+/// `method` for the forces (module header). A simplex failure other than an interrupt leaves
+/// that LP to `method`.
 pub fn solve(
     structure: &Structure,
     axes: usize,
     price: &dyn Fn(f64) -> MemberPrice,
     growth: Option<&Growth>,
     method: LpMethod,
+    warm: &[Vec<BasisKey>],
     interrupt: &Interrupt,
 ) -> Result<Layouts, LpError> {
     let cases = structure.joints.first().map_or(0, |j| j.loads.len());
@@ -112,18 +174,53 @@ pub fn solve(
     let mut added = 0;
     // The last solved iteration and the largest violation it left, should a larger LP fail.
     let mut previous: Option<Layouts> = None;
+    let rows: usize = (structure.joints.iter())
+        .map(|j| balance_basis(&j.kind, axes).len())
+        .sum();
+    let vertex = growth.is_some() && method == LpMethod::InteriorFace && rows <= SIMPLEX_ROWS;
+    let mut bases = warm.to_vec();
+    bases.resize(cases, Vec::new());
     for iteration in 1..=MAX_ITERATIONS {
         let prices: Vec<MemberPrice> = (0..current.beams.len())
             .map(|j| price(current.length(j)))
             .collect();
         let costs: Vec<(f64, f64)> = prices.iter().map(|p| p.cost).collect();
         let weights: Option<Vec<(f64, f64)>> = prices.iter().map(|p| p.weight).collect();
-        let solved = (0..cases)
-            .map(|c| {
-                let weights = weights.as_deref();
-                plastic::layout_with_costs(&current, c, axes, &costs, weights, method, interrupt)
-            })
-            .collect::<Result<Vec<_>, _>>();
+        let weights = weights.as_deref();
+        let mut solved = Ok(Vec::with_capacity(cases));
+        for (c, basis) in bases.iter_mut().enumerate() {
+            let by_vertex = vertex.then(|| {
+                let start = basis_of(basis, &current.beams);
+                let s = plastic::layout_by_simplex(
+                    &current,
+                    c,
+                    axes,
+                    &costs,
+                    weights,
+                    start.as_deref(),
+                    interrupt,
+                );
+                s.map(|(layout, b)| {
+                    *basis = keys_of(&b, &current.beams);
+                    layout
+                })
+            });
+            let layout = match by_vertex {
+                Some(Ok(layout)) => Ok(layout),
+                Some(Err(LpError::Interrupted)) => Err(LpError::Interrupted),
+                _ => plastic::layout_with_costs(
+                    &current, c, axes, &costs, weights, method, interrupt,
+                ),
+            };
+            match (layout, solved.as_mut()) {
+                (Ok(layout), Ok(all)) => all.push(layout),
+                (Err(e), Ok(_)) => solved = Err(e),
+                _ => {}
+            }
+            if solved.is_err() {
+                break;
+            }
+        }
         let layouts = match (solved, previous) {
             (Ok(layouts), _) => layouts,
             // An interrupted LP ends the layout at once.
@@ -156,10 +253,17 @@ pub fn solve(
             added,
             all_pairs: growth.is_some(),
             violation,
+            bases: bases.clone(),
         };
         let Some(growth) = growth.filter(|_| !violators.is_empty()) else {
             let tolerance = if growth.is_some() { ADD_TOLERANCE } else { 0.0 };
-            return Ok(done(inside.max(tolerance)));
+            let certified = done(inside.max(tolerance));
+            if vertex {
+                return with_interior_forces(
+                    certified, &current, axes, &costs, weights, method, interrupt,
+                );
+            }
+            return Ok(certified);
         };
         // Not certified over every pair: the largest violation left is the honest figure.
         let uncertified = done(violators[0].0.max(inside));
@@ -175,6 +279,34 @@ pub fn solve(
         added += current.beams.len() - before;
     }
     unreachable!("the loop returns on its last iteration")
+}
+
+/// `vertex` (certified by the simplex's duals) with each case's primal solution replaced by
+/// the interior point's on the same LP (`method`): its forces spread over tied members, the
+/// start the geometry solve expects ([`super::start`]). The certificate stays the vertex's: its
+/// duals priced every pair. Should the interior point fail, the vertex stands.
+fn with_interior_forces(
+    mut vertex: Layouts,
+    structure: &Structure,
+    axes: usize,
+    costs: &[(f64, f64)],
+    weights: Option<&[(f64, f64)]>,
+    method: LpMethod,
+    interrupt: &Interrupt,
+) -> Result<Layouts, LpError> {
+    for (c, layout) in vertex.cases.iter_mut().enumerate() {
+        match plastic::layout_with_costs(structure, c, axes, costs, weights, method, interrupt) {
+            Ok(interior) => {
+                layout.volume = interior.volume;
+                layout.forces = interior.forces;
+                layout.primal_residual = interior.primal_residual;
+            }
+            Err(LpError::Interrupted) => return Err(LpError::Interrupted),
+            Err(_) => {}
+        }
+    }
+    vertex.iterations += 1;
+    Ok(vertex)
 }
 
 /// The violation v of `beam` (module header) over the cases' virtual displacements.
@@ -312,6 +444,18 @@ mod tests {
         Structure { joints, beams }
     }
 
+    /// The test growth rule: no member joins two anchors.
+    fn not_between_anchors(s: &Structure, b: Beam) -> bool {
+        let [a, c] = b.ends;
+        !(s.joints[a].is_anchor() && s.joints[c].is_anchor())
+    }
+
+    /// The test closure: the members sorted.
+    fn sorted(mut beams: Vec<Beam>) -> Vec<Beam> {
+        beams.sort();
+        beams
+    }
+
     fn unit_price(length: f64) -> MemberPrice {
         MemberPrice {
             cost: (length, 0.5 * length),
@@ -329,21 +473,15 @@ mod tests {
             &unit_price,
             None,
             LpMethod::Simplex,
+            &[],
             &Interrupt::new(),
         )
         .unwrap();
         let sparse = cantilever(nx, ny, 4);
-        let admits = |b: Beam| {
-            let [a, c] = b.ends;
-            !(sparse.joints[a].is_anchor() && sparse.joints[c].is_anchor())
-        };
-        let close = |mut beams: Vec<Beam>| {
-            beams.sort();
-            beams
-        };
+        let admits = |b: Beam| not_between_anchors(&sparse, b);
         let growth = Growth {
             admits: &admits,
-            close: &close,
+            close: &sorted,
         };
         let grown = solve(
             &sparse,
@@ -351,6 +489,7 @@ mod tests {
             &unit_price,
             Some(&growth),
             LpMethod::InteriorPoint,
+            &[],
             &Interrupt::new(),
         )
         .unwrap();
@@ -396,6 +535,92 @@ mod tests {
     }
 
     #[test]
+    fn the_warm_started_simplex_prices_like_the_interior_point_on_ground_structures() {
+        let interrupt = Interrupt::new();
+        // Each LP of the full 7 × 5 and 6 × 4 ground structures: the same optimum both ways.
+        for (nx, ny) in [(7, 5), (6, 4)] {
+            let full = cantilever(nx, ny, nx * ny);
+            let costs: Vec<(f64, f64)> = (0..full.beams.len())
+                .map(|j| unit_price(full.length(j)).cost)
+                .collect();
+            let layout = |method| {
+                plastic::layout_with_costs(&full, 0, 2, &costs, None, method, &interrupt).unwrap()
+            };
+            let interior = layout(LpMethod::InteriorFace);
+            let (vertex, basis) =
+                plastic::layout_by_simplex(&full, 0, 2, &costs, None, None, &interrupt).unwrap();
+            let gap = (vertex.volume - interior.volume).abs() / interior.volume;
+            assert!(gap < 1e-9, "{nx} × {ny}: {gap}");
+            assert!((vertex.dual_volume - vertex.volume).abs() < 1e-9 * vertex.volume);
+            assert!(vertex.primal_residual < 1e-9 && vertex.dual_infeasibility < 1e-9);
+            // From its own optimal basis: no pivot, the same vertex.
+            let (again, _) =
+                plastic::layout_by_simplex(&full, 0, 2, &costs, None, Some(&basis), &interrupt)
+                    .unwrap();
+            assert_eq!(again.forces, vertex.forces);
+        }
+        // Member adding by the simplex (`InteriorFace`): the full LP's optimum, certified, and
+        // the forces of the interior point on the last LP.
+        let (nx, ny) = (7, 5);
+        let full = cantilever(nx, ny, nx * ny);
+        let reference = solve(
+            &full,
+            2,
+            &unit_price,
+            None,
+            LpMethod::Simplex,
+            &[],
+            &interrupt,
+        )
+        .unwrap()
+        .cases[0]
+            .volume;
+        let sparse = cantilever(nx, ny, 4);
+        let admits = |b: Beam| not_between_anchors(&sparse, b);
+        let growth = Growth {
+            admits: &admits,
+            close: &sorted,
+        };
+        let method = LpMethod::InteriorFace;
+        let grown = solve(
+            &sparse,
+            2,
+            &unit_price,
+            Some(&growth),
+            method,
+            &[],
+            &interrupt,
+        )
+        .unwrap();
+        let volume = grown.cases[0].volume;
+        assert!(
+            (volume - reference).abs() < 1e-7 * reference,
+            "{volume} vs {reference}"
+        );
+        assert!(grown.bases[0].len() == grown.cases[0].duals.len());
+        let bound = grown.lower_bound()[0];
+        assert!(bound <= reference * (1.0 + 1e-12) && bound > reference * (1.0 - 2e-6));
+        let on_last = Structure {
+            joints: sparse.joints.clone(),
+            beams: grown.beams.clone(),
+        };
+        let last = solve(&on_last, 2, &unit_price, None, method, &[], &interrupt).unwrap();
+        assert_eq!(last.cases[0].forces, grown.cases[0].forces);
+        // Warm from the last bases, the next pass starts at an optimal vertex.
+        let again = solve(
+            &on_last,
+            2,
+            &unit_price,
+            Some(&growth),
+            method,
+            &grown.bases,
+            &interrupt,
+        )
+        .unwrap();
+        assert_eq!(again.iterations, 2, "one vertex, one interior-point solve");
+    }
+
+    #[test]
     fn the_admissible_pairs_complete_the_ground_structure_whose_lp_member_adding_solves() {
         let (nx, ny) = (6, 4);
         let full = cantilever(nx, ny, nx * ny);
@@ -436,6 +661,7 @@ mod tests {
             &unit_price,
             Some(&growth),
             LpMethod::InteriorPoint,
+            &[],
             &interrupt,
         )
         .unwrap();

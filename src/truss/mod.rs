@@ -23,6 +23,7 @@ pub mod plastic;
 pub mod quality;
 pub mod restart;
 pub mod rounds;
+pub mod simplex;
 pub mod spec;
 pub mod start;
 pub mod topology;
@@ -91,7 +92,9 @@ pub fn load_source(source: Source) -> Result<Problem, InputError> {
         name,
         model,
     };
-    problem.nlp(&problem.model, 0)?;
+    // The NLP's setup checks at load time (bad input fails before the run starts).
+    let model = &problem.model;
+    nlp::check_setup(&model.structure, &model.settings).map_err(|e| problem.setup_error(&e))?;
     Ok(problem)
 }
 

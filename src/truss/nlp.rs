@@ -1184,6 +1184,17 @@ fn fixed_diagonal(s: &Structure) -> f64 {
     (hi - lo).norm()
 }
 
+/// The setup checks of [`TrussNlp::new`] on `structure`, without building the NLP: beams exist,
+/// and every free joint has a mirror image under each symmetry plane.
+pub fn check_setup(structure: &Structure, settings: &Settings) -> Result<(), SetupError> {
+    if structure.beams.is_empty() {
+        return Err(SetupError::NoBeams);
+    }
+    // Without position variables the rows are all constant: only the images are checked.
+    let vars = vec![[None; 3]; structure.joints.len()];
+    symmetry_rows(structure, settings, &vars).map(|_| ())
+}
+
 /// Symmetry rows (module header, item 4).
 fn symmetry_rows(
     s: &Structure,

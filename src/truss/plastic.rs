@@ -19,12 +19,13 @@
 //!   P/2). With both supports pinned the optimum is lower (horizontal thrust is free).
 
 use nalgebra::DMatrix;
-use nalgebra_sparse::{CooMatrix, CsrMatrix};
+use nalgebra_sparse::{CooMatrix, CscMatrix, CsrMatrix};
 
 use super::lp::{self, LpError};
 use super::mass::gravity;
 use super::model::{Structure, Vec3};
 use super::nlp::balance_basis;
+use super::simplex::{self, Basic};
 use crate::solver::Interrupt;
 
 /// The LP optimum on a fixed ground structure.
@@ -101,7 +102,6 @@ pub fn layout_with_costs(
     method: LpMethod,
     interrupt: &Interrupt,
 ) -> Result<PlasticLayout, LpError> {
-    let beams = structure.beams.len();
     let LayoutLp { a, b, cost } = layout_lp(structure, case, axes, costs, self_weight);
     let s = match method {
         LpMethod::Simplex => lp::solve(&DMatrix::from(&a), &b, &cost, interrupt)?,
@@ -112,16 +112,39 @@ pub fn layout_with_costs(
             lp::solve_sparse(&CsrMatrix::from(&a), &b, &cost, false, interrupt)?
         }
     };
+    Ok(layout_of(structure.beams.len(), &b, s))
+}
+
+/// [`layout_with_costs`] by the revised simplex method ([`simplex::solve`]) from the basis
+/// `warm` if it is usable for this LP (columns as in [`LayoutLp`]), with the optimal basis: a
+/// vertex, for member adding's intermediate LPs.
+pub fn layout_by_simplex(
+    structure: &Structure,
+    case: usize,
+    axes: usize,
+    costs: &[(f64, f64)],
+    self_weight: Option<&[(f64, f64)]>,
+    warm: Option<&[Basic]>,
+    interrupt: &Interrupt,
+) -> Result<(PlasticLayout, Vec<Basic>), LpError> {
+    let LayoutLp { a, b, cost } = layout_lp(structure, case, axes, costs, self_weight);
+    let solved = simplex::solve(&CscMatrix::from(&a), &b, &cost, warm, interrupt)?;
+    let layout = layout_of(structure.beams.len(), &b, solved.solution);
+    Ok((layout, solved.basis))
+}
+
+/// The layout of an LP solution over `beams` beams with right-hand side `b`.
+fn layout_of(beams: usize, b: &[f64], s: lp::LpSolution) -> PlasticLayout {
     let forces = (0..beams).map(|j| s.x[j] - s.x[beams + j]).collect();
-    let dual_volume = s.y.iter().zip(&b).map(|(y, b)| y * b).sum();
-    Ok(PlasticLayout {
+    let dual_volume = s.y.iter().zip(b).map(|(y, b)| y * b).sum();
+    PlasticLayout {
         volume: s.objective,
         forces,
         duals: s.y,
         dual_volume,
         primal_residual: s.primal_residual,
         dual_infeasibility: s.dual_infeasibility,
-    })
+    }
 }
 
 /// The layout LP in standard form `min costᵀx s.t. A x = b, x ≥ 0` (module header).

@@ -454,12 +454,26 @@ fn an_explicit_seed_overrides_the_files_seed() {
 
 #[test]
 fn a_round_that_does_not_converge_does_not_replace_an_optimal_one() {
+    use super::rounds::{Standing::*, reported_round};
     // Last round Optimal: it is reported, whatever came before.
-    assert_eq!(super::rounds::reported_round(5, true, Some(5)), 5);
+    assert_eq!(
+        reported_round(&[Unfinished, Converged, Failed, Unfinished, Converged]),
+        5
+    );
     // Round 3 was the last Optimal one and round 5 ended at its limit: round 3 is reported.
-    assert_eq!(super::rounds::reported_round(5, false, Some(3)), 3);
-    // No round converged: the last one is reported.
-    assert_eq!(super::rounds::reported_round(5, false, None), 5);
+    assert_eq!(
+        reported_round(&[Converged, Unfinished, Converged, Failed, Unfinished]),
+        3
+    );
+    // No round converged: the last one that did not fail is reported, not a later
+    // least-infeasible point.
+    assert_eq!(
+        reported_round(&[Unfinished, Unfinished, Unfinished, Failed, Failed]),
+        3
+    );
+    assert_eq!(reported_round(&[Unfinished, Unfinished]), 2);
+    // Every round failed: the last one.
+    assert_eq!(reported_round(&[Failed, Failed]), 2);
 }
 
 #[test]

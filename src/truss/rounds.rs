@@ -89,8 +89,8 @@ pub struct Rounds {
     pub reports: Vec<RoundReport>,
     /// Rounds solved.
     pub rounds_run: usize,
-    /// The round whose design is reported: the last one, unless it did not end Optimal while an
-    /// earlier one did (then the last such round).
+    /// The round whose design is reported: the last round of the best standing (`Standing`)
+    /// any round reached (the last one, unless an earlier one ended better).
     pub result_round: usize,
     /// SQP iterations over all rounds.
     pub iterations: usize,
@@ -118,8 +118,9 @@ pub fn solve_rounds(
     let mut logs: Vec<Vec<IterationRecord>> = Vec::new();
     let mut solution: Solution;
     let mut round = 0;
-    // The last round that ended Optimal: its model, solution and number.
-    let mut converged: Option<(TrussNlp, Solution, usize)> = None;
+    // Each round's standing, and the model, solution and number of the last round of the best.
+    let mut standings: Vec<Standing> = Vec::new();
+    let mut best: Option<(TrussNlp, Solution, usize)> = None;
     // Iterations the current round spent before its clean-up check or creep end that changed
     // nothing (0: none yet).
     let mut checked = 0;
@@ -182,9 +183,11 @@ pub fn solve_rounds(
         checked = 0;
         round += 1;
         let optimal = solution.status == Status::Optimal;
-        if optimal {
-            converged = Some((nlp.clone(), solution.clone(), round));
+        let standing = Standing::of(solution.status);
+        if standings.iter().all(|&s| s <= standing) {
+            best = Some((nlp.clone(), solution.clone(), round));
         }
+        standings.push(standing);
         if round == rounds || solution.status == Status::Interrupted {
             break;
         }
@@ -211,16 +214,12 @@ pub fn solve_rounds(
         nlp = TrussNlp::with_parts(structure, nlp.settings().clone(), forces, parts)
             .map_err(|e| Error::Runtime(format!("round {round}: {e}")))?;
     }
-    let result_round = reported_round(
-        round,
-        solution.status == Status::Optimal,
-        converged.as_ref().map(|c| c.2),
-    );
-    if let Some((converged_nlp, converged_solution, converged_round)) = converged
-        && converged_round == result_round
+    let result_round = reported_round(&standings);
+    if let Some((best_nlp, best_solution, best_round)) = best
+        && best_round == result_round
     {
-        nlp = converged_nlp;
-        solution = converged_solution;
+        nlp = best_nlp;
+        solution = best_solution;
     }
     Ok(Rounds {
         nlp,
@@ -252,18 +251,40 @@ fn clean_up_at(
     )
 }
 
-/// The round whose design a run reports: the last one, unless it did not end Optimal while an
-/// earlier one did (`last_converged`, the last such round) — a clean-up that the next solve
-/// cannot settle does not discard a converged design.
-pub(super) fn reported_round(
-    last: usize,
-    last_optimal: bool,
-    last_converged: Option<usize>,
-) -> usize {
-    match last_converged {
-        Some(round) if !last_optimal => round,
-        _ => last,
+/// How a round ended, ordered from worst to best for choosing the reported design.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub(super) enum Standing {
+    /// No usable design: Infeasible (the least-infeasible point), Unbounded, EvaluationError.
+    Failed,
+    /// A design the solver stopped at before its tests held (a limit, slow progress, a stall,
+    /// Acceptable, an interruption).
+    Unfinished,
+    /// Optimal.
+    Converged,
+}
+
+impl Standing {
+    /// The standing of a round that ended with `status`.
+    pub(super) fn of(status: Status) -> Self {
+        match status {
+            Status::Optimal => Standing::Converged,
+            Status::Infeasible | Status::Unbounded | Status::EvaluationError => Standing::Failed,
+            _ => Standing::Unfinished,
+        }
     }
+}
+
+/// The round (1-based) whose design a run reports, from each round's standing in order: the
+/// last round of the best standing reached. A clean-up that the next solve cannot settle does
+/// not discard a converged design, nor a feasible one for the least-infeasible point of a
+/// round that found none (roof_warren's 30-iteration golden run: its fourth round, on a design
+/// cleaned up from a point one iteration short of convergence, ended Infeasible).
+pub(super) fn reported_round(standings: &[Standing]) -> usize {
+    let best = standings.iter().copied().max().unwrap_or(Standing::Failed);
+    standings
+        .iter()
+        .rposition(|&s| s == best)
+        .map_or(standings.len(), |i| i + 1)
 }
 
 #[cfg(test)]

@@ -69,7 +69,7 @@
 use super::ground::FullConnectivity;
 use super::lp::LpError;
 use super::mass::Compression;
-use super::member_adding::{self, Growth, MemberPrice};
+use super::member_adding::{self, BasisKey, Growth, MemberPrice};
 use super::model::{Beam, Mirror, Objective, Obstacle, Settings, Structure};
 use super::nlp::ForceParts;
 use super::plastic::{self, LayoutLp, LpMethod};
@@ -122,7 +122,8 @@ pub struct LpReport {
     pub members: usize,
     /// Members added by pricing (every pass).
     pub members_added: usize,
-    /// LP solves per case (every pass).
+    /// LP solves per case (every pass; member adding's pricing LPs by the simplex and the
+    /// interior-point solves alike).
     pub solves: usize,
 }
 
@@ -209,8 +210,15 @@ fn solve_on(
     interrupt: &Interrupt,
 ) -> Result<LayoutStart, LpError> {
     let mut usable = usable.to_vec();
-    let (mut ground, mut forces, mut lp, mut columns) =
-        lp_forces(structure, settings, &usable, self_weight, grow, interrupt)?;
+    let (mut ground, mut forces, mut lp, mut columns, mut bases) = lp_forces(
+        structure,
+        settings,
+        &usable,
+        self_weight,
+        grow,
+        &[],
+        interrupt,
+    )?;
     for _ in 0..RUN_PASSES {
         usable.resize(ground.beams.len(), true);
         let Some((merged, _)) = merge_runs(
@@ -231,26 +239,42 @@ fn solve_on(
             break;
         }
         let (added, solves) = (lp.members_added, lp.solves);
-        (ground, forces, lp, columns) =
-            lp_forces(&merged, settings, &usable, self_weight, grow, interrupt)?;
+        (ground, forces, lp, columns, bases) = lp_forces(
+            &merged,
+            settings,
+            &usable,
+            self_weight,
+            grow,
+            &bases,
+            interrupt,
+        )?;
         lp.members_added += added;
         lp.solves += solves;
     }
     Ok(prune(&ground, forces, lp, &settings.symmetry))
 }
 
-/// What [`lp_forces`] returns: the ground structure, forces, report and the last LP's members.
-type SolvedLp = (Structure, Vec<Vec<f64>>, LpReport, Vec<Beam>);
+/// What [`lp_forces`] returns: the ground structure, forces, report, the last LP's members and
+/// its simplex bases.
+type SolvedLp = (
+    Structure,
+    Vec<Vec<f64>>,
+    LpReport,
+    Vec<Beam>,
+    Vec<Vec<BasisKey>>,
+);
 
 /// The LP of [`solve_on`]: the ground structure with the members pricing added (appended), its
-/// forces (N, `[case][beam]`, symmetrized), the LP's report and the last LP's members in its
-/// column order.
+/// forces (N, `[case][beam]`, symmetrized), the LP's report, the last LP's members in its
+/// column order and member adding's last simplex bases (to start the next pass's simplex from,
+/// `warm`: the joints and rows stay, the members only grow).
 fn lp_forces(
     structure: &Structure,
     settings: &Settings,
     usable: &[bool],
     self_weight: bool,
     grow: Option<(&FullConnectivity, bool)>,
+    warm: &[Vec<BasisKey>],
     interrupt: &Interrupt,
 ) -> Result<SolvedLp, LpError> {
     let scaled = Scaled::new(structure, settings, usable);
@@ -271,7 +295,8 @@ fn lp_forces(
         Some(_) => LpMethod::InteriorFace,
         None => LpMethod::InteriorPoint,
     };
-    let layouts = member_adding::solve(sub, axes, &price, growth.as_ref(), method, interrupt)?;
+    let layouts =
+        member_adding::solve(sub, axes, &price, growth.as_ref(), method, warm, interrupt)?;
     let mut ground = structure.clone();
     let mut index: std::collections::HashMap<Beam, usize> = (ground.beams.iter().enumerate())
         .map(|(j, b)| (*b, j))
@@ -310,7 +335,7 @@ fn lp_forces(
         members_added: layouts.added,
         solves: layouts.iterations,
     };
-    Ok((ground, forces, report, layouts.beams))
+    Ok((ground, forces, report, layouts.beams, layouts.bases))
 }
 
 /// The ground structure of the start's LPs in O(1) numbers: the usable beams, the loads divided

@@ -18,7 +18,11 @@
 //!
 //! Warm start: constraints of the previous working set are preferred when choosing which
 //! violated constraint to add next, which reproduces an unchanged active set in as many steps
-//! as it has members and never changes the solution.
+//! as it has members and never changes the solution. A solve of the same H, A, g and
+//! equality rows as the last one (the SQP's second-order correction moves only the
+//! right-hand sides) starts from the last equality phase, `J` and `R` as they were after the
+//! equalities were factored ([`EqualityPhase`]): only `x = J y` and the multipliers are formed
+//! again.
 //!
 //! Multipliers are returned in the convention of [`super::QpSolution`]:
 //! `H d + g + Aᵀλ + z = 0`, λ ≤ 0 at an active lower bound, ≥ 0 at an active upper one.
@@ -217,16 +221,28 @@ fn givens(a: f64, b: f64) -> (f64, f64, f64) {
     }
 }
 
-/// Rotates columns `p` and `q` of `mat`: `(colp, colq) ← (c·colp + s·colq, −s·colp + c·colq)`.
+/// Rotates columns `p` < `q` of `mat`: `(colp, colq) ← (c·colp + s·colq, −s·colp + c·colq)`.
 fn rotate_columns(mat: &mut DMatrix<f64>, p: usize, q: usize, c: f64, s: f64) {
-    for k in 0..mat.nrows() {
-        let (a, b) = (mat[(k, p)], mat[(k, q)]);
-        mat[(k, p)] = c * a + s * b;
-        mat[(k, q)] = -s * a + c * b;
+    let n = mat.nrows();
+    let (left, right) = mat.as_mut_slice().split_at_mut(q * n);
+    let column_p = &mut left[p * n..(p + 1) * n];
+    for (x, y) in column_p.iter_mut().zip(&mut right[..n]) {
+        let (a, b) = (*x, *y);
+        *x = c * a + s * b;
+        *y = -s * a + c * b;
+    }
+}
+
+/// `y ← a·x + y` over slices of equal length, each entry as nalgebra's `axpy(a, x, 1)`
+/// computes it (`(a·xᵢ)·1 + 1·yᵢ`, the products by 1 exact), so the same numbers.
+fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
+    for (yi, &xi) in y.iter_mut().zip(x) {
+        *yi += a * xi;
     }
 }
 
 /// The Goldfarb–Idnani state.
+#[derive(Debug, Clone)]
 struct ActiveSet {
     /// J with J Jᵀ = H⁻¹, rotated so that its first `iq` columns span the active normals.
     j: DMatrix<f64>,
@@ -253,16 +269,20 @@ impl ActiveSet {
         let n = self.j.nrows();
         let iq = self.len();
         let mut z = DVector::zeros(n);
-        for c in iq..n {
-            z.axpy(d[c], &self.j.column(c), 1.0);
+        let columns = self.j.as_slice()[iq * n..].chunks_exact(n.max(1));
+        for (column, &dc) in columns.zip(&d.as_slice()[iq..]) {
+            axpy(dc, column, z.as_mut_slice());
         }
-        let mut r = DVector::zeros(iq);
+        let mut r = DVector::<f64>::zeros(iq);
+        let (rt, r_slice) = (self.rt.as_slice(), r.as_mut_slice());
         for i in (0..iq).rev() {
+            // Row i of R (column i of Rᵀ), entries i + 1..iq.
+            let row = &rt[i * n + i + 1..i * n + iq];
             let mut s = d[i];
-            for k in i + 1..iq {
-                s -= self.rt[(k, i)] * r[k];
+            for (&t, &rk) in row.iter().zip(&r_slice[i + 1..iq]) {
+                s -= t * rk;
             }
-            r[i] = s / self.rt[(i, i)];
+            r_slice[i] = s / rt[i * n + i];
         }
         (z, r)
     }
@@ -323,12 +343,19 @@ impl ActiveSet {
         let n = self.j.nrows();
         let iq = self.len();
         let alpha = if d[iq] > 0.0 { -sigma } else { sigma };
-        let mut v = d.rows(iq, n - iq).into_owned();
+        let mut v = d.as_slice()[iq..].to_vec();
         v[0] -= alpha;
         let beta = 1.0 / (sigma * (sigma + d[iq].abs()));
-        let mut inactive = self.j.columns_mut(iq, n - iq);
-        let w = &inactive * &v;
-        inactive.ger(-beta, &w, &v, 1.0);
+        // w = J₂v and J₂ ← J₂ − β w vᵀ column by column, each entry as nalgebra's gemv
+        // (`wᵢ = J₂ᵢ₀v₀`, then `wᵢ += J₂ᵢⱼvⱼ`) and ger (`J₂ᵢⱼ += (−β vⱼ) wᵢ`) compute it.
+        let inactive = &mut self.j.as_mut_slice()[iq * n..];
+        let mut w: Vec<f64> = inactive[..n].iter().map(|x| x * v[0]).collect();
+        for (column, &vc) in inactive.chunks_exact(n).zip(&v).skip(1) {
+            axpy(vc, column, &mut w);
+        }
+        for (column, &vc) in inactive.chunks_exact_mut(n).zip(&v) {
+            axpy(-beta * vc, &w, column);
+        }
         alpha
     }
 
@@ -481,19 +508,54 @@ pub fn solve(h: &DMatrix<f64>, problem: &QpProblem, preferred: &[ConstraintId]) 
 /// [`solve`] with the Cholesky factor L of `h` (`h = L Lᵀ`, L in the lower triangle, the
 /// strict upper triangle ignored) already computed, as nalgebra's `cholesky` computes it: the
 /// same iterates without factoring `h` again.
+///
+/// `phase` carries the factored equality rows from one solve to the next of the same `h`
+/// (the caller drops it when `h` changes): a solve whose A, g and equality rows equal those
+/// of the kept phase (a second-order correction: only the right-hand sides move) starts from
+/// it instead of forming `J = L⁻ᵀ` and factoring the equalities again, with the same
+/// numbers; any other solve replaces it.
 pub fn solve_with_factor(
     h: &DMatrix<f64>,
     factor: &DMatrix<f64>,
     problem: &QpProblem,
     preferred: &[ConstraintId],
+    phase: &mut Option<EqualityPhase>,
 ) -> DenseQpResult {
-    solve_factored(h, Some(factor), problem, preferred)
+    solve_factored(h, Some((factor, phase)), problem, preferred)
 }
 
-/// [`solve`], factoring `h` unless its factor is given.
+/// The state of a dense solve after its equality phase (`J`, `R` and the factored equality
+/// rows; the unconstrained minimizer `−H⁻¹g`; the rows found dependent), with what it was
+/// computed from besides H: A, g and the equality constraints. See [`solve_with_factor`].
+#[derive(Debug, Clone)]
+pub struct EqualityPhase {
+    a_offsets: Vec<usize>,
+    a_columns: Vec<usize>,
+    a_values: Vec<f64>,
+    g: Vec<f64>,
+    equalities: Vec<ConstraintId>,
+    set: ActiveSet,
+    x: DVector<f64>,
+    dependent: Vec<ConstraintId>,
+    iterations: usize,
+}
+
+impl EqualityPhase {
+    /// Whether this phase was computed for `problem`'s A, g and equality constraints.
+    fn fits(&self, problem: &QpProblem, equalities: &[ConstraintId]) -> bool {
+        let a = problem.a;
+        self.equalities == equalities
+            && self.g == problem.g
+            && self.a_offsets == a.row_offsets()
+            && self.a_columns == a.col_indices()
+            && self.a_values == a.values()
+    }
+}
+
+/// [`solve`], factoring `h` unless its factor is given (with the kept equality phase).
 fn solve_factored(
     h: &DMatrix<f64>,
-    factor: Option<&DMatrix<f64>>,
+    factor: Option<(&DMatrix<f64>, &mut Option<EqualityPhase>)>,
     problem: &QpProblem,
     preferred: &[ConstraintId],
 ) -> DenseQpResult {
@@ -514,10 +576,44 @@ fn solve_factored(
     {
         return fail(QpStatus::Infeasible);
     }
-    let Some(mut dual) = DualIteration::start(h, factor, problem, preferred) else {
-        return fail(QpStatus::Numerical);
+    let (factor, phase) = match factor {
+        Some((factor, phase)) => (Some(factor), Some(phase)),
+        None => (None, None),
     };
-    if let Err(status) = dual.add_equalities() {
+    let cons = Constraints::new(problem);
+    let equalities: Vec<ConstraintId> = (0..cons.count())
+        .filter(|&id| cons.is_equality_lower(id) && cons.rhs(id).is_some())
+        .collect();
+    let kept = (phase.as_deref())
+        .and_then(Option::as_ref)
+        .filter(|kept| kept.fits(problem, &equalities));
+    let (mut dual, dependent) = match kept {
+        Some(kept) => (
+            DualIteration::resume(kept, cons, preferred),
+            kept.dependent.clone(),
+        ),
+        None => {
+            let Some(mut dual) = DualIteration::start(h, factor, cons, preferred) else {
+                return fail(QpStatus::Numerical);
+            };
+            let dependent = dual.factor_equalities(&equalities);
+            if let Some(phase) = phase {
+                *phase = Some(EqualityPhase {
+                    a_offsets: problem.a.row_offsets().to_vec(),
+                    a_columns: problem.a.col_indices().to_vec(),
+                    a_values: problem.a.values().to_vec(),
+                    g: problem.g.to_vec(),
+                    equalities,
+                    set: dual.set.clone(),
+                    x: dual.x.clone(),
+                    dependent: dependent.clone(),
+                    iterations: dual.iterations,
+                });
+            }
+            (dual, dependent)
+        }
+    };
+    if let Err(status) = dual.equality_point(&dependent) {
         return fail(status);
     }
     loop {
@@ -555,11 +651,10 @@ impl<'a> DualIteration<'a> {
     fn start(
         h: &DMatrix<f64>,
         factor: Option<&DMatrix<f64>>,
-        problem: &'a QpProblem<'a>,
+        cons: Constraints<'a>,
         preferred: &[ConstraintId],
     ) -> Option<Self> {
-        let n = problem.g.len();
-        let m = problem.a.nrows();
+        let n = cons.n;
         let computed;
         let lower = match factor {
             Some(l) => l,
@@ -568,35 +663,61 @@ impl<'a> DualIteration<'a> {
                 &computed
             }
         };
-        let cons = Constraints::new(problem);
         let j = inverse_of_upper(&lower.lower_triangle().transpose());
         // −H⁻¹g by the two triangular solves of nalgebra's `Cholesky::solve`.
-        let mut x = DVector::from_column_slice(problem.g);
+        let mut x = DVector::from_column_slice(cons.problem.g);
         lower.solve_lower_triangular_unchecked_mut(&mut x);
         lower.ad_solve_lower_triangular_unchecked_mut(&mut x);
-        let x = -x;
+        let set = ActiveSet {
+            j,
+            rt: DMatrix::zeros(n, n),
+            ids: Vec::new(),
+            u: Vec::new(),
+            equality: Vec::new(),
+            r_norm: 1.0,
+        };
+        Some(Self::with(cons, set, -x, 0, preferred))
+    }
+
+    /// The state of a kept equality phase, before its minimizer is formed
+    /// ([`DualIteration::equality_point`]).
+    fn resume(kept: &EqualityPhase, cons: Constraints<'a>, preferred: &[ConstraintId]) -> Self {
+        let mut dual = Self::with(
+            cons,
+            kept.set.clone(),
+            kept.x.clone(),
+            kept.iterations,
+            preferred,
+        );
+        for &id in &kept.set.ids {
+            dual.active[id] = true;
+        }
+        dual
+    }
+
+    /// The iteration at `x` with the active set `set` (none of it marked active yet).
+    fn with(
+        cons: Constraints<'a>,
+        set: ActiveSet,
+        x: DVector<f64>,
+        iterations: usize,
+        preferred: &[ConstraintId],
+    ) -> Self {
         let mut is_preferred = vec![false; cons.count()];
         for &id in preferred {
             if id < cons.count() {
                 is_preferred[id] = true;
             }
         }
-        Some(DualIteration {
-            set: ActiveSet {
-                j,
-                rt: DMatrix::zeros(n, n),
-                ids: Vec::new(),
-                u: Vec::new(),
-                equality: Vec::new(),
-                r_norm: 1.0,
-            },
+        DualIteration {
+            set,
             x,
-            iterations: 0,
-            cap: iteration_cap(n, m),
+            iterations,
+            cap: iteration_cap(cons.n, cons.m),
             active: vec![false; cons.count()],
             preferred: is_preferred,
             cons,
-        })
+        }
     }
 
     /// The violation below which constraint `id` (right-hand side `b`) counts as met at `x`,
@@ -605,34 +726,37 @@ impl<'a> DualIteration<'a> {
         1e-11 * (1.0 + b.abs() + self.cons.normal_norm(id) * x_max)
     }
 
-    /// Adds the equalities first: each independent one is factored into the active set
-    /// ([`ActiveSet::add`]) without a step, then `x` and the multipliers are set at once to
-    /// the minimizer on their manifold ([`ActiveSet::equality_point`]; no drops are possible,
-    /// the multipliers of equalities having no sign). A row is dependent on earlier ones when
-    /// its part `d[iq..]` outside their span is negligible (`‖d[iq..]‖² = nᵀz` for the step
-    /// `z` that a primal step would take); `Err(Infeasible)` when one is inconsistent with
-    /// the others at the final point.
-    fn add_equalities(&mut self) -> Result<(), QpStatus> {
+    /// Factors the equalities `equalities` (the lower sides of equality constraints with a
+    /// finite right-hand side, in order) into the active set ([`ActiveSet::add`]) without a
+    /// step, and returns those dependent on earlier ones: a row is dependent when its part
+    /// `d[iq..]` outside their span is negligible (`‖d[iq..]‖² = nᵀz` for the step `z` that a
+    /// primal step would take). The minimizer on their manifold follows from
+    /// [`DualIteration::equality_point`].
+    fn factor_equalities(&mut self, equalities: &[ConstraintId]) -> Vec<ConstraintId> {
         let mut dependent = Vec::new();
-        for id in 0..self.cons.count() {
-            if !self.cons.is_equality_lower(id) {
-                continue;
-            }
-            let Some(b) = self.cons.rhs(id) else { continue };
+        for &id in equalities {
             let d = self.cons.jt_times_normal(id, &self.set.j);
             let iq = self.set.len();
             let outside = d.rows(iq, d.len() - iq).norm_squared();
             if outside <= 1e-14 * (1.0 + self.cons.normal_norm(id).powi(2)) {
-                dependent.push((id, b));
+                dependent.push(id);
                 continue;
             }
             if self.set.add(d, id, 0.0, true) {
                 self.active[id] = true;
             } else {
-                dependent.push((id, b));
+                dependent.push(id);
             }
             self.iterations += 1;
         }
+        dependent
+    }
+
+    /// Sets `x` and the multipliers at once to the minimizer on the factored equalities'
+    /// manifold ([`ActiveSet::equality_point`]; no drops are possible, the multipliers of
+    /// equalities having no sign); `Err(Infeasible)` when one of the `dependent` rows is
+    /// inconsistent with the others there.
+    fn equality_point(&mut self, dependent: &[ConstraintId]) -> Result<(), QpStatus> {
         if self.set.len() > 0 {
             let b: Vec<f64> = (self.set.ids.iter())
                 .map(|&id| self.cons.rhs(id).unwrap_or(0.0))
@@ -643,7 +767,8 @@ impl<'a> DualIteration<'a> {
             self.set.u = u;
         }
         let x_max = self.x.amax();
-        for (id, b) in dependent {
+        for &id in dependent {
+            let b = self.cons.rhs(id).unwrap_or(0.0);
             let s = self.cons.dot(id, &self.x) - b;
             if s.abs() > self.violation_tol(id, b, x_max) * 1e3 {
                 return Err(QpStatus::Infeasible);
@@ -1052,6 +1177,90 @@ mod tests {
             let full = u.solve_upper_triangular(&DMatrix::identity(n, n)).unwrap();
             assert_eq!(inv, full);
             assert!((&u * &inv - DMatrix::identity(n, n)).amax() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn a_kept_equality_phase_gives_the_fresh_solve_to_the_bit() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for (n, m) in [(6, 4), (12, 9), (20, 15)] {
+            let p = random_qp(&mut rng, n, m);
+            let factor = p.h.clone().cholesky().unwrap().unpack_dirty();
+            let mut phase = None;
+            let first = solve_with_factor(&p.h, &factor, &p.problem(), &[], &mut phase);
+            assert!(phase.is_some());
+            // The right-hand sides moved (a second-order correction): the kept phase is used,
+            // and the solution is the one of a solve without it.
+            let shift: Vec<f64> = (0..m).map(|_| rng.random_range(-0.05..0.05)).collect();
+            let moved = Owned {
+                bl: p.bl.iter().zip(&shift).map(|(b, s)| b + s).collect(),
+                bu: p.bu.iter().zip(&shift).map(|(b, s)| b + s).collect(),
+                ..p
+            };
+            let kept = phase.clone();
+            let resumed = solve_with_factor(
+                &moved.h,
+                &factor,
+                &moved.problem(),
+                &first.working_set,
+                &mut phase,
+            );
+            let fresh = solve(&moved.h, &moved.problem(), &first.working_set);
+            assert_eq!(resumed.solution.status, fresh.solution.status);
+            assert_eq!(resumed.solution.d, fresh.solution.d);
+            assert_eq!(resumed.solution.lambda, fresh.solution.lambda);
+            assert_eq!(resumed.solution.z, fresh.solution.z);
+            assert_eq!(resumed.working_set, fresh.working_set);
+            assert_eq!(resumed.solution.iterations, fresh.solution.iterations);
+            // Used, not replaced: the same A, g and equality rows.
+            let (before, after) = (kept.unwrap(), phase.clone().unwrap());
+            assert_eq!(before.set.j, after.set.j);
+            // Another g replaces it.
+            let other = Owned {
+                g: moved.g.iter().map(|v| v + 1.0).collect(),
+                ..moved
+            };
+            solve_with_factor(&other.h, &factor, &other.problem(), &[], &mut phase);
+            assert_eq!(phase.unwrap().g, other.g);
+        }
+    }
+
+    #[test]
+    fn the_reflection_is_nalgebras_gemv_and_ger_to_the_bit() {
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        for (n, iq) in [(5, 0), (9, 3), (17, 10)] {
+            let j = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
+            let d = DVector::from_fn(n, |_, _| rng.random_range(-1.0..1.0));
+            let mut set = ActiveSet {
+                j: j.clone(),
+                rt: DMatrix::zeros(n, n),
+                ids: (0..iq).collect(),
+                u: vec![0.0; iq],
+                equality: vec![true; iq],
+                r_norm: 1.0,
+            };
+            let sigma = d.rows(iq, n - iq).norm();
+            let alpha = set.reflect(&d, sigma);
+            // The reference: nalgebra's products on J's inactive columns.
+            let mut v = d.rows(iq, n - iq).into_owned();
+            v[0] -= alpha;
+            let beta = 1.0 / (sigma * (sigma + d[iq].abs()));
+            let mut reference = j;
+            let mut inactive = reference.columns_mut(iq, n - iq);
+            let w = &inactive * &v;
+            inactive.ger(-beta, &w, &v, 1.0);
+            assert_eq!(set.j, reference);
+            // The directions: z = J₂ d₂ by nalgebra's axpy, r = R⁻¹ d₁ (R = I here).
+            for k in 0..iq {
+                set.rt[(k, k)] = 1.0;
+            }
+            let (z, r) = set.directions(&d);
+            let mut z_reference = DVector::zeros(n);
+            for c in iq..n {
+                z_reference.axpy(d[c], &set.j.column(c), 1.0);
+            }
+            assert_eq!(z, z_reference);
+            assert_eq!(r.as_slice(), &d.as_slice()[..iq]);
         }
     }
 

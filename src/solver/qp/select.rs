@@ -25,6 +25,7 @@
 //! O(μ) rather than exactly 0, and the step is accurate to the relative tolerance passed
 //! down, which the SQP sets two orders tighter than its own.
 
+use std::borrow::Cow;
 use std::fmt;
 
 use nalgebra::DMatrix;
@@ -99,6 +100,9 @@ pub struct WarmStart {
     newton: Option<Box<SparseQp>>,
     /// A dense Hessian and its Cholesky factor (see [`WarmStart::keep_factor`]).
     factored: Option<(DMatrix<f64>, DMatrix<f64>)>,
+    /// The last dense solve's equality phase with that factor (see
+    /// [`dense::solve_with_factor`]), dropped with the factor.
+    equality_phase: Option<dense::EqualityPhase>,
 }
 
 impl fmt::Debug for WarmStart {
@@ -170,6 +174,7 @@ impl WarmStart {
     /// again (the SQP's convexification has just factored the matrix in its definiteness test).
     pub fn keep_factor(&mut self, h: DMatrix<f64>, factor: DMatrix<f64>) {
         self.factored = Some((h, factor));
+        self.equality_phase = None;
     }
 
     /// Puts back the state taken by [`WarmStart::snapshot`].
@@ -332,16 +337,29 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
         if warm.interrupt.is_raised() {
             return interrupted(problem);
         }
-        let mut shifted = h.clone();
-        for i in 0..n {
-            shifted[(i, i)] += shift;
-        }
+        // h itself first; shifted copies only when it is not positive definite.
+        let shifted = if shift == 0.0 {
+            Cow::Borrowed(&*h)
+        } else {
+            let mut shifted = h.clone().into_owned();
+            for i in 0..n {
+                shifted[(i, i)] += shift;
+            }
+            Cow::Owned(shifted)
+        };
+        let shifted = &*shifted;
         let factor = (warm.factored.as_ref())
-            .filter(|(kept, _)| *kept == shifted)
+            .filter(|(kept, _)| kept == shifted)
             .map(|(_, factor)| factor);
         let result = match factor {
-            Some(factor) => dense::solve_with_factor(&shifted, factor, problem, &warm.working_set),
-            None => dense::solve(&shifted, problem, &warm.working_set),
+            Some(factor) => dense::solve_with_factor(
+                shifted,
+                factor,
+                problem,
+                &warm.working_set,
+                &mut warm.equality_phase,
+            ),
+            None => dense::solve(shifted, problem, &warm.working_set),
         };
         if result.solution.status == QpStatus::Numerical && convexify && shift < 1e20 {
             shift = if shift == 0.0 { base } else { shift * 10.0 };
@@ -557,9 +575,9 @@ fn shifted_lower(h: &CscMatrix<f64>, delta: f64) -> CscMatrix<f64> {
 }
 
 /// The Hessian as a dense symmetric matrix.
-fn dense_hessian(h: &QpHessian) -> DMatrix<f64> {
-    match *h {
-        QpHessian::Dense(m) => m.clone(),
+fn dense_hessian<'a>(h: &QpHessian<'a>) -> Cow<'a, DMatrix<f64>> {
+    Cow::Owned(match *h {
+        QpHessian::Dense(m) => return Cow::Borrowed(m),
         QpHessian::SparseLower(csc) => {
             let n = csc.nrows();
             let mut d = DMatrix::zeros(n, n);
@@ -579,7 +597,7 @@ fn dense_hessian(h: &QpHessian) -> DMatrix<f64> {
             }
             d
         }
-    }
+    })
 }
 
 #[cfg(test)]
