@@ -25,15 +25,17 @@
 //! ([`super::simplex`], up to `SIMPLEX_ROWS` balance rows), each from the previous LP's optimal
 //! basis: the added columns are nonbasic at 0, so that basis stays primal feasible and only the
 //! added columns that price negative enter (pier_cantilever_linear: 212 pivots cold, then 41,
-//! 4, 2). Once a vertex's duals price every pair out, the same LP is solved once more by the
-//! interior point for its primal solution: the start ([`super::start`]) wants the forces of
-//! the optimal face's interior, spread over tied members, not a vertex's.
+//! 4, 2). Once a vertex's duals price every pair out, the start ([`super::start`]) wants the
+//! forces of the optimal face's interior, spread over tied members, not a vertex's: the
+//! vertex's duals give the face (the columns of zero reduced cost, [`plastic::layout_on_face`]);
+//! when it holds only basic columns the vertex is the only optimum and stands, otherwise the
+//! interior point solves the LP on the face's columns alone.
 //!
 //! Certificate: at the end no admissible pair has v > `ADD_TOLERANCE` and the members in the
 //! LP have v ≤ v_in (the residual of the duals that priced), so y/(1 + max(v_in, tolerance))
 //! is feasible for the dual of the LP over every admissible pair and its dual objective is a
 //! lower bound on that LP's optimum ([`Layouts::lower_bound`]). With the simplex, y is the
-//! vertex's and the primal optimum the interior point's on the same LP.
+//! vertex's and the primal optimum the vertex or the interior point's on its face.
 //!
 //! Admissible pairs: the caller's rule for a pair's ends (anchors, forbidden pairs,
 //! obstacles), and no joint on the segment: q must be the nearest joint to p in its direction.
@@ -157,9 +159,9 @@ fn basis_of(keys: &[BasisKey], beams: &[Beam]) -> Option<Vec<Basic>> {
 /// With `growth` and [`LpMethod::InteriorFace`] (and at most `SIMPLEX_ROWS` rows), the LPs
 /// whose duals only price are solved by the revised simplex method, each from the previous
 /// one's optimal basis (per case; the first from `warm` if given, e.g. a previous pass's
-/// [`Layouts::bases`]); once a vertex's duals price every pair out, the same LP is solved by
-/// `method` for the forces (module header). A simplex failure other than an interrupt leaves
-/// that LP to `method`.
+/// [`Layouts::bases`]); once a vertex's duals price every pair out, the forces are the
+/// vertex's or the interior point's on its optimal face (module header). A simplex failure
+/// other than an interrupt leaves that LP to `method`.
 pub fn solve(
     structure: &Structure,
     axes: usize,
@@ -282,9 +284,10 @@ pub fn solve(
 }
 
 /// `vertex` (certified by the simplex's duals) with each case's primal solution replaced by
-/// the interior point's on the same LP (`method`): its forces spread over tied members, the
-/// start the geometry solve expects ([`super::start`]). The certificate stays the vertex's: its
-/// duals priced every pair. Should the interior point fail, the vertex stands.
+/// the interior point's on the same LP's optimal face ([`plastic::layout_on_face`], from the
+/// vertex's duals): its forces spread over tied members, the start the geometry solve expects
+/// ([`super::start`]). The certificate stays the vertex's: its duals priced every pair. Should
+/// the face's LP fail, the whole LP is solved by `method`; should that fail, the vertex stands.
 fn with_interior_forces(
     mut vertex: Layouts,
     structure: &Structure,
@@ -295,7 +298,16 @@ fn with_interior_forces(
     interrupt: &Interrupt,
 ) -> Result<Layouts, LpError> {
     for (c, layout) in vertex.cases.iter_mut().enumerate() {
-        match plastic::layout_with_costs(structure, c, axes, costs, weights, method, interrupt) {
+        let basis = basis_of(&vertex.bases[c], &vertex.beams).unwrap_or_default();
+        let lp = plastic::layout_lp(structure, c, axes, costs, weights);
+        let on_face = plastic::layout_on_face(&lp, layout, &basis, interrupt);
+        let interior = match on_face {
+            Err(e) if e != LpError::Interrupted => {
+                plastic::layout_with_costs(structure, c, axes, costs, weights, method, interrupt)
+            }
+            solved => solved,
+        };
+        match interior {
             Ok(interior) => {
                 layout.volume = interior.volume;
                 layout.forces = interior.forces;
@@ -560,7 +572,7 @@ mod tests {
             assert_eq!(again.forces, vertex.forces);
         }
         // Member adding by the simplex (`InteriorFace`): the full LP's optimum, certified, and
-        // the forces of the interior point on the last LP.
+        // the forces of the interior point on the last LP's optimal face.
         let (nx, ny) = (7, 5);
         let full = cantilever(nx, ny, nx * ny);
         let reference = solve(
@@ -604,8 +616,16 @@ mod tests {
             joints: sparse.joints.clone(),
             beams: grown.beams.clone(),
         };
+        // The last LP by the interior point: the same optimum, and the forces of the same
+        // members (the optimal face's relative interior; the split over tied members differs).
         let last = solve(&on_last, 2, &unit_price, None, method, &[], &interrupt).unwrap();
-        assert_eq!(last.cases[0].forces, grown.cases[0].forces);
+        let (whole, face) = (&last.cases[0], &grown.cases[0]);
+        assert!((whole.volume - face.volume).abs() < 1e-9 * whole.volume);
+        assert!(face.primal_residual < 1e-9, "{}", face.primal_residual);
+        let largest = whole.forces.iter().fold(0.0, |a: f64, f| a.max(f.abs()));
+        let support =
+            |f: &[f64]| -> Vec<bool> { f.iter().map(|v| v.abs() > 1e-6 * largest).collect() };
+        assert_eq!(support(&whole.forces), support(&face.forces));
         // Warm from the last bases, the next pass starts at an optimal vertex.
         let again = solve(
             &on_last,
@@ -617,7 +637,7 @@ mod tests {
             &interrupt,
         )
         .unwrap();
-        assert_eq!(again.iterations, 2, "one vertex, one interior-point solve");
+        assert_eq!(again.iterations, 2, "one vertex, one solve on its face");
     }
 
     #[test]

@@ -133,6 +133,95 @@ pub fn layout_by_simplex(
     Ok((layout, solved.basis))
 }
 
+/// Reduced cost above which (relative to the column's cost) a column is off the optimal face
+/// in [`layout_on_face`]: far above the rounding of an optimal vertex's reduced costs
+/// (≲ 1e-14 on the scaled layout LPs), far below any real price difference.
+pub const FACE_TOLERANCE: f64 = 1e-9;
+
+/// The primal solution of the layout LP `lp` ([`layout_lp`]) by the interior point without
+/// crossover (as [`LpMethod::InteriorFace`]), from an optimal vertex `vertex` of that LP and its
+/// basis `basis` ([`layout_by_simplex`]).
+///
+/// The columns whose reduced cost c_j − a_jᵀy under the vertex's duals y exceeds
+/// [`FACE_TOLERANCE`]·c_j are zero in every optimal solution (complementary slackness); the
+/// others span the optimal face. When they are all basic, their columns are independent and
+/// the face is the vertex alone, the LP's only optimum, which the interior point on the whole
+/// LP would approach to its tolerance: it is returned as it is. Otherwise the interior point
+/// solves the LP on those columns and the rows they reach (the other rows are unloaded, else y
+/// is not optimal: [`LpError::Infeasible`]), whose optimal set is the whole LP's: a point of
+/// the face's relative interior, forces spread over tied members, at a fraction of the cost
+/// (not the same point as on the whole LP: Mehrotra's iterates stop short of the face's
+/// analytic centre, where the path left them). Forces are zero off the face; duals and dual
+/// figures are the vertex's.
+pub fn layout_on_face(
+    lp: &LayoutLp,
+    vertex: &PlasticLayout,
+    basis: &[Basic],
+    interrupt: &Interrupt,
+) -> Result<PlasticLayout, LpError> {
+    let (b, cost) = (&lp.b, &lp.cost);
+    let a = CscMatrix::from(&lp.a);
+    let (m, n) = (a.nrows(), a.ncols());
+    let mut basic = vec![false; n];
+    for &k in basis {
+        if let Basic::Column(j) = k {
+            basic[j] = true;
+        }
+    }
+    let mut columns = Vec::new();
+    let mut row_used = vec![false; m];
+    for (j, &c) in cost.iter().enumerate() {
+        let col = a.col(j);
+        let aty: f64 = (col.row_indices().iter().zip(col.values()))
+            .map(|(&r, &v)| v * vertex.duals[r])
+            .sum();
+        if c - aty <= FACE_TOLERANCE * c.abs() {
+            columns.push(j);
+            col.row_indices().iter().for_each(|&r| row_used[r] = true);
+        }
+    }
+    if columns.iter().all(|&j| basic[j]) {
+        return Ok(vertex.clone());
+    }
+    let mut row_of = vec![usize::MAX; m];
+    let mut rows = Vec::new();
+    for r in 0..m {
+        if row_used[r] {
+            row_of[r] = rows.len();
+            rows.push(r);
+        } else if b[r] != 0.0 {
+            return Err(LpError::Infeasible);
+        }
+    }
+    let mut face = CooMatrix::new(rows.len(), columns.len());
+    for (k, &j) in columns.iter().enumerate() {
+        let col = a.col(j);
+        for (&r, &v) in col.row_indices().iter().zip(col.values()) {
+            face.push(row_of[r], k, v);
+        }
+    }
+    let face_b: Vec<f64> = rows.iter().map(|&r| b[r]).collect();
+    let face_cost: Vec<f64> = columns.iter().map(|&j| cost[j]).collect();
+    let s = lp::solve_sparse(
+        &CsrMatrix::from(&face),
+        &face_b,
+        &face_cost,
+        false,
+        interrupt,
+    )?;
+    let mut x = vec![0.0; n];
+    for (k, &j) in columns.iter().enumerate() {
+        x[j] = s.x[k];
+    }
+    let beams = n / 2;
+    Ok(PlasticLayout {
+        volume: s.objective,
+        forces: (0..beams).map(|j| x[j] - x[beams + j]).collect(),
+        primal_residual: s.primal_residual,
+        ..vertex.clone()
+    })
+}
+
 /// The layout of an LP solution over `beams` beams with right-hand side `b`.
 fn layout_of(beams: usize, b: &[f64], s: lp::LpSolution) -> PlasticLayout {
     let forces = (0..beams).map(|j| s.x[j] - s.x[beams + j]).collect();
@@ -410,6 +499,96 @@ mod tests {
         let rows = 2 * (s.joints.len() - 2);
         let active = interior.forces.iter().filter(|f| f.abs() > 1e-9).count();
         assert!(active <= rows, "{active} members on {rows} rows");
+    }
+
+    /// The planar layout LP of `s` three ways: by the interior point on the whole LP, by the
+    /// revised simplex (a vertex) and by the interior point on that vertex's optimal face.
+    fn three_ways(s: &Structure, costs: &[(f64, f64)]) -> [PlasticLayout; 3] {
+        let interrupt = Interrupt::new();
+        let whole =
+            layout_with_costs(s, 0, 2, costs, None, LpMethod::InteriorFace, &interrupt).unwrap();
+        let (vertex, basis) = layout_by_simplex(s, 0, 2, costs, None, None, &interrupt).unwrap();
+        let lp = layout_lp(s, 0, 2, costs, None);
+        let face = layout_on_face(&lp, &vertex, &basis, &interrupt).unwrap();
+        [whole, vertex, face]
+    }
+
+    #[test]
+    fn the_interior_point_on_the_vertex_face_matches_it_on_the_whole_lp() {
+        // Half-wheel ground structures (ties: a regular grid) under several loads and strength
+        // ratios, and one with lengths perturbed so that the optimum is a single vertex.
+        let mut single = 0;
+        for (k, (load, ratio, jitter)) in [
+            (Vec3::new(0.0, -1.0, 0.0), 1.0, 0.0),
+            (Vec3::new(0.3, -1.0, 0.0), 0.5, 0.0),
+            (Vec3::new(-0.7, -0.2, 0.0), 2.0, 0.0),
+            (Vec3::new(0.3, -1.0, 0.0), 0.5, 1e-3),
+            (Vec3::new(0.0, -1.0, 0.0), 1.0, 1e-3),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let mut s = half_wheel_ground(Support::Roller(vec![Vec3::y()]), load);
+            for (i, joint) in s.joints.iter_mut().enumerate() {
+                let wobble = jitter * ((i * 7919 + k) % 13) as f64 / 13.0;
+                joint.position += Vec3::new(wobble, -0.5 * wobble, 0.0);
+            }
+            let costs: Vec<(f64, f64)> = (0..s.beams.len())
+                .map(|j| (ratio * s.length(j), s.length(j)))
+                .collect();
+            let [whole, vertex, face] = three_ways(&s, &costs);
+            let scale = whole.volume;
+            assert!(
+                (face.volume - whole.volume).abs() < 1e-9 * scale,
+                "case {k}"
+            );
+            assert!(
+                face.primal_residual < 1e-9,
+                "case {k}: {}",
+                face.primal_residual
+            );
+            assert_eq!(face.duals, vertex.duals);
+            let largest = whole.forces.iter().fold(0.0, |a: f64, f| a.max(f.abs()));
+            let gap = (whole.forces.iter().zip(&face.forces))
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(gap < 1e-5 * largest, "case {k}: forces differ by {gap}");
+            single += usize::from(face == vertex);
+        }
+        assert!(single > 0, "no optimum was a single vertex");
+        // A tie: a hanger from the anchor (0, 1) to the load P at (0, 0), and a chain of two
+        // halves through the free joint (0, ½), braced by an idle bar to the anchor (1, ½). The
+        // vertex hangs P on one path; the interior point, on the face as on the whole LP, on
+        // both (not in the same split: Mehrotra's iterates stop short of the face's analytic
+        // centre, P/3 on the hanger, at a point that depends on the path).
+        let p = 1.0;
+        let anchor = JointKind::Anchor(Support::Pinned);
+        let s = Structure {
+            joints: vec![
+                joint(0.0, 1.0, anchor.clone(), Vec3::zeros()),
+                joint(0.0, 0.0, JointKind::Load, Vec3::new(0.0, -p, 0.0)),
+                joint(0.0, 0.5, JointKind::Free, Vec3::zeros()),
+                joint(1.0, 0.5, anchor, Vec3::zeros()),
+            ],
+            beams: vec![
+                Beam::new(0, 1),
+                Beam::new(1, 2),
+                Beam::new(0, 2),
+                Beam::new(2, 3),
+            ],
+        };
+        let costs: Vec<(f64, f64)> = (0..4).map(|j| (s.length(j), s.length(j))).collect();
+        let [whole, vertex, face] = three_ways(&s, &costs);
+        assert!(
+            (vertex.forces[0] * vertex.forces[1]).abs() < 1e-12,
+            "{vertex:?}"
+        );
+        for forces in [&whole.forces, &face.forces] {
+            assert!((forces[0] + forces[1] + p).abs() < 1e-9, "{forces:?}");
+            assert!(forces[0] < -0.2 * p && forces[1] < -0.2 * p, "{forces:?}");
+            assert!((forces[1] - forces[2]).abs() < 1e-9 && forces[3].abs() < 1e-9);
+        }
+        assert!((face.volume - p).abs() < 1e-9 && (whole.volume - p).abs() < 1e-9);
     }
 
     #[test]
