@@ -515,8 +515,8 @@ mod tests {
 
     #[test]
     fn the_interior_point_on_the_vertex_face_matches_it_on_the_whole_lp() {
-        // Half-wheel ground structures (ties: a regular grid) under several loads and strength
-        // ratios, and one with lengths perturbed so that the optimum is a single vertex.
+        // Half-wheel ground structures (a regular grid: dual ties) under several loads and
+        // strength ratios, two with joints displaced; at least one optimum is a single vertex.
         let mut single = 0;
         for (k, (load, ratio, jitter)) in [
             (Vec3::new(0.0, -1.0, 0.0), 1.0, 0.0),
