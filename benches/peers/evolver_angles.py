@@ -90,7 +90,7 @@ def describe(path):
     """One line of `quality(path)`."""
     n, smallest, largest, thin, wide = quality(path)
     return (
-        f"{n} facets, angles {smallest:.3f}° … {largest:.3f}°, "
+        f"{n} facets, angles {smallest:.4g}° … {largest:.4g}°, "
         f"{thin} with an angle < 5°, {wide} with an angle > 170°"
     )
 

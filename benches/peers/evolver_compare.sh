@@ -47,7 +47,9 @@
 # Evolver's own projection onto the volumes (`m 0; g 1`), its inertia in normal motion and
 # triangle angles there; then Evolver's standard script from it (the timed runs' commands) and,
 # with REFERENCE=1, the tangential relaxation too, each end's area, inertia and (last end)
-# angles. Whether Evolver stays at optimize's answer or finds lower area from it. A closing
+# angles; with STABILITY=1 also Evolver's `linear_metric; ritz(-1e-6, 6)` at optimize's answer,
+# the eigenvalues of one configuration in both programs (the timed runs' ritz is at Evolver's
+# own end). Whether Evolver stays at optimize's answer or finds lower area from it. A closing
 # table lists per case Evolver's areas from the shared start and from optimize's answer, and
 # optimize's.
 #
@@ -120,7 +122,9 @@ echo q >> "$work/run.cmd"
 # script from it (and with REFERENCE=1 the tangential relaxation), probed, and dumps its end.
 {
     printf 'printf "EVOLVER_LOADED_AREA %%.12f\\n", total_area;\nm 0;\ng 1;\n'
-    printf 'printf "EVOLVER_PROJECTED_AREA %%.12f\\n", total_area;\n'; probe loaded; echo q
+    printf 'printf "EVOLVER_PROJECTED_AREA %%.12f\\n", total_area;\n'; probe loaded
+    [ "${STABILITY:-0}" = 1 ] && printf 'linear_metric;\nritz(-1e-6, 6);\n'
+    echo q
 } > "$work/answer.cmd"
 {
     cat "$work/standard.cmd"; probe standard
@@ -177,13 +181,12 @@ for c in "${cases[@]}"; do
     if [ "${REFERENCE:-0}" = 1 ]; then
         timeout "$LIMIT" "$EVOLVER" -x -f "$work/ref.cmd" "$work/$name.fe" > "$work/$name.ref.log" 2>&1 || true
     fi
-    : > "$work/$name.confirm.log"
+    : > "$work/$name.answer.log"; : > "$work/$name.confirm.log"
     if [ "${CONFIRM:-0}" = 1 ]; then
         # optimize's answer (the last timed run's result.json, same resolution, no flips).
         if "$export_bin" "$file" "$work/$name.answer.fe" "$res" 100 "$work/out_$name/result.json" 2>>"$work/export.log"; then
-            for cmd in answer confirm; do
-                timeout "$LIMIT" "$EVOLVER" -x -f "$work/$cmd.cmd" "$work/$name.answer.fe" >> "$work/$name.confirm.log" 2>&1 || true
-            done
+            timeout "$LIMIT" "$EVOLVER" -x -f "$work/answer.cmd" "$work/$name.answer.fe" > "$work/$name.answer.log" 2>&1 || true
+            timeout "$LIMIT" "$EVOLVER" -x -f "$work/confirm.cmd" "$work/$name.answer.fe" > "$work/$name.confirm.log" 2>&1 || true
         fi
     fi
     python3 - "$work/$name.json" "$work/$name.evolver.log" "$c" "$facets" "$ours" "$theirs" \
@@ -203,11 +206,13 @@ theirs = float(match[-1]) if match else float("nan")
 # STABILITY=1: optimize's smallest and sixth eigenvalue and Evolver's six as printed, 1/cm²
 # (Evolver's include the rigid modes of a free cluster).
 stability = ours.get("figures", {}).get("stability")
+def ritz(text):
+    # The six values Evolver's ritz prints after its last "ritz(" command, as printed.
+    values = re.findall(r"^\s*\d+\.\s+(\S+)\s*$", text.split("ritz(")[-1], re.M)
+    return " ".join(f"{float(v):.4g}" for v in values[:6])
 if stability:
-    ritz = re.findall(r"^\s*\d+\.\s+(\S+)\s*$", text.split("ritz(")[-1], re.M)
-    status += (f"; optimize λ {stability['smallest_eigenvalues'][0] * 1e-4:.5g}…"
-               f"{stability['smallest_eigenvalues'][-1] * 1e-4:.5g} /cm², Evolver ritz "
-               + " ".join(f"{float(v):.4g}" for v in ritz[:6]))
+    status += ("; optimize λ " + " ".join(f"{v * 1e-4:.4g}" for v in stability["smallest_eigenvalues"])
+               + " /cm², Evolver ritz " + ritz(text))
 def best(readings):
     # "seconds:runs" per round; the fastest round.
     return min((float(t), int(n)) for t, n in (r.split(":") for r in readings.split()))
@@ -236,7 +241,8 @@ lines = []
 if relaxed:
     lines.append(f"Evolver from the shared start, relaxed: {ref:.6f} cm², normal-motion inertia "
                  f"{probes(ref_text).get('relaxed', '?')}; {angles(stem + '.fe.dmp')}")
-confirm_text = open(confirm_log).read()
+answer_text = open(stem + ".answer.log").read()
+confirm_text = answer_text + open(confirm_log).read()
 nan = float("nan")
 loaded = re.findall(r"EVOLVER_LOADED_AREA ([-0-9.eE+]+)", confirm_text)
 projected = re.findall(r"EVOLVER_PROJECTED_AREA ([-0-9.eE+]+)", confirm_text)
@@ -251,6 +257,8 @@ if loaded:
                  f"(optimize {area:.9f}), on Evolver's volumes {projected:.9f} "
                  f"({100 * (projected - area) / area:+.6f} %), normal-motion inertia "
                  f"{inertia.get('loaded', '?')}; {angles(stem + '.answer.fe')}")
+    if "ritz(" in answer_text:
+        lines.append(f"Evolver's ritz at optimize's answer: {ritz(answer_text)} /cm²")
     lines.append(f"Evolver from optimize's answer, standard script: {confirmed:.9f} cm² "
                  f"({100 * (confirmed - area) / area:+.6f} % from the answer), inertia "
                  f"{inertia.get('standard', '?')}")
