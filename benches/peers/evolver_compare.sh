@@ -53,6 +53,9 @@
 # table lists per case Evolver's areas from the shared start and from optimize's answer, and
 # optimize's.
 #
+# KEEP=1 keeps the work directory (datafiles, logs, dumps, optimize's run folders) and prints
+# its path.
+#
 # FORMULATION=area (or normal, curvature) sets optimize's top-level `formulation` for every
 # case (default: the file's own, normal unless it says otherwise).
 #
@@ -79,7 +82,7 @@ if [ ${#cases[@]} -eq 0 ]; then
            problems/cmc/cube_frame_film.toml:22)
 fi
 work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+trap 'if [ "${KEEP:-0}" = 1 ]; then echo "work files kept in $work"; else rm -rf "$work"; fi' EXIT
 cargo build --release --quiet --bin optimize --example evolver_export
 bin=target/release/optimize
 export_bin=target/release/examples/evolver_export
