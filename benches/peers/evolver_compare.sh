@@ -190,6 +190,8 @@ for c in "${cases[@]}"; do
         if "$export_bin" "$file" "$work/$name.answer.fe" "$res" 100 "$work/out_$name/result.json" 2>>"$work/export.log"; then
             timeout "$LIMIT" "$EVOLVER" -x -f "$work/answer.cmd" "$work/$name.answer.fe" > "$work/$name.answer.log" 2>&1 || true
             timeout "$LIMIT" "$EVOLVER" -x -f "$work/confirm.cmd" "$work/$name.answer.fe" > "$work/$name.confirm.log" 2>&1 || true
+        else
+            echo "ANSWER_NOT_EXPORTED $(tail -1 "$work/export.log")" > "$work/$name.answer.log"
         fi
     fi
     python3 - "$work/$name.json" "$work/$name.evolver.log" "$c" "$facets" "$ours" "$theirs" \
@@ -198,12 +200,18 @@ import json, os, re, sys
 sys.path.insert(0, "benches/peers")
 from evolver_angles import describe
 summary, log, case, facets, ours_cpu, theirs_cpu, ref_log, confirm_log, stem, table = sys.argv[1:]
+def slurp(path):
+    # A log's text; empty when the run was cut off before writing it (LIMIT).
+    try:
+        return open(path).read()
+    except OSError:
+        return ""
 try:
     ours = json.load(open(summary))
     area, status = ours["objective"] * 1e4, f"{ours['status']}, {ours['iterations']} iterations"
 except (ValueError, OSError):
     ours, area, status = {}, float("nan"), "no result"
-text = open(log).read()
+text = slurp(log)
 match = re.findall(r"EVOLVER_AREA ([-0-9.eE+]+)", text)
 theirs = float(match[-1]) if match else float("nan")
 # STABILITY=1: optimize's smallest and sixth eigenvalue and Evolver's six as printed, 1/cm²
@@ -221,7 +229,7 @@ def best(readings):
     return min((float(t), int(n)) for t, n in (r.split(":") for r in readings.split()))
 (t_ours, n_ours), (t_theirs, n_theirs) = best(ours_cpu), best(theirs_cpu)
 diff = 100 * (area - theirs) / theirs if theirs else float("nan")
-ref_text = open(ref_log).read()
+ref_text = slurp(ref_log)
 relaxed = re.findall(r"EVOLVER_RELAXED_AREA ([-0-9.eE+]+)", ref_text)
 ref = float(relaxed[-1]) if relaxed else float("nan")
 if relaxed:
@@ -244,8 +252,8 @@ lines = []
 if relaxed:
     lines.append(f"Evolver from the shared start, relaxed: {ref:.6f} cm², normal-motion inertia "
                  f"{probes(ref_text).get('relaxed', '?')}; {angles(stem + '.fe.dmp')}")
-answer_text = open(stem + ".answer.log").read()
-confirm_text = answer_text + open(confirm_log).read()
+answer_text = slurp(stem + ".answer.log")
+confirm_text = answer_text + slurp(confirm_log)
 nan = float("nan")
 loaded = re.findall(r"EVOLVER_LOADED_AREA ([-0-9.eE+]+)", confirm_text)
 projected = re.findall(r"EVOLVER_PROJECTED_AREA ([-0-9.eE+]+)", confirm_text)
@@ -254,6 +262,9 @@ standard = re.findall(r"EVOLVER_AREA ([-0-9.eE+]+)", confirm_text)
 answer_relaxed = re.findall(r"EVOLVER_RELAXED_AREA ([-0-9.eE+]+)", confirm_text)
 confirmed = float(standard[-1]) if standard else nan
 confirmed_relaxed = float(answer_relaxed[-1]) if answer_relaxed else nan
+failed = re.findall(r"ANSWER_NOT_EXPORTED (.*)", answer_text)
+if failed:
+    lines.append(f"optimize's answer not exported: {failed[-1]}")
 if loaded:
     inertia = probes(confirm_text)
     lines.append(f"optimize's answer in Evolver: total_area {float(loaded[-1]):.9f} cm² "
