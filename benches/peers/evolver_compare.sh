@@ -49,7 +49,7 @@
 # with REFERENCE=1, the tangential relaxation too, each end's area, inertia and (last end)
 # angles; with STABILITY=1 also Evolver's `linear_metric; ritz(-1e-6, 6)` at optimize's answer,
 # the eigenvalues of one configuration in both programs (the timed runs' ritz is at Evolver's
-# own end). Whether Evolver stays at optimize's answer or finds lower area from it. A closing
+# own end). It shows whether Evolver stays at optimize's answer or finds lower area. A closing
 # table lists per case Evolver's areas from the shared start and from optimize's answer, and
 # optimize's.
 #
