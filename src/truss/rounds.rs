@@ -33,7 +33,7 @@ use crate::error::Error;
 use crate::solver::{Evaluations, IterationRecord, Options, Solution, Status};
 
 use super::model::Structure;
-use super::nlp::{ForceParts, TrussNlp};
+use super::nlp::{ForceParts, SetupError, TrussNlp};
 use super::start::signed_parts;
 use super::topology::{self, RoundReport, RoundSettings};
 
@@ -170,11 +170,11 @@ pub fn solve_rounds(
         let creep_end =
             creep_test && options.progress_stretch > 0 && solution.status == Status::SlowProgress;
         if creep_end || (check && solution.status == Status::IterationLimit) {
-            let (structure, forces, report) = clean_up_at(&nlp, &solution, clean_up);
+            let (_, _, report) = clean_up_at(&nlp, &solution, clean_up);
             if report.changes_nothing() {
                 stretch_checked |= creep_end;
                 checked += solution.iterations;
-                nlp = TrussNlp::with_parts(structure, nlp.settings().clone(), forces, nlp.parts())
+                nlp = resumed_at(&nlp, &solution.x)
                     .map_err(|e| Error::Runtime(format!("round {}: {e}", round + 1)))?;
                 continue;
             }
@@ -231,6 +231,18 @@ pub fn solve_rounds(
 }
 
 /// The clean-up of `solution`'s end point (its `merge` decided by the point's violation).
+/// The same model started again at `x`: its own structure (joints moved to `x`), beam order
+/// and force parts. (The clean-up's copy of an unchanged design lists the beams sorted, which
+/// a first round's layout start need not: its forces would meet another beam's parts.)
+fn resumed_at(nlp: &TrussNlp, x: &[f64]) -> Result<TrussNlp, SetupError> {
+    let mut structure = nlp.structure().clone();
+    for (joint, p) in structure.joints.iter_mut().zip(nlp.positions(x)) {
+        joint.position = p;
+    }
+    let forces = nlp.forces(x).concat();
+    TrussNlp::with_parts(structure, nlp.settings().clone(), forces, nlp.parts())
+}
+
 fn clean_up_at(
     nlp: &TrussNlp,
     solution: &Solution,
@@ -302,5 +314,71 @@ mod tests {
                 ForceParts::Both,
             ]
         );
+    }
+
+    #[test]
+    fn a_round_resumed_on_an_unchanged_design_starts_where_it_stopped() {
+        use super::super::mass::MassModel;
+        use super::super::model::{Beam, Joint, JointKind, Objective, Settings, Support, Vec3};
+        use crate::solver::Nlp;
+        // A bracket: anchors at (0, 0) and (0, 3), load P down at (4, 0). The diagonal pulls
+        // (−5P/3, tension), the horizontal pushes (4P/3). Its beams are listed unsorted, as a
+        // first round's layout start may list them, and each has one signed part.
+        let p = 1e5;
+        let joint = |at: [f64; 3], kind, load: f64| Joint {
+            position: Vec3::from(at),
+            kind,
+            name: None,
+            loads: vec![Vec3::new(0.0, -load, 0.0)],
+        };
+        let anchor = JointKind::Anchor(Support::Pinned);
+        let structure = Structure {
+            joints: vec![
+                joint([0.0, 0.0, 0.0], anchor.clone(), 0.0),
+                joint([0.0, 3.0, 0.0], anchor, 0.0),
+                joint([4.0, 0.0, 0.0], JointKind::Free, p),
+            ],
+            beams: vec![Beam::new(1, 2), Beam::new(0, 2)],
+        };
+        let settings = Settings {
+            mass: MassModel::seed(200.0),
+            objective: Objective::Mass,
+            self_weight: false,
+            max_force: 1e7,
+            min_length: 0.1,
+            max_length: None,
+            planar: true,
+            held_axis: None,
+            move_joints: true,
+            symmetry: Vec::new(),
+            obstacles: Vec::new(),
+            load_cases: vec!["case0".into()],
+        };
+        let forces = vec![-5.0 * p / 3.0, 4.0 * p / 3.0];
+        let parts = signed_parts(&forces);
+        assert_eq!(parts, [ForceParts::Tension, ForceParts::Compression]);
+        let nlp = TrussNlp::with_parts(structure, settings, forces, parts).unwrap();
+        let dims = nlp.dims();
+        let mut x = vec![0.0; dims.n];
+        nlp.start(&mut x);
+        // Moved a little, as a round's end point would be.
+        x[dims.n - 1] += 0.01;
+        let resumed = resumed_at(&nlp, &x).unwrap();
+        let mut start = vec![0.0; dims.n];
+        resumed.start(&mut start);
+        let evaluate = |nlp: &TrussNlp, x: &[f64]| {
+            let (mut f, mut c) = (0.0, vec![0.0; dims.m]);
+            nlp.eval(x, &mut f, &mut c).unwrap();
+            (f, c)
+        };
+        let (f, c) = evaluate(&nlp, &x);
+        let (f_resumed, c_resumed) = evaluate(&resumed, &start);
+        assert!(
+            (f - f_resumed).abs() <= 1e-12 * f.abs(),
+            "{f} vs {f_resumed}"
+        );
+        for (a, b) in c.iter().zip(&c_resumed) {
+            assert!((a - b).abs() <= 1e-9 * (1.0 + a.abs()), "{a} vs {b}");
+        }
     }
 }
