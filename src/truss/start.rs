@@ -43,7 +43,10 @@
 //! not be a vertex; where the optimum is not unique it spreads the force over the tied members.
 //! No crossover is needed: the start uses only each member's sign and whether it is idle, and
 //! members off the optimal face end with forces of the order of the solver tolerance (1e-10
-//! relative), far below `IDLE_FRACTION`.
+//! relative), far below `IDLE_FRACTION`. With member adding on planar layouts the pricing LPs
+//! are solved by the simplex and the last one's forces come from its vertex's optimal face
+//! ([`super::member_adding`]): the vertex itself where it is the only optimum, otherwise the
+//! interior point on the face's columns.
 //!
 //! Tension runs: a free joint without load on a straight tie (two collinear tension members,
 //! plus at most hangers carrying `RUN_SIDE_FRACTION` of the tie force, which the self-weight LP
