@@ -286,7 +286,12 @@ fn unmodified(h: &DMatrix<f64>, factor: DMatrix<f64>) -> Convexified {
 }
 
 /// `h + γ·gram` (gram the unit rows' `UᵀU`) for the first γ of [`GAMMAS`] (relative to
-/// `scale`) that makes it safely positive definite.
+/// `scale`) that makes it safely positive definite: every pivot above `PIVOT_MIN·scale`, h's
+/// own scale as in the projected shift. (A bound relative to the sum's diagonal, which the γ
+/// term inflates by up to 1e4, failed reduced Hessians whose smallest eigenvalue lies between
+/// the two, 3e-8 of h's scale on a cantilever with a pier: the convexification then fell
+/// through to the flipped diagonal, which changes h on the rows' null space, and the last
+/// round crept for 385 iterations at a mass constant to nine digits; docs/notes/truss.md.)
 fn augmented(
     h: &DMatrix<f64>,
     gram: &DMatrix<f64>,
@@ -297,11 +302,7 @@ fn augmented(
         return None;
     }
     GAMMAS.iter().find_map(|g| {
-        // `scale_of` the sum, from its diagonal.
-        let sum_scale = (0..h.nrows()).fold(1.0_f64, |a, i| {
-            a.max((h[(i, i)] + gram[(i, i)] * (g * scale)).abs())
-        });
-        let factor = definite_factor_of_sum(h, Some((gram, g * scale)), sum_scale)?;
+        let factor = definite_factor_of_sum(h, Some((gram, g * scale)), scale)?;
         Some(Convexified {
             matrix: plus_scaled(h, gram, g * scale),
             factor,
