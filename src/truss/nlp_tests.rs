@@ -9,7 +9,7 @@ use super::model::{
     Beam, Joint, JointKind, Mirror, Objective, Obstacle, Settings, Structure, Support, Vec3,
 };
 use super::nlp::TrussNlp;
-use super::testing::assert_derivatives;
+use super::testing::{assert_derivatives, test_settings};
 use crate::solver::Nlp;
 
 fn joint(p: [f64; 3], kind: JointKind, loads: Vec<Vec3>) -> Joint {
@@ -23,24 +23,6 @@ fn joint(p: [f64; 3], kind: JointKind, loads: Vec<Vec3>) -> Joint {
 
 fn pinned() -> JointKind {
     JointKind::Anchor(Support::Pinned)
-}
-
-fn settings(cases: usize) -> Settings {
-    Settings {
-        // Blend width 1e-3 of the loads, as the problem files default to.
-        mass: MassModel::seed(200.0),
-        objective: Objective::Mass,
-        self_weight: false,
-        max_force: 1e7,
-        min_length: 0.1,
-        max_length: None,
-        planar: false,
-        held_axis: None,
-        move_joints: true,
-        symmetry: Vec::new(),
-        obstacles: Vec::new(),
-        load_cases: (0..cases).map(|c| format!("case{c}")).collect(),
-    }
 }
 
 /// Scaled x from forces (N) for the structure's start positions.
@@ -71,7 +53,8 @@ fn the_force_parts_given_are_the_parts_reported() {
         ForceParts::Both,
         ForceParts::Tension,
     ];
-    let nlp = TrussNlp::with_parts(s, settings(1), vec![1.0, 0.0, -1.0], parts.clone()).unwrap();
+    let nlp =
+        TrussNlp::with_parts(s, test_settings(1), vec![1.0, 0.0, -1.0], parts.clone()).unwrap();
     assert_eq!(nlp.parts(), parts);
     // One variable per signed part, two for the free sign, then the free joints' coordinates.
     assert_eq!(nlp.dims().n, 4 + 2 * 3);
@@ -93,7 +76,7 @@ fn two_bar_truss_balances_at_its_analytic_forces() {
         ],
         beams: vec![Beam::new(0, 2), Beam::new(1, 2)],
     };
-    let mut set = settings(1);
+    let mut set = test_settings(1);
     set.planar = true;
     let nlp = TrussNlp::new(s, set, vec![0.0; 2]).unwrap();
     assert_eq!(nlp.dims().m, 2, "planar load joint: x and y balance only");
@@ -126,7 +109,7 @@ fn roller_support_needs_a_tie() {
         ],
         beams: vec![Beam::new(0, 2), Beam::new(1, 2), Beam::new(0, 1)],
     };
-    let mut set = settings(1);
+    let mut set = test_settings(1);
     set.planar = true;
     let nlp = TrussNlp::new(s, set, vec![0.0; 3]).unwrap();
     // Load: x, y; roller: x only.
@@ -164,12 +147,12 @@ fn tripod_balances_with_and_without_self_weight_accounting() {
         beams: (0..3).map(|k| Beam::new(k, 3)).collect(),
     };
     let leg = p * 13f64.sqrt() / 9.0;
-    let nlp = TrussNlp::new(s.clone(), settings(1), vec![0.0; 3]).unwrap();
+    let nlp = TrussNlp::new(s.clone(), test_settings(1), vec![0.0; 3]).unwrap();
     let x = point(&nlp, &[leg; 3]);
     assert!(nlp.max_balance_residual(&x).unwrap() < 1e-9 * p);
     // With self-weight the apex carries half of each leg's mass too; the analytic leg force
     // then solves λ·3h/L = P + (3/2)·g·m(λ, L): check the fixed point by iteration.
-    let mut set = settings(1);
+    let mut set = test_settings(1);
     set.self_weight = true;
     let nlp = TrussNlp::new(s, set.clone(), vec![0.0; 3]).unwrap();
     let len = 13f64.sqrt();
@@ -233,7 +216,7 @@ fn check(structure: Structure, set: Settings, seed: u64, what: &str) {
 
 #[test]
 fn derivatives_single_case_with_self_weight() {
-    let mut set = settings(1);
+    let mut set = test_settings(1);
     set.self_weight = true;
     set.max_length = Some(9.0);
     check(rich_structure(1), set, 1, "self-weight");
@@ -246,12 +229,12 @@ fn derivatives_of_every_objective() {
         Objective::Length,
         Objective::MassTensionPreference(3.0),
     ] {
-        let mut set = settings(1);
+        let mut set = test_settings(1);
         set.self_weight = true;
         set.objective = objective;
         check(rich_structure(1), set, 2, &format!("{objective:?}"));
     }
-    let mut set = settings(1);
+    let mut set = test_settings(1);
     set.mass = MassModel::linear(250e6, 120e6, 7850.0);
     set.self_weight = true;
     check(rich_structure(1), set, 3, "linear mass");
@@ -259,7 +242,7 @@ fn derivatives_of_every_objective() {
 
 #[test]
 fn derivatives_with_several_load_cases() {
-    let mut set = settings(3);
+    let mut set = test_settings(3);
     set.self_weight = true;
     check(rich_structure(3), set.clone(), 4, "three cases, mass");
     set.objective = Objective::Length;
@@ -268,7 +251,7 @@ fn derivatives_with_several_load_cases() {
 
 #[test]
 fn derivatives_with_obstacles_symmetry_and_held_planes() {
-    let mut set = settings(1);
+    let mut set = test_settings(1);
     set.self_weight = true;
     set.obstacles = vec![
         Obstacle::Sphere {
@@ -345,7 +328,7 @@ fn derivatives_in_degenerate_geometry() {
     s.beams.push(Beam::new(4, n + 1));
     s.beams.push(Beam::new(n + 1, 5));
     s.beams.push(Beam::new(n, n + 1));
-    let mut set = settings(1);
+    let mut set = test_settings(1);
     set.self_weight = true;
     set.obstacles = vec![Obstacle::Sphere {
         center: Vec3::new(6.2, 3.0, -0.2),
@@ -382,7 +365,7 @@ fn planar_problems_have_two_coordinates_per_free_joint() {
     }
     s.joints = unique;
     s.beams = ground::connect(&s.joints, 6, &BTreeSet::new(), &[], &[], 1e-9);
-    let mut set = settings(1);
+    let mut set = test_settings(1);
     set.planar = true;
     set.self_weight = true;
     let free = s.free_count();
@@ -398,7 +381,7 @@ fn planar_problems_have_two_coordinates_per_free_joint() {
 #[test]
 fn zero_length_beams_are_domain_errors() {
     let s = rich_structure(1);
-    let nlp = TrussNlp::new(s.clone(), settings(1), vec![0.0; s.beams.len()]).unwrap();
+    let nlp = TrussNlp::new(s.clone(), test_settings(1), vec![0.0; s.beams.len()]).unwrap();
     let mut x = vec![0.0; nlp.dims().n];
     nlp.start(&mut x);
     // Move the first free joint onto a neighbour.

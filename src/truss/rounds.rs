@@ -318,8 +318,8 @@ mod tests {
 
     #[test]
     fn a_round_resumed_on_an_unchanged_design_starts_where_it_stopped() {
-        use super::super::mass::MassModel;
-        use super::super::model::{Beam, Joint, JointKind, Objective, Settings, Support, Vec3};
+        use super::super::model::{Beam, Joint, JointKind, Settings, Support, Vec3};
+        use super::super::testing::test_settings;
         use crate::solver::Nlp;
         // A bracket: anchors at (0, 0) and (0, 3), load P down at (4, 0). The diagonal pulls
         // (−5P/3, tension), the horizontal pushes (4P/3). Its beams are listed unsorted, as a
@@ -341,18 +341,8 @@ mod tests {
             beams: vec![Beam::new(1, 2), Beam::new(0, 2)],
         };
         let settings = Settings {
-            mass: MassModel::seed(200.0),
-            objective: Objective::Mass,
-            self_weight: false,
-            max_force: 1e7,
-            min_length: 0.1,
-            max_length: None,
             planar: true,
-            held_axis: None,
-            move_joints: true,
-            symmetry: Vec::new(),
-            obstacles: Vec::new(),
-            load_cases: vec!["case0".into()],
+            ..test_settings(1)
         };
         let forces = vec![-5.0 * p / 3.0, 4.0 * p / 3.0];
         let parts = signed_parts(&forces);

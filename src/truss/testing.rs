@@ -6,7 +6,8 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::solver::Nlp;
 
-use super::model::{Joint, JointKind, Vec3};
+use super::mass::MassModel;
+use super::model::{Joint, JointKind, Objective, Settings, Vec3};
 
 /// A joint at (x, y, 0) m of the given kind, without name, with one zero load case.
 pub fn planar_joint(x: f64, y: f64, kind: JointKind) -> Joint {
@@ -15,6 +16,26 @@ pub fn planar_joint(x: f64, y: f64, kind: JointKind) -> Joint {
         kind,
         name: None,
         loads: vec![Vec3::zeros()],
+    }
+}
+
+/// Test settings: seed mass law (σ = 200), mass objective, no self-weight, 3-D, `cases` load
+/// cases named case0, case1, ….
+pub fn test_settings(cases: usize) -> Settings {
+    Settings {
+        // Blend width 1e-3 of the loads, as the problem files default to.
+        mass: MassModel::seed(200.0),
+        objective: Objective::Mass,
+        self_weight: false,
+        max_force: 1e7,
+        min_length: 0.1,
+        max_length: None,
+        planar: false,
+        held_axis: None,
+        move_joints: true,
+        symmetry: Vec::new(),
+        obstacles: Vec::new(),
+        load_cases: (0..cases).map(|c| format!("case{c}")).collect(),
     }
 }
 
