@@ -206,7 +206,11 @@ fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
     let model = match mode {
         HessianMode::Lbfgs => Model::Lbfgs(Lbfgs::new(n, options.lbfgs_memory)),
         HessianMode::Exact => Model::Exact {
-            shift: InertiaShift::default(),
+            shift: if options.progress_window == 0 {
+                InertiaShift::converging()
+            } else {
+                InertiaShift::default()
+            },
             dense: None,
             sparse: None,
             row_weights: Vec::new(),
