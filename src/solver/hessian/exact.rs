@@ -74,6 +74,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use crate::solver::columns::add_scaled_columns;
+
 /// Dense symmetric matrix from lower-triangle triplets (duplicates summed).
 pub fn assemble_dense(n: usize, rows: &[usize], cols: &[usize], values: &[f64]) -> DMatrix<f64> {
     let mut h = DMatrix::zeros(n, n);
@@ -332,8 +334,8 @@ pub fn scale_of(h: &DMatrix<f64>) -> f64 {
 /// columns before it, over contiguous column slices) that stops at the first pivot below the
 /// bound, so a failed trial of the δ or γ schedules costs only the columns up to it. L is in
 /// the lower triangle, the strict upper triangle keeps h's entries. The operations are
-/// nalgebra's `cholesky` (the same left-looking column updates `c − Lⱼₖ·v`, the same square
-/// roots and divisions), so the factor is the same to the bit and the dense QP takes it
+/// nalgebra's `cholesky` (the same left-looking column updates `c − Lⱼₖ·v`, four k per pass
+/// over the column, the same square roots and divisions), so the factor is the same to the bit and the dense QP takes it
 /// instead of factoring h again ([`Convexified::factor`]).
 fn definite_factor(h: &DMatrix<f64>, scale: f64) -> Option<DMatrix<f64>> {
     definite_factor_of_sum(h, None, scale)
@@ -362,6 +364,7 @@ fn definite_factor_of_sum(
         return None;
     }
     let mut l = Vec::with_capacity(n * n);
+    let mut updates: Vec<(f64, usize)> = Vec::with_capacity(n);
     for j in 0..n {
         l.extend_from_slice(&h.as_slice()[j * n..(j + 1) * n]);
         if let Some((b, s)) = extra {
@@ -371,15 +374,13 @@ fn definite_factor_of_sum(
         }
         let (before, rest) = l.split_at_mut(j * n);
         let column = &mut rest[j..n];
-        for k in 0..j {
-            let lk = &before[k * n + j..(k + 1) * n];
-            let factor = lk[0];
-            if factor != 0.0 {
-                for (c, &v) in column.iter_mut().zip(lk) {
-                    *c -= factor * v;
-                }
-            }
-        }
+        // `c −= Lⱼₖ·L[j.., k]` for every k < j with Lⱼₖ ≠ 0, in order (negation is exact).
+        updates.clear();
+        updates.extend((0..j).filter_map(|k| {
+            let factor = before[k * n + j];
+            (factor != 0.0).then_some((-factor, k * n + j))
+        }));
+        add_scaled_columns(column, before, &updates);
         let pivot = column[0];
         if pivot.is_nan() || pivot < bound {
             return None;
