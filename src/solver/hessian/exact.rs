@@ -154,6 +154,7 @@ fn independent_rows(rows: &DMatrix<f64>) -> RowBasis {
     let mut kept = Vec::new();
     let mut v = vec![0.0; n];
     let mut c = vec![0.0; k];
+    let mut terms = Vec::with_capacity(n);
     let entries = rows.as_slice();
     for index in 0..k {
         // Row `index` (entry i at i·k + index); its norm as nalgebra's of a row view: the
@@ -179,13 +180,12 @@ fn independent_rows(rows: &DMatrix<f64>) -> RowBasis {
             let column = |i: usize| &q[i * k..i * k + r];
             let c = &mut c[..r];
             c.fill(0.0);
-            for (i, &vi) in v.iter().enumerate() {
-                if vi != 0.0 {
-                    for (cj, qj) in c.iter_mut().zip(column(i)) {
-                        *cj += qj * vi;
-                    }
-                }
-            }
+            // c = Qv: the columns of the nonzero entries of v, four per pass over c.
+            terms.clear();
+            terms.extend(
+                (v.iter().enumerate()).filter_map(|(i, &vi)| (vi != 0.0).then_some((vi, i * k))),
+            );
+            add_scaled_columns(c, q, &terms);
             for (i, vi) in v.iter_mut().enumerate() {
                 *vi -= dense_dot(column(i), c);
             }
