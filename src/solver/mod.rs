@@ -59,6 +59,7 @@
 //! assert!((solution.lambda[0] + 1.0).abs() < 1e-6);
 //! ```
 
+mod columns;
 pub mod derivatives;
 mod elastic;
 mod evaluator;

@@ -88,6 +88,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use crate::solver::columns::add_scaled_columns;
+
 /// Dense symmetric matrix from lower-triangle triplets (duplicates summed).
 pub fn assemble_dense(n: usize, rows: &[usize], cols: &[usize], values: &[f64]) -> DMatrix<f64> {
     let mut h = DMatrix::zeros(n, n);
@@ -168,6 +170,7 @@ fn independent_rows(rows: &DMatrix<f64>) -> RowBasis {
     let mut kept = Vec::new();
     let mut v = vec![0.0; n];
     let mut c = vec![0.0; k];
+    let mut terms = Vec::with_capacity(n);
     let entries = rows.as_slice();
     for index in 0..k {
         // Row `index` (entry i at i·k + index); its norm as nalgebra's of a row view: the
@@ -193,13 +196,12 @@ fn independent_rows(rows: &DMatrix<f64>) -> RowBasis {
             let column = |i: usize| &q[i * k..i * k + r];
             let c = &mut c[..r];
             c.fill(0.0);
-            for (i, &vi) in v.iter().enumerate() {
-                if vi != 0.0 {
-                    for (cj, qj) in c.iter_mut().zip(column(i)) {
-                        *cj += qj * vi;
-                    }
-                }
-            }
+            // c = Qv: the columns of the nonzero entries of v, four per pass over c.
+            terms.clear();
+            terms.extend(
+                (v.iter().enumerate()).filter_map(|(i, &vi)| (vi != 0.0).then_some((vi, i * k))),
+            );
+            add_scaled_columns(c, q, &terms);
             for (i, vi) in v.iter_mut().enumerate() {
                 *vi -= dense_dot(column(i), c);
             }
@@ -349,8 +351,8 @@ pub fn scale_of(h: &DMatrix<f64>) -> f64 {
 /// columns before it, over contiguous column slices) that stops at the first pivot below the
 /// bound, so a failed trial of the δ or γ schedules costs only the columns up to it. L is in
 /// the lower triangle, the strict upper triangle keeps h's entries. The operations are
-/// nalgebra's `cholesky` (the same left-looking column updates `c − Lⱼₖ·v`, the same square
-/// roots and divisions), so the factor is the same to the bit and the dense QP takes it
+/// nalgebra's `cholesky` (the same left-looking column updates `c − Lⱼₖ·v`, four k per pass
+/// over the column, the same square roots and divisions), so the factor is the same to the bit and the dense QP takes it
 /// instead of factoring h again ([`Convexified::factor`]).
 fn definite_factor(h: &DMatrix<f64>, scale: f64) -> Option<DMatrix<f64>> {
     definite_factor_of_sum(h, None, scale)
@@ -379,6 +381,7 @@ fn definite_factor_of_sum(
         return None;
     }
     let mut l = Vec::with_capacity(n * n);
+    let mut updates: Vec<(f64, usize)> = Vec::with_capacity(n);
     for j in 0..n {
         l.extend_from_slice(&h.as_slice()[j * n..(j + 1) * n]);
         if let Some((b, s)) = extra {
@@ -388,15 +391,13 @@ fn definite_factor_of_sum(
         }
         let (before, rest) = l.split_at_mut(j * n);
         let column = &mut rest[j..n];
-        for k in 0..j {
-            let lk = &before[k * n + j..(k + 1) * n];
-            let factor = lk[0];
-            if factor != 0.0 {
-                for (c, &v) in column.iter_mut().zip(lk) {
-                    *c -= factor * v;
-                }
-            }
-        }
+        // `c −= Lⱼₖ·L[j.., k]` for every k < j with Lⱼₖ ≠ 0, in order (negation is exact).
+        updates.clear();
+        updates.extend((0..j).filter_map(|k| {
+            let factor = before[k * n + j];
+            (factor != 0.0).then_some((-factor, k * n + j))
+        }));
+        add_scaled_columns(column, before, &updates);
         let pivot = column[0];
         if pivot.is_nan() || pivot < bound {
             return None;

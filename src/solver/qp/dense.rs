@@ -30,6 +30,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::{QpProblem, QpSolution, QpStatus};
+use crate::solver::columns::{add_scaled_columns, add_to_columns};
 
 /// Identifier of one constraint side (`n` variables, `m` rows): `0..n` lower variable bounds,
 /// `n..2n` upper ones, `2n..2n+m` lower row bounds, `2n+m..2n+2m` upper row bounds.
@@ -348,14 +349,16 @@ impl ActiveSet {
         let beta = 1.0 / (sigma * (sigma + d[iq].abs()));
         // w = J₂v and J₂ ← J₂ − β w vᵀ column by column, each entry as nalgebra's gemv
         // (`wᵢ = J₂ᵢ₀v₀`, then `wᵢ += J₂ᵢⱼvⱼ`) and ger (`J₂ᵢⱼ += (−β vⱼ) wᵢ`) compute it.
+        // Both blocked over four columns ([`add_scaled_columns`], [`add_to_columns`]), each
+        // entry's operations in the same order.
         let inactive = &mut self.j.as_mut_slice()[iq * n..];
         let mut w: Vec<f64> = inactive[..n].iter().map(|x| x * v[0]).collect();
-        for (column, &vc) in inactive.chunks_exact(n).zip(&v).skip(1) {
-            axpy(vc, column, &mut w);
-        }
-        for (column, &vc) in inactive.chunks_exact_mut(n).zip(&v) {
-            axpy(-beta * vc, &w, column);
-        }
+        let terms: Vec<(f64, usize)> = (v.iter().enumerate().skip(1))
+            .map(|(c, &vc)| (vc, c * n))
+            .collect();
+        add_scaled_columns(&mut w, inactive, &terms);
+        let coefficients: Vec<f64> = v.iter().map(|&vc| -beta * vc).collect();
+        add_to_columns(inactive, &w, &coefficients);
         alpha
     }
 

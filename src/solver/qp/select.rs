@@ -348,8 +348,12 @@ pub fn solve(problem: &QpProblem, warm: &mut WarmStart, tolerance: f64) -> QpSol
             Cow::Owned(shifted)
         };
         let shifted = &*shifted;
+        // The kept matrix's entries compared as slices (the matrices' `==`, without its
+        // iterator over entries).
         let factor = (warm.factored.as_ref())
-            .filter(|(kept, _)| kept == shifted)
+            .filter(|(kept, _)| {
+                kept.shape() == shifted.shape() && kept.as_slice() == shifted.as_slice()
+            })
             .map(|(_, factor)| factor);
         let result = match factor {
             Some(factor) => dense::solve_with_factor(
