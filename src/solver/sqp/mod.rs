@@ -87,6 +87,7 @@
 //! decision through [`Next`].
 
 mod finish;
+mod jacobian;
 mod line_search;
 mod model;
 mod penalty;
@@ -99,8 +100,7 @@ use std::ops::ControlFlow;
 use std::sync::Arc;
 use std::time::Instant;
 
-use nalgebra_sparse::pattern::SparsityPattern;
-use nalgebra_sparse::{CooMatrix, CsrMatrix};
+use nalgebra_sparse::CsrMatrix;
 
 use super::evaluator::{Evaluator, Values};
 use super::hessian::{DenseBfgs, InertiaShift, Lbfgs, Model};
@@ -112,6 +112,7 @@ use super::{
     Globalization, HessianMode, Interrupt, Interruptible, IterationRecord, Nlp, Options, Solution,
     Status, Tuning,
 };
+use jacobian::Jacobian;
 use line_search::LineSearch;
 use penalty::Descent;
 use state::State;
@@ -137,9 +138,8 @@ struct Sqp<'a> {
     elastic_warm: WarmStart,
     /// For the least-violation subproblems (their own shape, so their own sparse analysis).
     feasibility_warm: RefCell<WarmStart>,
-    jac_shape: (Vec<usize>, Vec<usize>),
-    /// The Jacobian's CSR layout (see [`csr_layout`]); `None` when `jac_shape` repeats an entry.
-    jac_layout: Option<(SparsityPattern, Vec<usize>)>,
+    /// The constraint Jacobian's entries and CSR layout.
+    jac_shape: Jacobian,
     /// The QP method in effect ([`Options::qp_method`], with `Auto` resolved for exact
     /// Hessians above [`Tuning::exact_sparse_limit`]).
     qp_method: QpMethod,
@@ -223,9 +223,8 @@ fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
         }
         other => other,
     };
-    let jac_shape = (ev.jac_rows.clone(), ev.jac_cols.clone());
     let m = ev.dims.m;
-    let jac_layout = csr_layout(m, n, &jac_shape.0, &jac_shape.1);
+    let jac_shape = Jacobian::new(m, n, &ev.jac_rows, &ev.jac_cols);
     // Every QP polls the flag too: a long factorization sequence stops within one iteration.
     let interrupt = (options.interrupt.clone()).map_or_else(Interrupt::new, Interrupt::from);
     let warm = || WarmStart::new(qp_method).interruptible(interrupt.clone());
@@ -245,7 +244,6 @@ fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
         feasibility_warm: RefCell::new(warm()),
         qp_method,
         jac_shape,
-        jac_layout,
         radius: f64::INFINITY,
         active_signature: Vec::new(),
         active_stable: 0,
@@ -255,29 +253,6 @@ fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
         hessian_due: false,
     };
     sqp.run()
-}
-
-/// The CSR layout of an `m × n` Jacobian whose values come in the order of the `(rows, cols)`
-/// list: its sparsity pattern and, for each stored entry (row-major, columns ascending), its
-/// position in the list. Found once per solve by converting the list with its positions as
-/// values, so the pattern and order are those of the COO → CSR conversion itself and placing
-/// values by it gives the same matrix bit for bit. `None` when the list repeats an entry (the
-/// conversion sums repeats; then every Jacobian is converted).
-fn csr_layout(
-    m: usize,
-    n: usize,
-    rows: &[usize],
-    cols: &[usize],
-) -> Option<(SparsityPattern, Vec<usize>)> {
-    let mut coo = CooMatrix::new(m, n);
-    for (k, (&r, &c)) in rows.iter().zip(cols).enumerate() {
-        coo.push(r, c, k as f64);
-    }
-    let csr = CsrMatrix::from(&coo);
-    (csr.nnz() == rows.len()).then(|| {
-        let order = csr.values().iter().map(|&k| k as usize).collect();
-        (csr.pattern().clone(), order)
-    })
 }
 
 impl Sqp<'_> {
@@ -294,21 +269,9 @@ impl Sqp<'_> {
         self.live.borrow_mut().message(text);
     }
 
-    /// The constraint Jacobian in CSR form from its values in `jac_shape`'s order: the
-    /// values placed by the solve's layout, or (a shape that repeats an entry) converted from
-    /// COO, the repeats summed.
+    /// The constraint Jacobian in CSR form from its values in the evaluator's order.
     pub(super) fn jacobian(&self, values: &[f64]) -> CsrMatrix<f64> {
-        if let Some((pattern, order)) = &self.jac_layout {
-            let placed = order.iter().map(|&k| values[k]).collect();
-            return CsrMatrix::try_from_pattern_and_values(pattern.clone(), placed)
-                .expect("the layout holds one position per stored entry");
-        }
-        let (m, n) = (self.ev.dims.m, self.ev.dims.n);
-        let mut coo = CooMatrix::new(m, n);
-        for ((&r, &c), &v) in self.jac_shape.0.iter().zip(&self.jac_shape.1).zip(values) {
-            coo.push(r, c, v);
-        }
-        CsrMatrix::from(&coo)
+        self.jac_shape.csr(values)
     }
 
     pub(super) fn merit(&self, v: &Values) -> f64 {
