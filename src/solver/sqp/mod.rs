@@ -87,6 +87,7 @@
 //! decision through [`Next`].
 
 mod finish;
+mod jacobian;
 mod line_search;
 mod model;
 mod penalty;
@@ -99,7 +100,7 @@ use std::ops::ControlFlow;
 use std::sync::Arc;
 use std::time::Instant;
 
-use nalgebra_sparse::{CooMatrix, CsrMatrix};
+use nalgebra_sparse::CsrMatrix;
 
 use super::evaluator::{Evaluator, Values};
 use super::hessian::{DenseBfgs, InertiaShift, Lbfgs, Model};
@@ -111,6 +112,7 @@ use super::{
     Globalization, HessianMode, Interrupt, Interruptible, IterationRecord, Nlp, Options, Solution,
     Status, Tuning,
 };
+use jacobian::Jacobian;
 use line_search::LineSearch;
 use penalty::Descent;
 use state::State;
@@ -136,7 +138,8 @@ struct Sqp<'a> {
     elastic_warm: WarmStart,
     /// For the least-violation subproblems (their own shape, so their own sparse analysis).
     feasibility_warm: RefCell<WarmStart>,
-    jac_shape: (Vec<usize>, Vec<usize>),
+    /// The constraint Jacobian's entries and CSR layout.
+    jac_shape: Jacobian,
     /// The QP method in effect ([`Options::qp_method`], with `Auto` resolved for exact
     /// Hessians above [`Tuning::exact_sparse_limit`]).
     qp_method: QpMethod,
@@ -224,8 +227,8 @@ fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
         }
         other => other,
     };
-    let jac_shape = (ev.jac_rows.clone(), ev.jac_cols.clone());
     let m = ev.dims.m;
+    let jac_shape = Jacobian::new(m, n, &ev.jac_rows, &ev.jac_cols);
     // Every QP polls the flag too: a long factorization sequence stops within one iteration.
     let interrupt = (options.interrupt.clone()).map_or_else(Interrupt::new, Interrupt::from);
     let warm = || WarmStart::new(qp_method).interruptible(interrupt.clone());
@@ -270,13 +273,9 @@ impl Sqp<'_> {
         self.live.borrow_mut().message(text);
     }
 
+    /// The constraint Jacobian in CSR form from its values in the evaluator's order.
     pub(super) fn jacobian(&self, values: &[f64]) -> CsrMatrix<f64> {
-        let (m, n) = (self.ev.dims.m, self.ev.dims.n);
-        let mut coo = CooMatrix::new(m, n);
-        for ((&r, &c), &v) in self.jac_shape.0.iter().zip(&self.jac_shape.1).zip(values) {
-            coo.push(r, c, v);
-        }
-        CsrMatrix::from(&coo)
+        self.jac_shape.csr(values)
     }
 
     pub(super) fn merit(&self, v: &Values) -> f64 {

@@ -52,7 +52,8 @@ impl Sqp<'_> {
                 position[i] = k;
             }
             let mut a = DMatrix::zeros(active.len(), n);
-            for (k, (&r, &c)) in self.jac_shape.0.iter().zip(&self.jac_shape.1).enumerate() {
+            let (rows, cols) = self.jac_shape.entries();
+            for (k, (&r, &c)) in rows.iter().zip(cols).enumerate() {
                 if position[r] != usize::MAX {
                     a[(position[r], c)] += point.derivatives.jac[k];
                 }

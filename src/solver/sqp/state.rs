@@ -206,8 +206,8 @@ impl Sqp<'_> {
         if !self.model.is_quasi_newton() {
             self.lambda = multipliers::least_squares(&LinearizedPoint {
                 grad: &point.derivatives.grad,
-                jac_rows: &self.jac_shape.0,
-                jac_cols: &self.jac_shape.1,
+                jac_rows: self.jac_shape.entries().0,
+                jac_cols: self.jac_shape.entries().1,
                 jac: &point.derivatives.jac,
                 c: &point.values.c,
                 cl: &self.ev.cl,
@@ -324,7 +324,8 @@ impl Sqp<'_> {
 
     pub(super) fn lagrangian_gradient(&self, p: &Point) -> Vec<f64> {
         let mut g = p.derivatives.grad.clone();
-        for (k, (&r, &c)) in self.jac_shape.0.iter().zip(&self.jac_shape.1).enumerate() {
+        let (rows, cols) = self.jac_shape.entries();
+        for (k, (&r, &c)) in rows.iter().zip(cols).enumerate() {
             g[c] += self.lambda[r] * p.derivatives.jac[k];
         }
         g
