@@ -414,8 +414,8 @@ fn definite_factor_of_sum(
 impl InertiaShift {
     /// The shift memory of a solve that is to converge on its model (no creep watch, see
     /// `Options::progress_window`): a reduced Hessian that is positive definite, but coupled
-    /// across the rows more strongly than [`GAMMAS`] cover, is kept unmodified with γ up to
-    /// [`PROJECTED_GAMMA`] before the negative diagonal is flipped (module header).
+    /// across the rows more strongly than the weights up to 1e4 cover, is kept unmodified with
+    /// γ up to 1e6 (relative) before the negative diagonal is flipped (module header).
     pub fn converging() -> Self {
         InertiaShift {
             converging: true,
