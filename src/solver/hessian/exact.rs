@@ -149,6 +149,9 @@ const GAMMAS: [f64; 3] = [1.0, 1e2, 1e4];
 /// shift lifts the null space, so the weight only has to overcome the coupling across the rows
 /// (see the module header), which grows as the rows' smallest singular value falls.
 const PROJECTED_GAMMA: f64 = 1e6;
+/// Augmentation weights of a converging solve (relative): [`GAMMAS`], then
+/// [`PROJECTED_GAMMA`] before the flip (module header).
+const CONVERGING_GAMMAS: [f64; 4] = [GAMMAS[0], GAMMAS[1], GAMMAS[2], PROJECTED_GAMMA];
 /// Augmentation weight under the shift when none of `GAMMAS` suffices (relative; see the
 /// module header for why it is large, and not larger).
 pub const FALLBACK_GAMMA: f64 = 1e4;
@@ -352,8 +355,8 @@ pub fn scale_of(h: &DMatrix<f64>) -> f64 {
 /// bound, so a failed trial of the δ or γ schedules costs only the columns up to it. L is in
 /// the lower triangle, the strict upper triangle keeps h's entries. The operations are
 /// nalgebra's `cholesky` (the same left-looking column updates `c − Lⱼₖ·v`, four k per pass
-/// over the column, the same square roots and divisions), so the factor is the same to the bit and the dense QP takes it
-/// instead of factoring h again ([`Convexified::factor`]).
+/// over the column, the same square roots and divisions), so the factor is the same to the
+/// bit and the dense QP takes it instead of factoring h again ([`Convexified::factor`]).
 fn definite_factor(h: &DMatrix<f64>, scale: f64) -> Option<DMatrix<f64>> {
     definite_factor_of_sum(h, None, scale)
 }
@@ -503,12 +506,12 @@ impl InertiaShift {
             r /= r.norm();
         }
         let gram = gram_of(&unit);
-        if let Some(found) = augmented(h, &gram, kept, scale, &GAMMAS) {
-            return Some(found);
-        }
-        if self.converging
-            && let Some(found) = augmented(h, &gram, kept, scale, &[PROJECTED_GAMMA])
-        {
+        let gammas: &[f64] = if self.converging {
+            &CONVERGING_GAMMAS
+        } else {
+            &GAMMAS
+        };
+        if let Some(found) = augmented(h, &gram, kept, scale, gammas) {
             return Some(found);
         }
         // Negative diagonal entries flipped (see `qp::sparse`'s convexification): a separable

@@ -139,7 +139,7 @@ struct Sqp<'a> {
     /// For the least-violation subproblems (their own shape, so their own sparse analysis).
     feasibility_warm: RefCell<WarmStart>,
     /// The constraint Jacobian's entries and CSR layout.
-    jac_shape: Jacobian,
+    jac_pattern: Jacobian,
     /// The QP method in effect ([`Options::qp_method`], with `Auto` resolved for exact
     /// Hessians above [`Tuning::exact_sparse_limit`]).
     qp_method: QpMethod,
@@ -228,7 +228,7 @@ fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
         other => other,
     };
     let m = ev.dims.m;
-    let jac_shape = Jacobian::new(m, n, &ev.jac_rows, &ev.jac_cols);
+    let jac_pattern = Jacobian::new(m, n, &ev.jac_rows, &ev.jac_cols);
     // Every QP polls the flag too: a long factorization sequence stops within one iteration.
     let interrupt = (options.interrupt.clone()).map_or_else(Interrupt::new, Interrupt::from);
     let warm = || WarmStart::new(qp_method).interruptible(interrupt.clone());
@@ -247,7 +247,7 @@ fn solve_unguarded(nlp: &dyn Nlp, options: &Options) -> Solution {
         elastic_warm: warm(),
         feasibility_warm: RefCell::new(warm()),
         qp_method,
-        jac_shape,
+        jac_pattern,
         radius: f64::INFINITY,
         active_signature: Vec::new(),
         active_stable: 0,
@@ -275,7 +275,7 @@ impl Sqp<'_> {
 
     /// The constraint Jacobian in CSR form from its values in the evaluator's order.
     pub(super) fn jacobian(&self, values: &[f64]) -> CsrMatrix<f64> {
-        self.jac_shape.csr(values)
+        self.jac_pattern.csr(values)
     }
 
     pub(super) fn merit(&self, v: &Values) -> f64 {

@@ -52,7 +52,7 @@ impl Sqp<'_> {
                 position[i] = k;
             }
             let mut a = DMatrix::zeros(active.len(), n);
-            let (rows, cols) = self.jac_shape.entries();
+            let (rows, cols) = self.jac_pattern.entries();
             for (k, (&r, &c)) in rows.iter().zip(cols).enumerate() {
                 if position[r] != usize::MAX {
                     a[(position[r], c)] += point.derivatives.jac[k];

@@ -206,8 +206,8 @@ impl Sqp<'_> {
         if !self.model.is_quasi_newton() {
             self.lambda = multipliers::least_squares(&LinearizedPoint {
                 grad: &point.derivatives.grad,
-                jac_rows: self.jac_shape.entries().0,
-                jac_cols: self.jac_shape.entries().1,
+                jac_rows: self.jac_pattern.entries().0,
+                jac_cols: self.jac_pattern.entries().1,
                 jac: &point.derivatives.jac,
                 c: &point.values.c,
                 cl: &self.ev.cl,
@@ -324,7 +324,7 @@ impl Sqp<'_> {
 
     pub(super) fn lagrangian_gradient(&self, p: &Point) -> Vec<f64> {
         let mut g = p.derivatives.grad.clone();
-        let (rows, cols) = self.jac_shape.entries();
+        let (rows, cols) = self.jac_pattern.entries();
         for (k, (&r, &c)) in rows.iter().zip(cols).enumerate() {
             g[c] += self.lambda[r] * p.derivatives.jac[k];
         }
