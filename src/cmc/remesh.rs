@@ -28,7 +28,7 @@
 //! both ends are free with the same guide (or none), which the midpoint then inherits: a film
 //! never comes loose from what holds it.
 
-use std::collections::BTreeSet;
+use std::collections::HashSet;
 
 use super::area::area_vector;
 use super::mesh::{Mesh, MeshError, Point, VertexFlags};
@@ -40,23 +40,21 @@ pub fn equiangulate(mesh: &Mesh, max_passes: usize) -> Result<(Mesh, usize), Mes
     let surface = mesh.triangle_surface();
     let pos = mesh.positions();
     let mut flips = 0;
+    // The mesh of the current triangles, once a pass has flipped any (before: `mesh` itself).
+    let mut flipped: Option<Mesh> = None;
     for _ in 0..max_passes {
-        let current = Mesh::new(
-            pos.to_vec(),
-            triangles.clone(),
-            surface.to_vec(),
-            mesh.surfaces().to_vec(),
-            mesh.flags().to_vec(),
-            mesh.guides().to_vec(),
-        )?;
-        let mut touched: BTreeSet<usize> = BTreeSet::new();
-        let mut edges: BTreeSet<[usize; 2]> = current.edges().iter().map(|e| e.vertices).collect();
+        let current = flipped.as_ref().unwrap_or(mesh);
+        let mut touched = vec![false; triangles.len()];
+        // The pass's edges: the mesh's (its sorted neighbour lists), less those flipped away,
+        // plus the new diagonals (a diagonal's triangles are touched, so it is not flipped
+        // away in the same pass).
+        let (mut added, mut removed) = (HashSet::new(), HashSet::new());
         let mut pass_flips = 0;
         for edge in current.edges() {
             let &[t1, t2] = edge.triangles.as_slice() else {
                 continue;
             };
-            if surface[t1] != surface[t2] || touched.contains(&t1) || touched.contains(&t2) {
+            if surface[t1] != surface[t2] || touched[t1] || touched[t2] {
                 continue;
             }
             let Some((a, b, c)) = ordered(triangles[t1], edge.vertices) else {
@@ -70,7 +68,8 @@ pub fn equiangulate(mesh: &Mesh, max_passes: usize) -> Result<(Mesh, usize), Mes
                 continue;
             }
             let new_edge = [c.min(d), c.max(d)];
-            if edges.contains(&new_edge) {
+            let in_mesh = current.neighbours(c).binary_search(&d).is_ok();
+            if (in_mesh && !removed.contains(&new_edge)) || added.contains(&new_edge) {
                 continue;
             }
             let angle =
@@ -87,26 +86,26 @@ pub fn equiangulate(mesh: &Mesh, max_passes: usize) -> Result<(Mesh, usize), Mes
             }
             triangles[t1] = [c, a, d];
             triangles[t2] = [d, b, c];
-            edges.remove(&edge.vertices);
-            edges.insert(new_edge);
-            touched.insert(t1);
-            touched.insert(t2);
+            removed.insert(edge.vertices);
+            added.insert(new_edge);
+            touched[t1] = true;
+            touched[t2] = true;
             pass_flips += 1;
         }
         flips += pass_flips;
         if pass_flips == 0 {
             break;
         }
+        flipped = Some(Mesh::new(
+            pos.to_vec(),
+            triangles.clone(),
+            surface.to_vec(),
+            mesh.surfaces().to_vec(),
+            mesh.flags().to_vec(),
+            mesh.guides().to_vec(),
+        )?);
     }
-    let out = Mesh::new(
-        pos.to_vec(),
-        triangles,
-        surface.to_vec(),
-        mesh.surfaces().to_vec(),
-        mesh.flags().to_vec(),
-        mesh.guides().to_vec(),
-    )?;
-    Ok((out, flips))
+    Ok((flipped.unwrap_or_else(|| mesh.clone()), flips))
 }
 
 /// Splits, in order of decreasing length, the edges longer than `max_length` (m) that may be
