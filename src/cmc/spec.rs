@@ -578,12 +578,13 @@ impl CmcSpec {
     }
 
     /// Checks every range of the file, in the order of its tables: solver, meshing
-    /// (resolution, quality, refine, chords), the mesh size, then the shape.
+    /// (resolution, quality, refine, chords), the shape, then the mesh size (estimated from
+    /// the shape's dimensions, so a zero width is named as such, not as an infinite mesh).
     fn validate(&self) -> Result<(), InputError> {
         validate_solver(&self.file.solver, &self.source, &[Key::Name("solver")])?;
         self.validate_meshing()?;
-        self.validate_size()?;
-        self.validate_shape()
+        self.validate_shape()?;
+        self.validate_size()
     }
 
     /// The meshing keys: `resolution`, `[quality]`, `[refine]`, `[stability]` and the chord
@@ -1242,13 +1243,24 @@ mod tests {
         }
     }
 
+    /// The error `text` (a file's contents) is refused with.
+    fn refusal(text: &str) -> InputError {
+        parse(Source {
+            path: "s.toml".into(),
+            text: text.into(),
+        })
+        .unwrap_err()
+    }
+
+    #[test]
+    fn a_zero_wire_width_is_named_not_sized() {
+        let e = refusal("[shape]\ntype = \"u_wires\"\nwidth = 0.0\ndepth = 0.03\n");
+        assert!(e.message.starts_with("`width` must be positive"), "{e}");
+    }
+
     #[test]
     fn an_absurd_resolution_is_refused_before_building() {
-        let source = Source {
-            path: "s.toml".into(),
-            text: "resolution = 40\n[shape]\ntype = \"sphere\"\nvolume = 1.0\n".into(),
-        };
-        let e = parse(source).unwrap_err();
+        let e = refusal("resolution = 40\n[shape]\ntype = \"sphere\"\nvolume = 1.0\n");
         assert_eq!(e.position, Some((1, 1)));
         assert!(
             e.message
