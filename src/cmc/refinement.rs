@@ -16,7 +16,9 @@
 //! vertices; on a curved wire (a ring) that would freeze the coarse polygon. Each fixed vertex
 //! of the subdivided mesh therefore takes the position of the nearest fixed vertex of the
 //! generator's own start at the doubled resolution when one lies within 0.3 of the median
-//! edge length (the wire at the finer resolution); straight wires are unchanged by it.
+//! edge length (the wire at the finer resolution); straight wires are unchanged by it. The free
+//! vertices then follow the wires' move ([`follow_wires`]), so rows closer to a wire than its
+//! move are not folded over it.
 
 use super::mesh::{Mesh, Point};
 
@@ -161,21 +163,20 @@ pub fn table(study: &Study) -> Vec<String> {
     lines
 }
 
-/// Moves each fixed vertex of `refined` onto the nearest fixed vertex of `wire` (the
-/// generator's start at the finer resolution) when one lies within `reach` (m); returns how
-/// many moved.
-pub fn snap_fixed_vertices(refined: &mut Mesh, wire: &Mesh, reach: f64) -> usize {
+/// The positions of `refined` with each fixed vertex moved onto the nearest fixed vertex of
+/// `wire` (the generator's start at the finer resolution) when one lies within `reach` (m);
+/// free vertices keep theirs ([`follow_wires`] moves them along).
+pub fn snap_fixed_vertices(refined: &Mesh, wire: &Mesh, reach: f64) -> Vec<Point> {
+    let mut positions = refined.positions().to_vec();
     let targets: Vec<Point> = wire.fixed_positions().copied().collect();
     if targets.is_empty() || reach <= 0.0 {
-        return 0;
+        return positions;
     }
     let cell = |p: &Point| [p.x, p.y, p.z].map(|c| (c / reach).floor() as i64);
     let mut grid: std::collections::HashMap<[i64; 3], Vec<usize>> = Default::default();
     for (k, p) in targets.iter().enumerate() {
         grid.entry(cell(p)).or_default().push(k);
     }
-    let mut positions = refined.positions().to_vec();
-    let mut moved = 0;
     for (p, f) in positions.iter_mut().zip(refined.flags()) {
         if !f.fixed {
             continue;
@@ -198,18 +199,111 @@ pub fn snap_fixed_vertices(refined: &mut Mesh, wire: &Mesh, reach: f64) -> usize
                 }
             }
         }
-        if let Some((d, k)) = best {
-            if d > 0.0 {
-                moved += 1;
-            }
+        if let Some((_, k)) = best {
             *p = targets[k];
         }
     }
-    // Positions only move by a fraction of an edge: the mesh stays valid.
-    refined
-        .set_positions(positions)
-        .expect("snapping moves fixed vertices by less than an edge");
+    positions
+}
+
+/// Largest number of conjugate-gradient steps of [`follow_wires`].
+const FOLLOW_MAX_STEPS: usize = 5_000;
+
+/// Moves the free vertices of `mesh` along with its wires: `moved` holds the positions after
+/// [`snap_fixed_vertices`] (fixed vertices moved, the others as in `mesh`). Each free vertex
+/// without a guide is displaced by the discrete harmonic extension of the fixed vertices'
+/// displacement, `Σⱼ wᵢⱼ (uᵢ − uⱼ) = 0` with edge weights `wᵢⱼ = 1/ℓᵢⱼ²` (ℓ the edge's length
+/// in `mesh`, m): a vertex one short edge away from a moved wire vertex moves nearly as far,
+/// so a band of rows thinner than the wire's move (a ring close to a square wire, whose new
+/// vertices move from the coarse chords onto the circle) is carried along instead of folded.
+/// Guided vertices stay (their guide holds them); so does everything when no wire moved.
+/// Solved by conjugate gradients with the diagonal as preconditioner, to 1e-10 of the
+/// right-hand side's norm (m).
+pub fn follow_wires(mesh: &Mesh, mut moved: Vec<Point>) -> Vec<Point> {
+    let before = mesh.positions();
+    let unknown: Vec<bool> = (mesh.flags().iter())
+        .map(|f| !f.fixed && f.guide.is_none())
+        .collect();
+    let rows: Vec<Vec<(usize, f64)>> = (0..before.len())
+        .map(|v| {
+            let weight = |u: &usize| (*u, 1.0 / (before[v] - before[*u]).norm_squared());
+            mesh.neighbours(v).iter().map(weight).collect()
+        })
+        .collect();
+    let diagonal: Vec<f64> = rows
+        .iter()
+        .map(|r| r.iter().map(|(_, w)| w).sum())
+        .collect();
+    // Right-hand side: the known neighbours' displacement, weighted; zero on known rows.
+    let rhs: Vec<Point> = (0..before.len())
+        .map(|v| match unknown[v] {
+            false => Point::zeros(),
+            true => (rows[v].iter())
+                .filter(|(u, _)| !unknown[*u])
+                .map(|&(u, w)| w * (moved[u] - before[u]))
+                .sum(),
+        })
+        .collect();
+    let apply = |x: &[Point]| -> Vec<Point> {
+        (0..x.len())
+            .map(|v| match unknown[v] {
+                false => Point::zeros(),
+                true => {
+                    let off: Point = (rows[v].iter())
+                        .filter(|(u, _)| unknown[*u])
+                        .map(|&(u, w)| w * x[u])
+                        .sum();
+                    diagonal[v] * x[v] - off
+                }
+            })
+            .collect()
+    };
+    let shift = conjugate_gradients(apply, &rhs, &diagonal);
+    for (v, d) in shift.iter().enumerate().filter(|(v, _)| unknown[*v]) {
+        moved[v] = before[v] + d;
+    }
     moved
+}
+
+/// Solves `A x = b` for a symmetric positive (semi)definite `A` given as `apply`, with the
+/// diagonal `diagonal` as preconditioner, from x = 0 (zero rows of `b` stay zero), to a
+/// residual of 1e-10·‖b‖ or [`FOLLOW_MAX_STEPS`] steps.
+fn conjugate_gradients(
+    apply: impl Fn(&[Point]) -> Vec<Point>,
+    b: &[Point],
+    diagonal: &[f64],
+) -> Vec<Point> {
+    let dot = |a: &[Point], c: &[Point]| a.iter().zip(c).map(|(p, q)| p.dot(q)).sum::<f64>();
+    let precondition = |r: &[Point]| -> Vec<Point> {
+        (r.iter().zip(diagonal))
+            .map(|(p, &d)| if d > 0.0 { p / d } else { Point::zeros() })
+            .collect()
+    };
+    let mut x = vec![Point::zeros(); b.len()];
+    let mut r = b.to_vec();
+    let stop = 1e-20 * dot(b, b);
+    let mut z = precondition(&r);
+    let mut p = z.clone();
+    let mut rz = dot(&r, &z);
+    for _ in 0..FOLLOW_MAX_STEPS {
+        if dot(&r, &r) <= stop {
+            break;
+        }
+        let ap = apply(&p);
+        let alpha = rz / dot(&p, &ap);
+        for ((xi, ri), (pi, api)) in x.iter_mut().zip(&mut r).zip(p.iter().zip(&ap)) {
+            *xi += alpha * pi;
+            *ri -= alpha * api;
+        }
+        z = precondition(&r);
+        let next = dot(&r, &z);
+        let beta = next / rz;
+        rz = next;
+        for (pi, zi) in p.iter_mut().zip(&z) {
+            *pi = zi + beta * *pi;
+        }
+    }
+    x
 }
 
 #[cfg(test)]

@@ -427,24 +427,21 @@ pub struct VolumeToml {
 
 impl ShapeSpec {
     /// An upper estimate of the start mesh's triangles at `resolution`, in floating point so
-    /// that absurd inputs cannot overflow: an icosphere has 20·4ʳ; the other generators grow
-    /// with r² per surface piece (a tent and each of its poles, a cell), at most 100·r² each,
-    /// times the aspect ratio where rows follow it (U wires: depth/width; quadrilateral tents
-    /// and cells: long/short side). Imports are bounded when read ([`super::import`]).
+    /// that absurd inputs cannot overflow: an icosphere has 20·4ʳ; tents their generator's
+    /// count (at most 6·r² per fan, 2·r·(r·a + 1) per quadrilateral grid of aspect ratio a);
+    /// the other generators grow with r² per surface piece (a cell), at most 100·r² each,
+    /// times the aspect ratio where rows follow it (U wires: depth/width; quadrilateral cells:
+    /// long/short side). Imports are bounded when read ([`super::import`]).
     pub fn face_estimate(&self, resolution: usize) -> f64 {
         let r = resolution as f64;
         let pieces = match self {
             ShapeSpec::Sphere { .. } => return 20.0 * 4f64.powf(r),
             ShapeSpec::Obj { .. } | ShapeSpec::Gltf { .. } => return 0.0,
             ShapeSpec::UWires { width, depth } => (depth / width).max(1.0),
-            ShapeSpec::Tents { tent } => tent
-                .iter()
-                .map(|t| {
-                    let ring_poles: f64 = t.pole_ring.iter().map(|p| p.count as f64).sum();
-                    let corners: Vec<[f64; 3]> = t.boundary.clone().unwrap_or_default();
-                    (1.0 + t.pole.len() as f64 + ring_poles) * quad_aspect(&corners)
-                })
-                .sum(),
+            ShapeSpec::Tents { tent } => {
+                let faces: f64 = tent.iter().map(|t| tent_faces(t, r)).sum();
+                return if faces.is_nan() { f64::INFINITY } else { faces };
+            }
             ShapeSpec::Cluster { bubble } => 3.0 * bubble.len() as f64,
             ShapeSpec::Cells { cell } => cell
                 .iter()
@@ -581,12 +578,13 @@ impl CmcSpec {
     }
 
     /// Checks every range of the file, in the order of its tables: solver, meshing
-    /// (resolution, quality, refine, chords), the mesh size, then the shape.
+    /// (resolution, quality, refine, chords), the shape, then the mesh size (estimated from
+    /// the shape's dimensions, so a zero width is named as such, not as an infinite mesh).
     fn validate(&self) -> Result<(), InputError> {
         validate_solver(&self.file.solver, &self.source, &[Key::Name("solver")])?;
         self.validate_meshing()?;
-        self.validate_size()?;
-        self.validate_shape()
+        self.validate_shape()?;
+        self.validate_size()
     }
 
     /// The meshing keys: `resolution`, `[quality]`, `[refine]`, `[stability]` and the chord
@@ -1101,6 +1099,18 @@ impl CmcSpec {
 
 /// The ratio of the longer to the shorter mean side of a quadrilateral (the generators grid it
 /// with rows along the short side); 1 for other polygons.
+/// Most triangles of one tent's start mesh at resolution `r` (`generators::tents`): a grid of
+/// r cells along the short side and round(r·a) along the long one (a the aspect ratio) for a
+/// quadrilateral `boundary`, else a fan disk of at most six sectors with r rings (`sides·r²`
+/// triangles); poles fix vertices of that mesh and add none. NaN for a zero-length side.
+fn tent_faces(tent: &TentToml, r: f64) -> f64 {
+    match tent.boundary.as_deref() {
+        Some(corners) if corners.len() == 4 => 2.0 * r * (r * quad_aspect(corners) + 1.0),
+        Some(corners) => corners.len().min(6) as f64 * r * r,
+        None => 6.0 * r * r,
+    }
+}
+
 fn quad_aspect(corners: &[[f64; 3]]) -> f64 {
     if corners.len() != 4 {
         return 1.0;
@@ -1215,12 +1225,42 @@ mod tests {
     }
 
     #[test]
-    fn an_absurd_resolution_is_refused_before_building() {
-        let source = Source {
+    fn a_tent_roof_is_sized_by_its_own_mesh() {
+        // The convention center's eight tents (five with mast caps, one 100 m × 8 m quadrilateral
+        // with five): 1,974 triangles at resolution 7; resolution 8 was refused as 5.6e5
+        // faces by an estimate of 100·r² per tent and per pole.
+        let file =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/cmc/convention_center.toml");
+        let spec = parse(Source::read(&file).unwrap()).unwrap();
+        for r in [4, 8] {
+            let (shape, _) = spec.build(r).unwrap();
+            let faces = shape.mesh.triangles().len() as f64;
+            let estimate = spec.file.shape.face_estimate(r);
+            assert!(
+                faces <= estimate && estimate <= 1.5 * faces,
+                "r{r}: {faces} {estimate}"
+            );
+        }
+    }
+
+    /// The error `text` (a file's contents) is refused with.
+    fn refusal(text: &str) -> InputError {
+        parse(Source {
             path: "s.toml".into(),
-            text: "resolution = 40\n[shape]\ntype = \"sphere\"\nvolume = 1.0\n".into(),
-        };
-        let e = parse(source).unwrap_err();
+            text: text.into(),
+        })
+        .unwrap_err()
+    }
+
+    #[test]
+    fn a_zero_wire_width_is_named_not_sized() {
+        let e = refusal("[shape]\ntype = \"u_wires\"\nwidth = 0.0\ndepth = 0.03\n");
+        assert!(e.message.starts_with("`width` must be positive"), "{e}");
+    }
+
+    #[test]
+    fn an_absurd_resolution_is_refused_before_building() {
+        let e = refusal("resolution = 40\n[shape]\ntype = \"sphere\"\nvolume = 1.0\n");
         assert_eq!(e.position, Some((1, 1)));
         assert!(
             e.message
