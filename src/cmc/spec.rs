@@ -1097,8 +1097,6 @@ impl CmcSpec {
     }
 }
 
-/// The ratio of the longer to the shorter mean side of a quadrilateral (the generators grid it
-/// with rows along the short side); 1 for other polygons.
 /// Most triangles of one tent's start mesh at resolution `r` (`generators::tents`): a grid of
 /// r cells along the short side and round(r·a) along the long one (a the aspect ratio) for a
 /// quadrilateral `boundary`, else a fan disk of at most six sectors with r rings (`sides·r²`
@@ -1111,6 +1109,8 @@ fn tent_faces(tent: &TentToml, r: f64) -> f64 {
     }
 }
 
+/// The ratio of the longer to the shorter mean side of a quadrilateral (the generators grid it
+/// with rows along the short side); 1 for other polygons.
 fn quad_aspect(corners: &[[f64; 3]]) -> f64 {
     if corners.len() != 4 {
         return 1.0;
