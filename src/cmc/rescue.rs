@@ -78,9 +78,22 @@ pub fn movable_min_angle(mesh: &Mesh) -> f64 {
         .fold(180.0, f64::min)
 }
 
-/// Whether a mesh's movable triangles are collapsed ([`COLLAPSED_ANGLE_DEG`]).
+/// Whether a mesh's movable triangles are collapsed: some angle below [`COLLAPSED_ANGLE_DEG`]
+/// (tested on its cosine, `(a·b)² > cos²θ |a|²|b|²` with `a·b > 0`, without inverse cosines:
+/// this runs after every solve).
 pub fn collapsed(mesh: &Mesh) -> bool {
-    movable_min_angle(mesh) < COLLAPSED_ANGLE_DEG
+    let flags = mesh.flags();
+    let cos2 = COLLAPSED_ANGLE_DEG.to_radians().cos().powi(2);
+    (0..mesh.triangles().len())
+        .filter(|&t| mesh.triangles()[t].iter().any(|&v| !flags[v].fixed))
+        .any(|t| {
+            let p = mesh.corners(t);
+            (0..3).any(|m| {
+                let (a, b) = (p[(m + 1) % 3] - p[m], p[(m + 2) % 3] - p[m]);
+                let dot = a.dot(&b);
+                dot > 0.0 && dot * dot > cos2 * a.norm_squared() * b.norm_squared()
+            })
+        })
 }
 
 /// The run's status for a solve that ended with `status` on `mesh`: `Degenerate` (exit 3)
@@ -109,15 +122,17 @@ pub fn solve(
         if matches!(solution.status, Status::Interrupted | Status::TimeLimit) {
             return solution;
         }
-        let Ok(mesh) = nlp.mesh_at(&solution.x) else {
-            return solution;
-        };
-        let angle = movable_min_angle(&mesh);
         let weight = match nlp.tangential_weight() {
             w if w > 0.0 => w * WEIGHT_FACTOR,
             _ => FIRST_WEIGHT,
         };
-        if angle >= COLLAPSED_ANGLE_DEG || weight > MAX_WEIGHT * (1.0 + 1e-12) {
+        if weight > MAX_WEIGHT * (1.0 + 1e-12) {
+            return solution;
+        }
+        let Ok(mesh) = nlp.mesh_at(&solution.x) else {
+            return solution;
+        };
+        if !collapsed(&mesh) {
             return solution;
         }
         let Ok(mut repeat) = nlp.reweighted(start.clone(), weight) else {
@@ -135,7 +150,7 @@ pub fn solve(
             stage: stage.to_string(),
             weight_before: nlp.tangential_weight(),
             weight_after: weight,
-            min_angle_deg_before: angle,
+            min_angle_deg_before: movable_min_angle(&mesh),
             min_angle_deg_after: movable_min_angle(&after),
             area_before: total_area(&mesh),
             area_after: total_area(&after),
