@@ -373,42 +373,29 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     } else {
         None
     };
-    let Tally {
-        iterations,
-        evaluations,
-        log,
-        rescues,
-    } = tally;
     let solve_seconds = solve_started.elapsed().as_secs_f64();
     let mesh = nlp
         .mesh_at(&solution.x)
         .map_err(|e| Error::Runtime(format!("final mesh: {e}")))?;
-    let status = rescue::final_status(solution.status, &mesh);
-    if status != solution.status {
-        solution.status = status;
-        eprintln!(
-            "warning: {}: converged with collapsed triangles (smallest angle {:.2}° < {}°) at tangential weight {}; status Degenerate, exit 3",
-            problem.name,
-            rescue::movable_min_angle(&mesh),
-            rescue::COLLAPSED_ANGLE_DEG,
-            nlp.tangential_weight()
-        );
-    }
+    solution.status = rescue::judged(
+        &problem.name,
+        solution.status,
+        &mesh,
+        nlp.tangential_weight(),
+    );
     let mut summary = ResultSummary::from_solution(&problem.name, Kind::Cmc, opts.seed, &solution);
     // The module's objective in SI units: the total area, m² (the solver saw it scaled by 1/L²
     // plus the tangential regularization, both reported under `figures`).
     summary.objective = area::total_area(&mesh);
     summary.headline = Headline::new("area", summary.objective, "m²");
-    summary.iterations = iterations;
-    summary.evaluations = evaluations;
+    summary.iterations = tally.iterations;
+    summary.evaluations = tally.evaluations;
     summary.figures = figures_json(&nlp, &mesh, &solution.x)?;
     if let Some(obj) = summary.figures.as_object_mut() {
         obj.insert("flip_rounds".into(), rounds.into());
         obj.insert("mesh".into(), restart::mesh_json(&mesh));
-        if !rescues.is_empty() {
-            let value = serde_json::to_value(&rescues)
-                .map_err(|e| Error::Runtime(format!("quality rescues: {e}")))?;
-            obj.insert("quality_rescues".into(), value);
+        if !tally.rescues.is_empty() {
+            insert_json(obj, "quality_rescues", &tally.rescues)?;
         }
         match problem.spec.file.stability.eigenvalues {
             0 => opts.say("stability: not analysed ([stability] eigenvalues = 0)"),
@@ -418,14 +405,10 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             }
         }
         if let Some(study) = &study {
-            let value = serde_json::to_value(study)
-                .map_err(|e| Error::Runtime(format!("refinement study: {e}")))?;
-            obj.insert("refinement".into(), value);
+            insert_json(obj, "refinement", study)?;
         }
         if !coarse_stages.is_empty() {
-            let stages = serde_json::to_value(&coarse_stages)
-                .map_err(|e| Error::Runtime(format!("coarse stages: {e}")))?;
-            obj.insert("coarse_stages".into(), stages);
+            insert_json(obj, "coarse_stages", &coarse_stages)?;
         }
     }
     if let Some(study) = study.as_ref().filter(|s| !s.converging) {
@@ -453,7 +436,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         .timings
         .insert("export".into(), export_started.elapsed().as_secs_f64());
     let [iterations, convergence] =
-        crate::io::result::iteration_files(&problem.name, &summary.headline, &log);
+        crate::io::result::iteration_files(&problem.name, &summary.headline, &tally.log);
     Ok(Outcome {
         summary,
         status: Some(solution.status),
@@ -471,6 +454,17 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             },
         ],
     })
+}
+
+/// Inserts `value` as JSON under `key`.
+fn insert_json(
+    obj: &mut serde_json::Map<String, serde_json::Value>,
+    key: &str,
+    value: &impl serde::Serialize,
+) -> Result<(), Error> {
+    let value = serde_json::to_value(value).map_err(|e| Error::Runtime(format!("{key}: {e}")))?;
+    obj.insert(key.into(), value);
+    Ok(())
 }
 
 /// Work summed over the solves of a run: iterations, evaluations, the iteration log, and the

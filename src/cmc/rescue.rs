@@ -106,6 +106,20 @@ pub fn final_status(status: Status, mesh: &Mesh) -> Status {
     }
 }
 
+/// [`final_status`] of problem `name`'s run, with a warning on stderr when it is
+/// `Degenerate` (at tangential weight `weight`).
+pub fn judged(name: &str, status: Status, mesh: &Mesh, weight: f64) -> Status {
+    let judged = final_status(status, mesh);
+    if judged != status {
+        eprintln!(
+            "warning: {name}: converged with collapsed triangles (smallest angle {:.2}° < \
+             {COLLAPSED_ANGLE_DEG}°) at tangential weight {weight}; status Degenerate, exit 3",
+            movable_min_angle(mesh),
+        );
+    }
+    judged
+}
+
 /// `nlp.solve(options, stage)`, repeated from the same start at larger tangential weights
 /// while its mesh is collapsed (module header); each repeat is appended to `rescues`. `nlp`
 /// becomes the last solve's problem; the returned solution carries every solve's iterations,
