@@ -36,6 +36,7 @@ pub mod preview;
 pub mod prolong;
 pub mod refinement;
 pub mod remesh;
+pub mod rescue;
 pub mod restart;
 pub mod ring_tent;
 pub mod spec;
@@ -325,6 +326,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         iterations: 0,
         evaluations: Evaluations::default(),
         log: Vec::new(),
+        rescues: Vec::new(),
     };
     let mut stopped = None;
     if let Some(staged) = staged {
@@ -334,6 +336,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             iterations: staged.iterations,
             evaluations: staged.evaluations,
             log: staged.log,
+            rescues: staged.rescues,
         };
         stopped = staged.stopped;
     }
@@ -343,7 +346,8 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let mut solution = match stopped {
         Some(solution) => solution,
         None => {
-            let solution = nlp.solve(&options, if staged_run { "full" } else { "" });
+            let stage = if staged_run { "full" } else { "" };
+            let solution = rescue::solve(&mut nlp, &options, stage, &mut tally.rescues);
             tally.add(&solution);
             solution
         }
@@ -369,26 +373,30 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     } else {
         None
     };
-    let Tally {
-        iterations,
-        evaluations,
-        log,
-    } = tally;
     let solve_seconds = solve_started.elapsed().as_secs_f64();
     let mesh = nlp
         .mesh_at(&solution.x)
         .map_err(|e| Error::Runtime(format!("final mesh: {e}")))?;
+    solution.status = rescue::judged(
+        &problem.name,
+        solution.status,
+        &mesh,
+        nlp.tangential_weight(),
+    );
     let mut summary = ResultSummary::from_solution(&problem.name, Kind::Cmc, opts.seed, &solution);
     // The module's objective in SI units: the total area, m² (the solver saw it scaled by 1/L²
     // plus the tangential regularization, both reported under `figures`).
     summary.objective = area::total_area(&mesh);
     summary.headline = Headline::new("area", summary.objective, "m²");
-    summary.iterations = iterations;
-    summary.evaluations = evaluations;
+    summary.iterations = tally.iterations;
+    summary.evaluations = tally.evaluations;
     summary.figures = figures_json(&nlp, &mesh, &solution.x)?;
     if let Some(obj) = summary.figures.as_object_mut() {
         obj.insert("flip_rounds".into(), rounds.into());
         obj.insert("mesh".into(), restart::mesh_json(&mesh));
+        if !tally.rescues.is_empty() {
+            insert_json(obj, "quality_rescues", &tally.rescues)?;
+        }
         match problem.spec.file.stability.eigenvalues {
             0 => opts.say("stability: not analysed ([stability] eigenvalues = 0)"),
             reported => {
@@ -397,14 +405,10 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             }
         }
         if let Some(study) = &study {
-            let value = serde_json::to_value(study)
-                .map_err(|e| Error::Runtime(format!("refinement study: {e}")))?;
-            obj.insert("refinement".into(), value);
+            insert_json(obj, "refinement", study)?;
         }
         if !coarse_stages.is_empty() {
-            let stages = serde_json::to_value(&coarse_stages)
-                .map_err(|e| Error::Runtime(format!("coarse stages: {e}")))?;
-            obj.insert("coarse_stages".into(), stages);
+            insert_json(obj, "coarse_stages", &coarse_stages)?;
         }
     }
     if let Some(study) = study.as_ref().filter(|s| !s.converging) {
@@ -432,7 +436,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         .timings
         .insert("export".into(), export_started.elapsed().as_secs_f64());
     let [iterations, convergence] =
-        crate::io::result::iteration_files(&problem.name, &summary.headline, &log);
+        crate::io::result::iteration_files(&problem.name, &summary.headline, &tally.log);
     Ok(Outcome {
         summary,
         status: Some(solution.status),
@@ -452,11 +456,24 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     })
 }
 
-/// Work summed over the solves of a run: iterations, evaluations and the iteration log.
+/// Inserts `value` as JSON under `key`.
+fn insert_json(
+    obj: &mut serde_json::Map<String, serde_json::Value>,
+    key: &str,
+    value: &impl serde::Serialize,
+) -> Result<(), Error> {
+    let value = serde_json::to_value(value).map_err(|e| Error::Runtime(format!("{key}: {e}")))?;
+    obj.insert(key.into(), value);
+    Ok(())
+}
+
+/// Work summed over the solves of a run: iterations, evaluations, the iteration log, and the
+/// repeats of collapsed solves ([`rescue`]).
 struct Tally {
     iterations: usize,
     evaluations: Evaluations,
     log: Vec<solver::IterationRecord>,
+    rescues: Vec<rescue::Rescue>,
 }
 
 impl Tally {
@@ -472,9 +489,11 @@ impl Tally {
 
 /// Rounds of edge flips (and splits with `[quality] refine`) and re-solves after a solve
 /// (cmc::remesh), up to `rounds`; a feasible point that stalled or ran out of iterations is
-/// remeshed too (such a stall is usually a sliver that flips or splits remove). A round is
-/// kept when its re-solve converged, or when the solve before it had not; a failed re-solve
-/// of a converged mesh is rejected and the converged solution stands. Returns the final
+/// remeshed too (such a stall is usually a sliver that flips or splits remove). The re-solve
+/// is repeated at larger tangential weights while collapsed ([`rescue`]). A round is kept when
+/// its re-solve converged on an uncollapsed mesh, or when the solve before it had not; a
+/// failed or collapsed re-solve of a sound converged mesh is rejected and the converged
+/// solution stands. Returns the final
 /// problem and solution and each round's areas (before flips, after flips, after the
 /// re-solve): the effect of the mesh-quality mechanism on the area.
 fn improve_in_rounds(
@@ -525,9 +544,15 @@ fn improve_in_rounds(
             "" => format!("remesh {}", round + 1),
             level => format!("{level} remesh {}", round + 1),
         };
-        let resolved = remeshed.solve(options, &stage);
+        let resolved = rescue::solve(&mut remeshed, options, &stage, &mut tally.rescues);
         tally.add(&resolved);
-        let kept = resolved.status.is_success() || !solution.status.is_success();
+        let sound = |nlp: &CmcNlp, solution: &solver::Solution| {
+            solution.status.is_success()
+                && nlp
+                    .mesh_at(&solution.x)
+                    .is_ok_and(|m| !rescue::collapsed(&m))
+        };
+        let kept = sound(&remeshed, &resolved) || !sound(&nlp, &solution);
         records.push(serde_json::json!({
             "flips": flips,
             "splits": splits,
@@ -585,7 +610,8 @@ fn refine_in_levels(
                 .map_err(|e| runtime("refined mesh", &e))?;
             let mut level_options = options.clone();
             level_options.log.stage = format!("level {level}");
-            solution = nlp.solve(&level_options, &level_options.log.stage.clone());
+            let stage = level_options.log.stage.clone();
+            solution = rescue::solve(&mut nlp, &level_options, &stage, &mut tally.rescues);
             tally.add(&solution);
             let rounds = problem.spec.file.quality.flip_rounds;
             (nlp, solution, _) =
@@ -1072,6 +1098,52 @@ mod tests {
         let area = levels[1]["area"].as_f64().unwrap();
         let polygon = 0.5 * 32.0 * 0.95f64.powi(2) * (2.0 * std::f64::consts::PI / 32.0).sin();
         assert!((area - (4.0 - polygon)).abs() < 1e-9, "{area}");
+    }
+
+    #[test]
+    #[cfg_attr(
+        debug_assertions,
+        ignore = "slow without optimizations: run with --release"
+    )]
+    fn a_tent_collapsed_at_a_small_weight_is_solved_again_at_a_larger_one() {
+        // The ring 0.05 m from the square's sides, 0.4 m up, 16 segments, one level: at
+        // w = 0.01 the band's vertices slid together (Optimal, 221 iterations, 0.0°); the
+        // repeat at w = 0.1 keeps every angle above 2° and says what it cost.
+        let problem = load_text(
+            "resolution = 2\n[shape]\ntype = \"ring_tent\"\nhalf_width = 1.0\n\
+             ring_radius = 0.95\nring_height = 0.4\n",
+        )
+        .unwrap();
+        let outcome = solve(&problem);
+        assert_eq!(outcome.status, Some(Status::Optimal));
+        let figures = &outcome.summary.figures;
+        let min_angle = figures["quality"]["min_angle_deg"].as_f64().unwrap();
+        assert!(min_angle > rescue::COLLAPSED_ANGLE_DEG, "{min_angle}");
+        let rescues = figures["quality_rescues"].as_array().unwrap();
+        assert!(!rescues.is_empty());
+        assert!(rescues[0]["min_angle_deg_before"].as_f64().unwrap() < 1.0);
+        assert_eq!(rescues[0]["weight_after"].as_f64(), Some(0.1));
+        assert!(figures["tangential_weight"].as_f64().unwrap() > 0.01);
+    }
+
+    #[test]
+    #[cfg_attr(
+        debug_assertions,
+        ignore = "slow without optimizations: run with --release"
+    )]
+    fn a_flip_round_that_collapses_the_film_is_rejected() {
+        // The convention center at resolution 8 (w = 1 already): the first solve is sound
+        // (31.5°, 3,113.93 m²); after 596 flips the re-solve let the film sag through the pole
+        // caps (0.4°, 3,044.34 m²). That round is rejected and the first solve stands.
+        let problem = load(&path("convention_center")).unwrap().with_resolution(8);
+        let outcome = solve(&problem);
+        assert_eq!(outcome.status, Some(Status::Optimal));
+        let figures = &outcome.summary.figures;
+        assert!(figures["quality"]["min_angle_deg"].as_f64().unwrap() > 20.0);
+        let round = &figures["flip_rounds"][0];
+        assert_eq!(round["kept"], false);
+        let before = round["area_before_flips"].as_f64().unwrap();
+        assert_eq!(outcome.summary.objective, before);
     }
 
     #[test]

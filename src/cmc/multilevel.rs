@@ -34,6 +34,7 @@ use super::mesh::Mesh;
 use super::nlp::CmcNlp;
 use super::prolong::prolong;
 use super::remesh::equiangulate;
+use super::rescue::{self, Rescue};
 use super::subdivide::subdivide;
 
 /// One coarse level's solve.
@@ -83,6 +84,8 @@ pub struct Staged {
     pub iterations: usize,
     /// Evaluations summed over the coarse solves.
     pub evaluations: Evaluations,
+    /// The coarse solves repeated at a larger tangential weight ([`rescue`]).
+    pub rescues: Vec<Rescue>,
     /// The solution of a coarse level that ended short of a usable one; `nlp` is then that
     /// level's (not refined) and the run stops there.
     pub stopped: Option<Solution>,
@@ -126,11 +129,12 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
     let runtime = |what: &str, e: &dyn std::fmt::Display| runtime_error(problem, what, e);
     let mut nlp = problem.with_resolution(first).build()?;
     let (mut stages, mut log, mut evaluations) = (Vec::new(), Vec::new(), Evaluations::default());
+    let mut rescues = Vec::new();
     let mut resolution = first;
     for (level, &factor) in factors.iter().enumerate() {
         let mut iterations = 0;
         let stage = format!("level {}", level + 1);
-        let mut solution = nlp.solve(options, &stage);
+        let mut solution = rescue::solve(&mut nlp, options, &stage, &mut rescues);
         iterations += solution.iterations;
         log.extend_from_slice(&solution.log);
         add(&mut evaluations, &solution.evaluations);
@@ -145,7 +149,8 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
                 nlp = nlp
                     .remeshed(flipped)
                     .map_err(|e| runtime("flipped mesh", &e))?;
-                solution = nlp.solve(options, &format!("{stage} remeshed"));
+                let remeshed = format!("{stage} remeshed");
+                solution = rescue::solve(&mut nlp, options, &remeshed, &mut rescues);
                 iterations += solution.iterations;
                 log.extend_from_slice(&solution.log);
                 add(&mut evaluations, &solution.evaluations);
@@ -162,6 +167,7 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
                 stages,
                 log,
                 evaluations,
+                rescues,
                 stopped: Some(solution),
             }));
         }
@@ -177,6 +183,7 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
         stages,
         log,
         evaluations,
+        rescues,
         stopped: None,
     }))
 }
@@ -188,7 +195,8 @@ fn prolonged(problem: &Problem, options: &Options, coarse: usize) -> Result<Stag
     let runtime = |what: &str, e: &dyn std::fmt::Display| runtime_error(problem, what, e);
     let mut nlp = problem.with_resolution(coarse).build()?;
     let coarse_start = nlp.mesh().clone();
-    let solution = nlp.solve(options, "level 1");
+    let mut rescues = Vec::new();
+    let solution = rescue::solve(&mut nlp, options, "level 1", &mut rescues);
     let mesh = nlp
         .mesh_at(&solution.x)
         .map_err(|e| runtime("coarse mesh", &e))?;
@@ -205,6 +213,7 @@ fn prolonged(problem: &Problem, options: &Options, coarse: usize) -> Result<Stag
             log,
             iterations,
             evaluations,
+            rescues,
             stopped: Some(solution),
         });
     }
@@ -223,6 +232,7 @@ fn prolonged(problem: &Problem, options: &Options, coarse: usize) -> Result<Stag
         log,
         iterations,
         evaluations,
+        rescues,
         stopped: None,
     })
 }

@@ -385,11 +385,16 @@ impl CmcNlp {
     /// surfaces, e.g. after [`super::remesh::equiangulate`] or a normal-coordinate round (same
     /// connectivity: the sparsity structure is shared, not rebuilt).
     pub fn remeshed(&self, mesh: Mesh) -> Result<CmcNlp, BuildError> {
+        self.reweighted(mesh, self.weight)
+    }
+
+    /// [`CmcNlp::remeshed`] with the tangential weight `weight` (`w` of the module header).
+    pub fn reweighted(&self, mesh: Mesh, weight: f64) -> Result<CmcNlp, BuildError> {
         Ok(CmcNlp::build(
             mesh,
             self.volumes.clone(),
             self.chords.clone(),
-            self.weight,
+            weight,
             self.rebuilt_as,
             Some(self),
         )?
@@ -865,7 +870,7 @@ impl CmcNlp {
 }
 
 /// `later` with the iterations, evaluations, seconds and log of `earlier` before its own.
-fn merged(mut earlier: Solution, mut later: Solution) -> Solution {
+pub(super) fn merged(mut earlier: Solution, mut later: Solution) -> Solution {
     later.iterations += earlier.iterations;
     later.evaluations.functions += earlier.evaluations.functions;
     later.evaluations.derivatives += earlier.evaluations.derivatives;

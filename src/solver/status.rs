@@ -26,6 +26,9 @@ pub enum Status {
     EvaluationError,
     /// Stopped from outside (Ctrl-C); the best point so far is returned.
     Interrupted,
+    /// Converged, but the model judged the answer's geometry degenerate (a cmc film whose
+    /// triangles collapsed, [`crate::cmc::rescue`]); the answer is returned for inspection.
+    Degenerate,
 }
 
 impl Status {
@@ -61,6 +64,9 @@ impl Status {
             }
             Status::Interrupted => {
                 "Interrupted: stopped by the user; the best point so far is returned."
+            }
+            Status::Degenerate => {
+                "Degenerate: converged, but on a degenerate geometry (collapsed triangles); the answer is not to be trusted."
             }
         }
     }
