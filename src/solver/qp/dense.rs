@@ -115,12 +115,16 @@ impl<'a> Constraints<'a> {
 
     /// Jᵀaᵢ for row `i` of A: the sum of aᵢⱼ times row j of J (the dense product's numbers,
     /// [`dense_dot_tail`]). Column by column of J, with the eight partial sums on the stack.
-    fn jt_times_row(&self, i: usize, j: &DMatrix<f64>) -> DVector<f64> {
+    /// J's columns `..skip` are not read: their entries of the product are left at +0, which
+    /// is the dense product's number when those columns are zero on the row's nonzeros (every
+    /// term a zero product, ±0, which changes no sum that starts at +0).
+    fn jt_times_row(&self, i: usize, j: &DMatrix<f64>, skip: usize) -> DVector<f64> {
         let (cols, vals) = self.row(i);
         let tail = dense_dot_tail(cols, self.n);
         let n = j.nrows().max(1);
         let mut out = DVector::<f64>::zeros(j.ncols());
-        for (column, o) in j.as_slice().chunks_exact(n).zip(out.iter_mut()) {
+        let columns = j.as_slice().chunks_exact(n).zip(out.iter_mut());
+        for (column, o) in columns.skip(skip) {
             let mut partial = [0.0; 8];
             for (&c, &a) in cols[..tail].iter().zip(vals) {
                 partial[c % 8] += column[c] * a;
@@ -185,8 +189,22 @@ impl<'a> Constraints<'a> {
         match side_of(id, self.n, self.m) {
             ConstraintSide::VarLower(c) => j.row(c).transpose(),
             ConstraintSide::VarUpper(c) => -j.row(c).transpose(),
-            ConstraintSide::RowLower(i) => self.jt_times_row(i, j),
-            ConstraintSide::RowUpper(i) => -self.jt_times_row(i, j),
+            ConstraintSide::RowLower(i) => self.jt_times_row(i, j, 0),
+            ConstraintSide::RowUpper(i) => -self.jt_times_row(i, j, 0),
+        }
+    }
+
+    /// Jᵀnₖ for an upper triangular J (the start's `L⁻ᵀ`), the numbers of
+    /// [`Constraints::jt_times_normal`]: J's columns before a row's first nonzero column index
+    /// are zero on all of the row's nonzeros, and are skipped.
+    fn upper_jt_times_normal(&self, id: ConstraintId, j: &DMatrix<f64>) -> DVector<f64> {
+        let first = |i: usize| self.row(i).0.first().copied().unwrap_or(self.n);
+        match side_of(id, self.n, self.m) {
+            ConstraintSide::RowLower(i) => self.jt_times_row(i, j, first(i)),
+            ConstraintSide::RowUpper(i) => -self.jt_times_row(i, j, first(i)),
+            ConstraintSide::VarLower(_) | ConstraintSide::VarUpper(_) => {
+                self.jt_times_normal(id, j)
+            }
         }
     }
 
@@ -752,7 +770,7 @@ impl<'a> DualIteration<'a> {
         let n = self.cons.n;
         let mut m = DMatrix::zeros(n, equalities.len());
         for (c, &id) in equalities.iter().enumerate() {
-            m.set_column(c, &self.cons.jt_times_normal(id, &self.set.j));
+            m.set_column(c, &self.cons.upper_jt_times_normal(id, &self.set.j));
         }
         let mut reflectors = Reflectors::new(n);
         let mut dependent = Vec::new();
@@ -1394,7 +1412,17 @@ mod tests {
             for i in 0..6 {
                 let row = dense.row(i).transpose();
                 assert_eq!(cons.row_dot(i, &v), row.dot(&v));
-                assert_eq!(cons.jt_times_row(i, &j), j.tr_mul(&row));
+                assert_eq!(cons.jt_times_row(i, &j, 0), j.tr_mul(&row));
+                // Upper triangular J: the leading columns skipped, the same numbers (bits:
+                // the signs of zeros included).
+                let upper = j.upper_triangle();
+                for id in [2 * n + i, 2 * n + 6 + i] {
+                    let bits = |v: DVector<f64>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(
+                        bits(cons.upper_jt_times_normal(id, &upper)),
+                        bits(cons.jt_times_normal(id, &upper))
+                    );
+                }
             }
         }
     }
