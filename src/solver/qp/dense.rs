@@ -12,10 +12,10 @@
 //! `N`. The equalities come first, without steps and as one block: with `J₀ = L⁻ᵀ`
 //! (`H = L Lᵀ`) and the equality normals `N_E`, a Householder QR of `M = J₀ᵀ N_E` column by
 //! column (a column whose part outside the earlier ones' span is negligible is a dependent
-//! row, skipped) gives R, and J is turned by all its reflections at once, `J = J₀ Q`
-//! (compact WY form, [`Reflectors`]): the factorization of adding the equalities one by one by
-//! a reflection of J's inactive columns each, with matrix products instead of one rank-one
-//! update of J per equality. The minimizer on their manifold is then formed at once from J and
+//! row, skipped) gives R, and J is turned by the same reflections, `J = J₀ Q`, a panel of
+//! them at a time in compact WY form (the private module `qp::reflectors`): the factorization
+//! of adding the equalities one by one by a reflection of J's inactive columns each, with
+//! matrix products instead of one rank-one update of J per equality. The minimizer on their manifold is then formed at once from J and
 //! R (`x = J y`, `Rᵀy₁ = b`, `y₂ = −J₂ᵀg`). Inequalities are added by Givens rotations of J's
 //! inactive columns. When a violated constraint can be neither reached by a primal step nor
 //! made reachable by dropping another, the constraints are inconsistent and the QP is reported
