@@ -7,9 +7,8 @@
 //! the numbers of one `y += aₖ·xₖ` pass per column (nalgebra's `axpy`, or the left-looking
 //! Cholesky's column update `c −= Lⱼₖ·v` with aₖ = −Lⱼₖ: negation is exact), but four terms
 //! per pass over y: each entry is loaded and stored once for four columns, where one pass per
-//! column loads and stores it for every one. The dense QP's Householder reflections (`J₂v`)
-//! and the definiteness test's Cholesky factorizations spend most of their instructions in
-//! such sums.
+//! column loads and stores it for every one. The definiteness test's Cholesky factorizations
+//! and its row basis spend most of their instructions in such sums.
 
 /// `y ← y + Σₖ aₖ·xₖ` for the terms `(aₖ, sₖ)` in order, xₖ the `y.len()` entries of
 /// `source` from `sₖ` on (columns of one column-major matrix); see the module header.
@@ -29,40 +28,6 @@ pub(crate) fn add_scaled_columns(y: &mut [f64], source: &[f64], terms: &[(f64, u
     for &(a, start) in groups.remainder() {
         for (yi, &u) in y.iter_mut().zip(column(start)) {
             *yi += a * u;
-        }
-    }
-}
-
-/// `yₖ ← yₖ + aₖ·x` for the consecutive columns yₖ of `columns` (each `x.len()` long, as many
-/// as `coefficients`): a rank-one update `Y += x aᵀ`, each entry as nalgebra's `ger` (or one
-/// `axpy` per column) computes it, four columns per pass over x, so that each xᵢ is loaded once
-/// for four columns.
-pub(crate) fn add_to_columns(columns: &mut [f64], x: &[f64], coefficients: &[f64]) {
-    let n = x.len();
-    if n == 0 {
-        return;
-    }
-    let mut blocks = columns.chunks_exact_mut(4 * n);
-    let mut groups = coefficients.chunks_exact(4);
-    for (block, group) in (&mut blocks).zip(&mut groups) {
-        let [a0, a1, a2, a3] = *group else {
-            unreachable!("chunks of four")
-        };
-        let (y0, rest) = block.split_at_mut(n);
-        let (y1, rest) = rest.split_at_mut(n);
-        let (y2, y3) = rest.split_at_mut(n);
-        let ys = y0.iter_mut().zip(y1).zip(y2).zip(y3);
-        for ((((u0, u1), u2), u3), &xi) in ys.zip(x) {
-            *u0 += a0 * xi;
-            *u1 += a1 * xi;
-            *u2 += a2 * xi;
-            *u3 += a3 * xi;
-        }
-    }
-    let rest = blocks.into_remainder().chunks_exact_mut(n);
-    for (column, &a) in rest.zip(groups.remainder()) {
-        for (yi, &xi) in column.iter_mut().zip(x) {
-            *yi += a * xi;
         }
     }
 }
@@ -107,25 +72,6 @@ mod tests {
             add_scaled_columns(&mut blocked, &source, &terms);
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&blocked), bits(&expected), "length {len}");
-        }
-    }
-
-    #[test]
-    fn the_blocked_rank_one_update_is_one_axpy_per_column_to_the_bit() {
-        for (len, count) in [(1, 1), (5, 4), (9, 7), (13, 9)] {
-            let x: Vec<f64> = (0..len).map(|i| (i as f64 * 0.37).sin() * 1e3).collect();
-            let coefficients: Vec<f64> = (0..count).map(|k| (k as f64 - 2.5) / 7.0).collect();
-            let start: Vec<f64> = (0..len * count).map(|i| (i as f64 * 1.3).cos()).collect();
-            let mut expected = start.clone();
-            for (column, a) in expected.chunks_exact_mut(len).zip(&coefficients) {
-                for (y, xi) in column.iter_mut().zip(&x) {
-                    *y += a * xi;
-                }
-            }
-            let mut blocked = start;
-            add_to_columns(&mut blocked, &x, &coefficients);
-            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-            assert_eq!(bits(&blocked), bits(&expected), "{len} × {count}");
         }
     }
 }

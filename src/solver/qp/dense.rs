@@ -9,12 +9,17 @@
 //! iterate feasible (multipliers uₖ ≥ 0 on active inequalities) and adds the most violated
 //! constraint at a time, dropping active ones whose multiplier would turn negative. It keeps
 //! `J` with `J Jᵀ = H⁻¹` and an upper-triangular `R` with `Jᵀ N = [R; 0]` for the active normals
-//! `N`, updated by a Householder reflection of J's inactive columns when an equality is
-//! added and by Givens rotations otherwise. The equalities come first: they are
-//! factored one by one without steps, and the minimizer on their manifold is then formed at
-//! once from J and R (`x = J y`, `Rᵀy₁ = b`, `y₂ = −J₂ᵀg`). When a violated constraint can be neither reached by a
-//! primal step nor made reachable by dropping another, the constraints are inconsistent and the
-//! QP is reported `Infeasible` (a certificate of the dual method, not a heuristic).
+//! `N`. The equalities come first, without steps and as one block: with `J₀ = L⁻ᵀ`
+//! (`H = L Lᵀ`) and the equality normals `N_E`, a Householder QR of `M = J₀ᵀ N_E` column by
+//! column (a column whose part outside the earlier ones' span is negligible is a dependent
+//! row, skipped) gives R, and J is turned by the same reflections, `J = J₀ Q`, a panel of
+//! them at a time in compact WY form (the private module `qp::reflectors`): the factorization
+//! of adding the equalities one by one by a reflection of J's inactive columns each, with
+//! matrix products instead of one rank-one update of J per equality. The minimizer on their manifold is then formed at once from J and
+//! R (`x = J y`, `Rᵀy₁ = b`, `y₂ = −J₂ᵀg`). Inequalities are added by Givens rotations of J's
+//! inactive columns. When a violated constraint can be neither reached by a primal step nor
+//! made reachable by dropping another, the constraints are inconsistent and the QP is reported
+//! `Infeasible` (a certificate of the dual method, not a heuristic).
 //!
 //! Warm start: constraints of the previous working set are preferred when choosing which
 //! violated constraint to add next, which reproduces an unchanged active set in as many steps
@@ -29,8 +34,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::reflectors::Reflectors;
 use super::{QpProblem, QpSolution, QpStatus};
-use crate::solver::columns::{add_scaled_columns, add_to_columns};
 
 /// Identifier of one constraint side (`n` variables, `m` rows): `0..n` lower variable bounds,
 /// `n..2n` upper ones, `2n..2n+m` lower row bounds, `2n+m..2n+2m` upper row bounds.
@@ -110,12 +115,16 @@ impl<'a> Constraints<'a> {
 
     /// Jᵀaᵢ for row `i` of A: the sum of aᵢⱼ times row j of J (the dense product's numbers,
     /// [`dense_dot_tail`]). Column by column of J, with the eight partial sums on the stack.
-    fn jt_times_row(&self, i: usize, j: &DMatrix<f64>) -> DVector<f64> {
+    /// J's columns `..skip` are not read: their entries of the product are left at +0, which
+    /// is the dense product's number when those columns are zero on the row's nonzeros (every
+    /// term a zero product, ±0, which changes no sum that starts at +0).
+    fn jt_times_row(&self, i: usize, j: &DMatrix<f64>, skip: usize) -> DVector<f64> {
         let (cols, vals) = self.row(i);
         let tail = dense_dot_tail(cols, self.n);
         let n = j.nrows().max(1);
         let mut out = DVector::<f64>::zeros(j.ncols());
-        for (column, o) in j.as_slice().chunks_exact(n).zip(out.iter_mut()) {
+        let columns = j.as_slice().chunks_exact(n).zip(out.iter_mut());
+        for (column, o) in columns.skip(skip) {
             let mut partial = [0.0; 8];
             for (&c, &a) in cols[..tail].iter().zip(vals) {
                 partial[c % 8] += column[c] * a;
@@ -180,8 +189,22 @@ impl<'a> Constraints<'a> {
         match side_of(id, self.n, self.m) {
             ConstraintSide::VarLower(c) => j.row(c).transpose(),
             ConstraintSide::VarUpper(c) => -j.row(c).transpose(),
-            ConstraintSide::RowLower(i) => self.jt_times_row(i, j),
-            ConstraintSide::RowUpper(i) => -self.jt_times_row(i, j),
+            ConstraintSide::RowLower(i) => self.jt_times_row(i, j, 0),
+            ConstraintSide::RowUpper(i) => -self.jt_times_row(i, j, 0),
+        }
+    }
+
+    /// Jᵀnₖ for an upper triangular J (the start's `L⁻ᵀ`), the numbers of
+    /// [`Constraints::jt_times_normal`]: J's columns before a row's first nonzero column index
+    /// are zero on all of the row's nonzeros, and are skipped.
+    fn upper_jt_times_normal(&self, id: ConstraintId, j: &DMatrix<f64>) -> DVector<f64> {
+        let first = |i: usize| self.row(i).0.first().copied().unwrap_or(self.n);
+        match side_of(id, self.n, self.m) {
+            ConstraintSide::RowLower(i) => self.jt_times_row(i, j, first(i)),
+            ConstraintSide::RowUpper(i) => -self.jt_times_row(i, j, first(i)),
+            ConstraintSide::VarLower(_) | ConstraintSide::VarUpper(_) => {
+                self.jt_times_normal(id, j)
+            }
         }
     }
 
@@ -288,78 +311,80 @@ impl ActiveSet {
         (z, r)
     }
 
-    /// Appends a constraint whose `d = Jᵀn` is given; false when it is linearly dependent on
-    /// the active ones (to working precision).
+    /// Appends an inequality whose `d = Jᵀn` is given; false when it is linearly dependent on
+    /// the active constraints (to working precision).
     ///
-    /// J's inactive columns `iq..n` are turned so that `d[iq..]` becomes `(α, 0, …)`, |α| =
-    /// ‖d[iq..]‖: `J Jᵀ = H⁻¹` is kept and column iq of `Jᵀ N` becomes `(d[..iq], α, 0, …)`,
-    /// R's new column. An equality is turned by one Householder reflection
-    /// ([`ActiveSet::reflect`], 4n(n − iq) multiply-adds); an inequality by the chain of
-    /// Givens rotations of Goldfarb and Idnani (6n(n − iq) and n − iq square roots). The
-    /// equalities are most of the additions of a truss QP; the inequalities keep the
-    /// rotations so that QPs without equalities take the same path to the bit (ill-conditioned
-    /// problems of the HS set, HS106, HS108 and HS116, end elsewhere when their rounding
-    /// changes).
-    fn add(&mut self, mut d: DVector<f64>, id: ConstraintId, u: f64, equality: bool) -> bool {
+    /// J's inactive columns `iq..n` are turned by the chain of Givens rotations of Goldfarb and
+    /// Idnani (6n(n − iq) multiply-adds and n − iq square roots) so that `d[iq..]` becomes
+    /// `(α, 0, …)`, |α| = ‖d[iq..]‖: `J Jᵀ = H⁻¹` is kept and column iq of `Jᵀ N` becomes
+    /// `(d[..iq], α, 0, …)`, R's new column. (The equalities are factored as one block,
+    /// [`ActiveSet::add_reflected`].)
+    fn add(&mut self, mut d: DVector<f64>, id: ConstraintId, u: f64) -> bool {
         let n = self.j.nrows();
         let iq = self.len();
         if iq >= n {
             return false;
         }
-        if equality {
-            let sigma = d.rows(iq, n - iq).norm();
-            if sigma <= f64::EPSILON * self.r_norm.max(1.0) * 1e2 {
-                return false;
+        for c in (iq + 1..n).rev() {
+            let (cs, sn, h) = givens(d[c - 1], d[c]);
+            if sn == 0.0 {
+                continue;
             }
-            d[iq] = self.reflect(&d, sigma);
-        } else {
-            for c in (iq + 1..n).rev() {
-                let (cs, sn, h) = givens(d[c - 1], d[c]);
-                if sn == 0.0 {
-                    continue;
-                }
-                d[c - 1] = h;
-                d[c] = 0.0;
-                rotate_columns(&mut self.j, c - 1, c, cs, sn);
-            }
-            if d[iq].abs() <= f64::EPSILON * self.r_norm.max(1.0) * 1e2 {
-                return false;
-            }
+            d[c - 1] = h;
+            d[c] = 0.0;
+            rotate_columns(&mut self.j, c - 1, c, cs, sn);
         }
-        for i in 0..=iq {
-            self.rt[(iq, i)] = d[i];
+        if self.negligible(d[iq]) {
+            return false;
         }
-        self.r_norm = self.r_norm.max(d[iq].abs());
-        self.ids.push(id);
-        self.u.push(u);
-        self.equality.push(equality);
+        self.push(&d.as_slice()[..=iq], id, u, false);
         true
     }
 
-    /// Applies to J's inactive columns `iq..n` the Householder reflection `P = I − β v vᵀ`
-    /// that maps `d[iq..]` (norm `sigma` > 0) to `α e₁`, and returns α. The sign of α is
-    /// opposite to `d[iq]`'s, so that `v = d[iq..] − α e₁` does not cancel, and
-    /// `β = 2 / vᵀv = 1 / (σ (σ + |d[iq]|))`.
-    fn reflect(&mut self, d: &DVector<f64>, sigma: f64) -> f64 {
+    /// Appends the equality `id` whose `Jᵀn` is column `c` of `m` (n × m_E), the column
+    /// brought up to date with the earlier equalities' reflections ([`Reflectors`], which turn
+    /// J and m's later columns in panels). The Householder reflection that maps `m[iq.., c]`
+    /// to `(α, 0, …)` is added to `reflectors`, and R's new column is `(m[..iq, c], α)`. False
+    /// (nothing added) when the column is dependent on the active ones to working precision:
+    /// |α| = ‖m[iq.., c]‖ negligible, the test of [`ActiveSet::add`].
+    fn add_reflected(
+        &mut self,
+        m: &mut DMatrix<f64>,
+        c: usize,
+        id: ConstraintId,
+        reflectors: &mut Reflectors,
+    ) -> bool {
         let n = self.j.nrows();
         let iq = self.len();
-        let alpha = if d[iq] > 0.0 { -sigma } else { sigma };
-        let mut v = d.as_slice()[iq..].to_vec();
-        v[0] -= alpha;
-        let beta = 1.0 / (sigma * (sigma + d[iq].abs()));
-        // w = J₂v and J₂ ← J₂ − β w vᵀ column by column, each entry as nalgebra's gemv
-        // (`wᵢ = J₂ᵢ₀v₀`, then `wᵢ += J₂ᵢⱼvⱼ`) and ger (`J₂ᵢⱼ += (−β vⱼ) wᵢ`) compute it.
-        // Both blocked over four columns ([`add_scaled_columns`], [`add_to_columns`]), each
-        // entry's operations in the same order.
-        let inactive = &mut self.j.as_mut_slice()[iq * n..];
-        let mut w: Vec<f64> = inactive[..n].iter().map(|x| x * v[0]).collect();
-        let terms: Vec<(f64, usize)> = (v.iter().enumerate().skip(1))
-            .map(|(c, &vc)| (vc, c * n))
-            .collect();
-        add_scaled_columns(&mut w, inactive, &terms);
-        let coefficients: Vec<f64> = v.iter().map(|&vc| -beta * vc).collect();
-        add_to_columns(inactive, &w, &coefficients);
-        alpha
+        debug_assert_eq!(reflectors.len(), iq);
+        if iq >= n {
+            return false;
+        }
+        let sigma = m.view((iq, c), (n - iq, 1)).norm();
+        if self.negligible(sigma) {
+            return false;
+        }
+        reflectors.reduce(m, c, sigma, &mut self.j);
+        self.push(&m.column(c).as_slice()[..=iq], id, 0.0, true);
+        true
+    }
+
+    /// Whether a new diagonal entry of R of magnitude `|r|` is zero to working precision
+    /// (relative to the largest one so far).
+    fn negligible(&self, r: f64) -> bool {
+        r.abs() <= f64::EPSILON * self.r_norm.max(1.0) * 1e2
+    }
+
+    /// Appends constraint `id` with R's new column `r` (its entries `0..=iq`), multiplier `u`.
+    fn push(&mut self, r: &[f64], id: ConstraintId, u: f64, equality: bool) {
+        let iq = self.len();
+        for (i, &ri) in r.iter().enumerate() {
+            self.rt[(iq, i)] = ri;
+        }
+        self.r_norm = self.r_norm.max(r[iq].abs());
+        self.ids.push(id);
+        self.u.push(u);
+        self.equality.push(equality);
     }
 
     /// Removes the active constraint at position `pos` and restores R's triangular form.
@@ -730,28 +755,41 @@ impl<'a> DualIteration<'a> {
     }
 
     /// Factors the equalities `equalities` (the lower sides of equality constraints with a
-    /// finite right-hand side, in order) into the active set ([`ActiveSet::add`]) without a
-    /// step, and returns those dependent on earlier ones: a row is dependent when its part
-    /// `d[iq..]` outside their span is negligible (`‖d[iq..]‖² = nᵀz` for the step `z` that a
-    /// primal step would take). The minimizer on their manifold follows from
+    /// finite right-hand side, in order) into the empty active set without a step, and
+    /// returns those dependent on earlier ones. As one block: `M = J₀ᵀ N_E` (n × m_E, one
+    /// column per equality), a Householder QR of M column by column in their order, J turned
+    /// by the same reflections in panels ([`Reflectors`]): the factorization of one reflection
+    /// of J per equality (`Jᵀn` of the turned J is M's column with the earlier reflections
+    /// applied), with matrix products instead of rank-one updates of J. A row is dependent when
+    /// its part `m[iq.., c]` outside the earlier ones' span is negligible (`‖m[iq.., c]‖² = nᵀz`
+    /// for the step `z` that a primal step would take), or when [`ActiveSet::add_reflected`]
+    /// finds it so. The minimizer on their manifold follows from
     /// [`DualIteration::equality_point`].
     fn factor_equalities(&mut self, equalities: &[ConstraintId]) -> Vec<ConstraintId> {
+        debug_assert_eq!(self.set.len(), 0);
+        let n = self.cons.n;
+        let mut m = DMatrix::zeros(n, equalities.len());
+        for (c, &id) in equalities.iter().enumerate() {
+            m.set_column(c, &self.cons.upper_jt_times_normal(id, &self.set.j));
+        }
+        let mut reflectors = Reflectors::new(n);
         let mut dependent = Vec::new();
-        for &id in equalities {
-            let d = self.cons.jt_times_normal(id, &self.set.j);
+        for (c, &id) in equalities.iter().enumerate() {
+            reflectors.bring_up_to_date(&mut m, c);
             let iq = self.set.len();
-            let outside = d.rows(iq, d.len() - iq).norm_squared();
+            let outside = m.view((iq, c), (n - iq, 1)).norm_squared();
             if outside <= 1e-14 * (1.0 + self.cons.normal_norm(id).powi(2)) {
                 dependent.push(id);
                 continue;
             }
-            if self.set.add(d, id, 0.0, true) {
+            if self.set.add_reflected(&mut m, c, id, &mut reflectors) {
                 self.active[id] = true;
             } else {
                 dependent.push(id);
             }
             self.iterations += 1;
         }
+        reflectors.finish(&mut self.set.j);
         dependent
     }
 
@@ -845,7 +883,7 @@ impl<'a> DualIteration<'a> {
             self.set.step_multipliers(t, &r);
             u_new += t;
             if t2 <= t1 {
-                if self.set.add(d, ip, u_new, false) {
+                if self.set.add(d, ip, u_new) {
                     self.active[ip] = true;
                 } else {
                     // Numerically dependent although z ≠ 0: treat as satisfied.
@@ -943,11 +981,16 @@ mod tests {
         CsrMatrix::from(&coo)
     }
 
+    /// A random symmetric positive definite n×n matrix (BBᵀ + 0.1 I).
+    fn random_definite(rng: &mut ChaCha8Rng, n: usize) -> DMatrix<f64> {
+        let b = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
+        &b * b.transpose() + DMatrix::identity(n, n) * 0.1
+    }
+
     /// A random strictly convex QP that is feasible by construction (bounds around a known
     /// point), with a mix of equalities, one- and two-sided rows, and variable bounds.
     fn random_qp(rng: &mut ChaCha8Rng, n: usize, m: usize) -> Owned {
-        let b = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
-        let h = &b * b.transpose() + DMatrix::identity(n, n) * 0.1;
+        let h = random_definite(rng, n);
         let g = (0..n).map(|_| rng.random_range(-5.0..5.0)).collect();
         let a = DMatrix::from_fn(m, n, |_, _| {
             if rng.random_range(0.0..1.0) < 0.6 {
@@ -1045,8 +1088,7 @@ mod tests {
     fn equality_constrained_qps_match_their_kkt_system() {
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         for (n, m) in [(6, 3), (12, 8), (20, 19)] {
-            let b = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
-            let h = &b * b.transpose() + DMatrix::identity(n, n) * 0.1;
+            let h = random_definite(&mut rng, n);
             let g = DVector::from_fn(n, |_, _| rng.random_range(-5.0..5.0));
             let a = DMatrix::from_fn(m, n, |_, _| rng.random_range(-2.0..2.0));
             let rhs = DVector::from_fn(m, |_, _| rng.random_range(-1.0..1.0));
@@ -1173,8 +1215,7 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         // Odd and even orders: columns are solved in pairs.
         for n in [1, 8, 9] {
-            let b = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
-            let h = &b * b.transpose() + DMatrix::identity(n, n) * 0.1;
+            let h = random_definite(&mut rng, n);
             let u = h.cholesky().expect("positive definite").l().transpose();
             let inv = inverse_of_upper(&u);
             let full = u.solve_upper_triangular(&DMatrix::identity(n, n)).unwrap();
@@ -1229,31 +1270,19 @@ mod tests {
     }
 
     #[test]
-    fn the_reflection_is_nalgebras_gemv_and_ger_to_the_bit() {
+    fn the_directions_are_nalgebras_axpy_to_the_bit() {
         let mut rng = ChaCha8Rng::seed_from_u64(9);
         for (n, iq) in [(5, 0), (9, 3), (17, 10)] {
-            let j = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
             let d = DVector::from_fn(n, |_, _| rng.random_range(-1.0..1.0));
             let mut set = ActiveSet {
-                j: j.clone(),
+                j: DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0)),
                 rt: DMatrix::zeros(n, n),
                 ids: (0..iq).collect(),
                 u: vec![0.0; iq],
                 equality: vec![true; iq],
                 r_norm: 1.0,
             };
-            let sigma = d.rows(iq, n - iq).norm();
-            let alpha = set.reflect(&d, sigma);
-            // The reference: nalgebra's products on J's inactive columns.
-            let mut v = d.rows(iq, n - iq).into_owned();
-            v[0] -= alpha;
-            let beta = 1.0 / (sigma * (sigma + d[iq].abs()));
-            let mut reference = j;
-            let mut inactive = reference.columns_mut(iq, n - iq);
-            let w = &inactive * &v;
-            inactive.ger(-beta, &w, &v, 1.0);
-            assert_eq!(set.j, reference);
-            // The directions: z = J₂ d₂ by nalgebra's axpy, r = R⁻¹ d₁ (R = I here).
+            // z = J₂ d₂ by nalgebra's axpy, r = R⁻¹ d₁ (R = I here).
             for k in 0..iq {
                 set.rt[(k, k)] = 1.0;
             }
@@ -1264,6 +1293,109 @@ mod tests {
             }
             assert_eq!(z, z_reference);
             assert_eq!(r.as_slice(), &d.as_slice()[..iq]);
+        }
+    }
+
+    /// The equality phase one reflection of J at a time (nalgebra's products): J, R's columns
+    /// and the rows of `a` found dependent, by the tests of [`DualIteration::factor_equalities`].
+    fn sequential_equality_phase(
+        h: &DMatrix<f64>,
+        a: &DMatrix<f64>,
+    ) -> (DMatrix<f64>, Vec<Vec<f64>>, Vec<usize>) {
+        let n = h.nrows();
+        let l = h.clone().cholesky().expect("positive definite").l();
+        let mut j = l.transpose().try_inverse().expect("non-singular");
+        let (mut r, mut dependent, mut r_norm) = (Vec::new(), Vec::new(), 1.0_f64);
+        for i in 0..a.nrows() {
+            let normal = a.row(i).transpose();
+            let d = j.tr_mul(&normal);
+            let iq = r.len();
+            let tail = d.rows(iq, n - iq);
+            if tail.norm_squared() <= 1e-14 * (1.0 + normal.norm_squared()) {
+                dependent.push(i);
+                continue;
+            }
+            let sigma = tail.norm();
+            if sigma <= f64::EPSILON * r_norm.max(1.0) * 1e2 {
+                dependent.push(i);
+                continue;
+            }
+            let alpha = if d[iq] > 0.0 { -sigma } else { sigma };
+            let mut v = tail.into_owned();
+            v[0] -= alpha;
+            let beta = 1.0 / (sigma * (sigma + d[iq].abs()));
+            let mut inactive = j.columns_mut(iq, n - iq);
+            let w = &inactive * &v;
+            inactive.ger(-beta, &w, &v, 1.0);
+            let mut column = d.as_slice()[..iq].to_vec();
+            column.push(alpha);
+            r.push(column);
+            r_norm = r_norm.max(sigma);
+        }
+        (j, r, dependent)
+    }
+
+    #[test]
+    fn the_block_equality_phase_is_the_sequential_reflections() {
+        let mut rng = ChaCha8Rng::seed_from_u64(13);
+        // Dependent rows: row 3 = row 0 + 2·row 1, row 5 = row 2 (and, for 5 × 8, any row past
+        // the rank).
+        for (n, m) in [(5, 8), (12, 7), (30, 20)] {
+            let h = random_definite(&mut rng, n);
+            let mut a = DMatrix::from_fn(m, n, |_, _| {
+                if rng.random_range(0.0..1.0) < 0.5 {
+                    rng.random_range(-2.0..2.0)
+                } else {
+                    0.0
+                }
+            });
+            let combination = a.row(0) + a.row(1) * 2.0;
+            a.set_row(3, &combination);
+            let copy = a.row(2).into_owned();
+            a.set_row(5, &copy);
+            let p = Owned {
+                h: h.clone(),
+                g: vec![0.0; n],
+                a: csr(&a),
+                dl: vec![f64::NEG_INFINITY; n],
+                du: vec![f64::INFINITY; n],
+                bl: vec![0.0; m],
+                bu: vec![0.0; m],
+            };
+            let problem = p.problem();
+            let cons = Constraints::new(&problem);
+            let mut dual = DualIteration::start(&h, None, cons, &[]).expect("definite");
+            let equalities: Vec<ConstraintId> = (0..m).map(|i| 2 * n + i).collect();
+            let dependent = dual.factor_equalities(&equalities);
+            let (j_reference, r_reference, dependent_reference) = sequential_equality_phase(&h, &a);
+            let rows = |ids: &[ConstraintId]| ids.iter().map(|id| id - 2 * n).collect::<Vec<_>>();
+            assert_eq!(rows(&dependent), dependent_reference, "{n} × {m}");
+            assert!(dependent.contains(&(2 * n + 3)) && dependent.contains(&(2 * n + 5)));
+            let set = &dual.set;
+            let iq = set.len();
+            assert_eq!(iq, r_reference.len());
+            // J orthonormal in the H metric: JᵀHJ = I (J Jᵀ = H⁻¹).
+            let j = &set.j;
+            assert!((j.transpose() * &h * j - DMatrix::identity(n, n)).amax() < 1e-10);
+            // The same span: J₁J₁ᵀ (the H⁻¹-projector onto H⁻¹N) as the sequential one's.
+            let (j1, j1_reference) = (j.columns(0, iq), j_reference.columns(0, iq));
+            let projector = j1 * j1.transpose();
+            let projector_reference = j1_reference * j1_reference.transpose();
+            assert!((projector - projector_reference).amax() < 1e-10 * h.norm());
+            // R up to the signs of its rows, and JᵀN = [R; 0].
+            let normals = DMatrix::from_fn(n, iq, |k, c| a[(set.ids[c] - 2 * n, k)]);
+            let jt_n = j.transpose() * &normals;
+            for (c, column) in r_reference.iter().enumerate() {
+                for (i, &reference) in column.iter().enumerate() {
+                    let sign = (set.rt[(i, i)] * r_reference[i][i]).signum();
+                    assert!(
+                        (set.rt[(c, i)] - sign * reference).abs()
+                            < 1e-10 * reference.abs().max(1.0)
+                    );
+                    assert!((jt_n[(i, c)] - set.rt[(c, i)]).abs() < 1e-10);
+                }
+                assert!(jt_n.view((c + 1, c), (n - c - 1, 1)).amax() < 1e-10);
+            }
         }
     }
 
@@ -1280,7 +1412,17 @@ mod tests {
             for i in 0..6 {
                 let row = dense.row(i).transpose();
                 assert_eq!(cons.row_dot(i, &v), row.dot(&v));
-                assert_eq!(cons.jt_times_row(i, &j), j.tr_mul(&row));
+                assert_eq!(cons.jt_times_row(i, &j, 0), j.tr_mul(&row));
+                // Upper triangular J: the leading columns skipped, the same numbers (bits:
+                // the signs of zeros included).
+                let upper = j.upper_triangle();
+                for id in [2 * n + i, 2 * n + 6 + i] {
+                    let bits = |v: DVector<f64>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(
+                        bits(cons.upper_jt_times_normal(id, &upper)),
+                        bits(cons.jt_times_normal(id, &upper))
+                    );
+                }
             }
         }
     }

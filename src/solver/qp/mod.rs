@@ -9,6 +9,7 @@
 //! interior-point one for large problems.
 
 pub mod dense;
+mod reflectors;
 mod select;
 
 pub use select::{DENSE_LIMIT, QpMethod, Snapshot, WarmStart, solve};
