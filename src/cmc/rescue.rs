@@ -20,7 +20,7 @@
 use crate::solver::{Options, Solution, Status};
 
 use super::area::total_area;
-use super::mesh::Mesh;
+use super::mesh::{Mesh, Point};
 use super::nlp::{CmcNlp, merged};
 
 /// Smallest angle (degrees) of a movable triangle below which a solved mesh counts as
@@ -62,14 +62,19 @@ pub struct Rescue {
     pub status_after: String,
 }
 
-/// Smallest angle (degrees) over the triangles with at least one free corner (180 when there
-/// is none): what a solve can collapse.
-pub fn movable_min_angle(mesh: &Mesh) -> f64 {
+/// The corners of each triangle with at least one free corner: what a solve can collapse.
+fn movable_triangles(mesh: &Mesh) -> impl Iterator<Item = [Point; 3]> + '_ {
     let flags = mesh.flags();
     (0..mesh.triangles().len())
-        .filter(|&t| mesh.triangles()[t].iter().any(|&v| !flags[v].fixed))
-        .map(|t| {
-            let p = mesh.corners(t);
+        .filter(move |&t| mesh.triangles()[t].iter().any(|&v| !flags[v].fixed))
+        .map(|t| mesh.corners(t))
+}
+
+/// Smallest angle (degrees) over the triangles with at least one free corner (180 when there
+/// is none).
+pub fn movable_min_angle(mesh: &Mesh) -> f64 {
+    movable_triangles(mesh)
+        .map(|p| {
             (0..3)
                 .map(|m| (p[(m + 1) % 3] - p[m]).angle(&(p[(m + 2) % 3] - p[m])))
                 .fold(f64::INFINITY, f64::min)
@@ -82,18 +87,14 @@ pub fn movable_min_angle(mesh: &Mesh) -> f64 {
 /// (tested on its cosine, `(a·b)² > cos²θ |a|²|b|²` with `a·b > 0`, without inverse cosines:
 /// this runs after every solve).
 pub fn collapsed(mesh: &Mesh) -> bool {
-    let flags = mesh.flags();
     let cos2 = COLLAPSED_ANGLE_DEG.to_radians().cos().powi(2);
-    (0..mesh.triangles().len())
-        .filter(|&t| mesh.triangles()[t].iter().any(|&v| !flags[v].fixed))
-        .any(|t| {
-            let p = mesh.corners(t);
-            (0..3).any(|m| {
-                let (a, b) = (p[(m + 1) % 3] - p[m], p[(m + 2) % 3] - p[m]);
-                let dot = a.dot(&b);
-                dot > 0.0 && dot * dot > cos2 * a.norm_squared() * b.norm_squared()
-            })
+    movable_triangles(mesh).any(|p| {
+        (0..3).any(|m| {
+            let (a, b) = (p[(m + 1) % 3] - p[m], p[(m + 2) % 3] - p[m]);
+            let dot = a.dot(&b);
+            dot > 0.0 && dot * dot > cos2 * a.norm_squared() * b.norm_squared()
         })
+    })
 }
 
 /// The run's status for a solve that ended with `status` on `mesh`: `Degenerate` (exit 3)
