@@ -802,10 +802,16 @@ mod tests {
         let triple = "[shape]\ntype = \"triple_bubble\"\nvolumes = [1e-6, 2e-6, 3e-6]\n";
         let p = load_text(triple).unwrap();
         assert_eq!(p.tangential_weight(), 1.0);
-        // The triple bubble solves its own start at every resolution (no coarse level).
+        // The triple bubble: no subdivided coarse level; from resolution 12 on its solution at
+        // half the resolution prolonged onto its own start.
         for r in [3, 8, 10, 11, 12] {
             assert_eq!(p.with_resolution(r).coarse_resolution(), None);
         }
+        let prolonged: Vec<_> = [8, 11, 12, 13, 16]
+            .iter()
+            .map(|&r| p.with_resolution(r).prolonged_resolution())
+            .collect();
+        assert_eq!(prolonged, [None, None, Some(6), Some(6), Some(8)]);
         let bubble = "[shape]\ntype = \"double_bubble\"\nvolumes = [1e-6, 2e-6]\n";
         let p = load_text(bubble).unwrap();
         assert_eq!((p.tangential_weight(), p.coarse_resolution()), (0.01, None));
