@@ -132,12 +132,11 @@ impl Problem {
         (file.quality.tangential_weight).unwrap_or_else(|| file.shape.default_tangential_weight())
     }
 
-    /// `[quality] coarse_resolution`, or the shape's default at this resolution
+    /// `[quality] coarse_resolution`, or the shape's default
     /// ([`spec::ShapeSpec::default_coarse_resolution`]).
     pub fn coarse_resolution(&self) -> Option<usize> {
         let file = &self.spec.file;
-        (file.quality.coarse_resolution)
-            .or_else(|| file.shape.default_coarse_resolution(self.resolution))
+        (file.quality.coarse_resolution).or_else(|| file.shape.default_coarse_resolution())
     }
 
     /// The coarse level whose solution is prolonged onto the generator's own start at this
@@ -803,14 +802,16 @@ mod tests {
         let triple = "[shape]\ntype = \"triple_bubble\"\nvolumes = [1e-6, 2e-6, 3e-6]\n";
         let p = load_text(triple).unwrap();
         assert_eq!(p.tangential_weight(), 1.0);
-        let levels: Vec<_> = [3, 4, 5, 6, 8, 10, 12]
+        // The triple bubble: no subdivided coarse level; from resolution 12 on its solution at
+        // half the resolution prolonged onto its own start.
+        for r in [3, 8, 10, 11, 12] {
+            assert_eq!(p.with_resolution(r).coarse_resolution(), None);
+        }
+        let prolonged: Vec<_> = [8, 11, 12, 13, 16]
             .iter()
-            .map(|&r| p.with_resolution(r).coarse_resolution())
+            .map(|&r| p.with_resolution(r).prolonged_resolution())
             .collect();
-        assert_eq!(
-            levels,
-            [None, None, None, Some(3), Some(4), Some(2), Some(4)]
-        );
+        assert_eq!(prolonged, [None, None, Some(6), Some(6), Some(8)]);
         let bubble = "[shape]\ntype = \"double_bubble\"\nvolumes = [1e-6, 2e-6]\n";
         let p = load_text(bubble).unwrap();
         assert_eq!((p.tangential_weight(), p.coarse_resolution()), (0.01, None));

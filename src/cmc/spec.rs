@@ -481,22 +481,20 @@ impl ShapeSpec {
         }
     }
 
-    /// The coarse level used when `[quality] coarse_resolution` is not given at `resolution`
+    /// The coarse level used when `[quality] coarse_resolution` is not given
     /// (cmc::multilevel): the octahedral frames and clusters start at one segment per wall
     /// edge (1), their starts being flat partitions whose junctions must travel far (without
     /// it the quadrilateral and pentagon films stall on collapsed triangles, and five clusters
     /// written from the docs, 2–6 bubbles, took 8–45× longer or stopped at the iteration
-    /// limit); the triple bubble above resolution 4 at the largest divisor of its resolution
-    /// from 2 to 4, if any (its one-row start is too coarse to subdivide: at resolutions 5 and
-    /// 7 that start ended at the iteration limit; at resolution 12 the direct solve took
-    /// 31.6 s, from level 4 0.6 s; at 4 and below the direct solve is as fast). Other shapes
-    /// solve their start directly.
-    pub fn default_coarse_resolution(&self, resolution: usize) -> Option<usize> {
+    /// limit). Other shapes solve their start directly (the triple bubble from resolution 12
+    /// on after a prolonged coarse level, [`ShapeSpec::default_prolonged_resolution`]): from its digon
+    /// start (two triangles per lune and one per wall at each pole) the direct solve at
+    /// resolutions 4–16 took 23–122 iterations, smallest angle ≥ 12.1°; the grid start's
+    /// coarse levels (the largest divisor from 2 to 4, subdivided) and direct solves collapsed
+    /// at the poles from resolution 10 on (docs/notes/cmc.md, "the triple bubble's poles").
+    pub fn default_coarse_resolution(&self) -> Option<usize> {
         match self {
             ShapeSpec::OctahedronFrame { .. } | ShapeSpec::Cluster { .. } => Some(1),
-            ShapeSpec::TripleBubble { .. } if resolution > 4 => {
-                (2..=4).rev().find(|&d| resolution.is_multiple_of(d))
-            }
             _ => None,
         }
     }
@@ -514,13 +512,18 @@ impl ShapeSpec {
     /// (docs/notes/cmc.md). A coarse level of 1 segment per wire (resolutions 3–5) or of half
     /// the resolution took more iterations than none. The
     /// cube frame with a bubble, whose start already holds the bubble's volume, gained nothing
-    /// (resolution 8: 14 → 16 iterations): no coarse level.
+    /// (resolution 8: 14 → 16 iterations): no coarse level. The triple bubble from resolution
+    /// 12 on at half its resolution: from its own start the first normal-coordinate solve
+    /// stalled near the answer from resolution 14 on and the area-formulation fallback
+    /// finished it (120–130 iterations, 1.4–7.0 s at 14–24); from the prolonged half-resolution
+    /// solution 28–46 iterations, 0.24–0.80 s, smallest angle 12.4–16.3° (docs/notes/cmc.md).
     pub fn default_prolonged_resolution(&self, resolution: usize) -> Option<usize> {
         match self {
             ShapeSpec::CubeFrame {
                 bubble_volume: None,
                 ..
             } if resolution / 3 >= 2 => Some(resolution / 3),
+            ShapeSpec::TripleBubble { .. } if resolution >= 12 => Some(resolution / 2),
             _ => None,
         }
     }
