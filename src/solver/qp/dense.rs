@@ -139,6 +139,73 @@ impl<'a> Constraints<'a> {
         out
     }
 
+    /// [`Constraints::jt_times_row`] from `jt = Jᵀ` (so that row k of J is column k of `jt`,
+    /// contiguous), the same numbers to the bit: each nonzero `aᵢₖ` scales a whole row of J
+    /// into the partial-sum column `k mod 8` of `scratch` (8 columns of J's width), and the
+    /// columns are combined as `jt_times_row` combines its eight partial sums, one output entry
+    /// at a time in the same order. J's columns `..skip` are left at +0 as there. One pass over
+    /// each touched row of J instead of one short gather per column of J.
+    fn jt_times_row_from_transpose(
+        &self,
+        i: usize,
+        jt: &DMatrix<f64>,
+        skip: usize,
+        scratch: &mut Vec<f64>,
+    ) -> DVector<f64> {
+        let (cols, vals) = self.row(i);
+        let tail = dense_dot_tail(cols, self.n);
+        let width = jt.nrows();
+        let entries = jt.as_slice();
+        let row_of_j = |k: usize| &entries[k * width + skip..(k + 1) * width];
+        scratch.clear();
+        scratch.resize(8 * width, 0.0);
+        for (&k, &a) in cols[..tail].iter().zip(vals) {
+            let p = k % 8;
+            let partial = &mut scratch[p * width + skip..(p + 1) * width];
+            for (s, &x) in partial.iter_mut().zip(row_of_j(k)) {
+                *s += x * a;
+            }
+        }
+        let mut out = DVector::<f64>::zeros(width);
+        let o = &mut out.as_mut_slice()[skip..];
+        for p in 0..4 {
+            let low = &scratch[p * width + skip..(p + 1) * width];
+            let high = &scratch[(p + 4) * width + skip..(p + 5) * width];
+            for ((oi, &x), &y) in o.iter_mut().zip(low).zip(high) {
+                *oi += x + y;
+            }
+        }
+        for (&k, &a) in cols[tail..].iter().zip(&vals[tail..]) {
+            for (oi, &x) in o.iter_mut().zip(row_of_j(k)) {
+                *oi += x * a;
+            }
+        }
+        out
+    }
+
+    /// Jᵀnₖ for an upper triangular J (the start's `L⁻ᵀ`) from `jt = Jᵀ`
+    /// ([`Constraints::jt_times_row_from_transpose`]), the numbers of
+    /// [`Constraints::jt_times_normal`] to the bit: J's columns before a row's first nonzero
+    /// column index are zero on all of the row's nonzeros, and are skipped.
+    fn upper_jt_times_normal_from_transpose(
+        &self,
+        id: ConstraintId,
+        jt: &DMatrix<f64>,
+        scratch: &mut Vec<f64>,
+    ) -> DVector<f64> {
+        let first = |i: usize| self.row(i).0.first().copied().unwrap_or(self.n);
+        match side_of(id, self.n, self.m) {
+            ConstraintSide::RowLower(i) => {
+                self.jt_times_row_from_transpose(i, jt, first(i), scratch)
+            }
+            ConstraintSide::RowUpper(i) => {
+                -self.jt_times_row_from_transpose(i, jt, first(i), scratch)
+            }
+            ConstraintSide::VarLower(c) => jt.column(c).into_owned(),
+            ConstraintSide::VarUpper(c) => -jt.column(c).into_owned(),
+        }
+    }
+
     fn count(&self) -> usize {
         2 * (self.n + self.m)
     }
@@ -191,20 +258,6 @@ impl<'a> Constraints<'a> {
             ConstraintSide::VarUpper(c) => -j.row(c).transpose(),
             ConstraintSide::RowLower(i) => self.jt_times_row(i, j, 0),
             ConstraintSide::RowUpper(i) => -self.jt_times_row(i, j, 0),
-        }
-    }
-
-    /// Jᵀnₖ for an upper triangular J (the start's `L⁻ᵀ`), the numbers of
-    /// [`Constraints::jt_times_normal`]: J's columns before a row's first nonzero column index
-    /// are zero on all of the row's nonzeros, and are skipped.
-    fn upper_jt_times_normal(&self, id: ConstraintId, j: &DMatrix<f64>) -> DVector<f64> {
-        let first = |i: usize| self.row(i).0.first().copied().unwrap_or(self.n);
-        match side_of(id, self.n, self.m) {
-            ConstraintSide::RowLower(i) => self.jt_times_row(i, j, first(i)),
-            ConstraintSide::RowUpper(i) => -self.jt_times_row(i, j, first(i)),
-            ConstraintSide::VarLower(_) | ConstraintSide::VarUpper(_) => {
-                self.jt_times_normal(id, j)
-            }
         }
     }
 
@@ -769,8 +822,13 @@ impl<'a> DualIteration<'a> {
         debug_assert_eq!(self.set.len(), 0);
         let n = self.cons.n;
         let mut m = DMatrix::zeros(n, equalities.len());
+        let jt = self.set.j.transpose();
+        let mut scratch = Vec::new();
         for (c, &id) in equalities.iter().enumerate() {
-            m.set_column(c, &self.cons.upper_jt_times_normal(id, &self.set.j));
+            let column = self
+                .cons
+                .upper_jt_times_normal_from_transpose(id, &jt, &mut scratch);
+            m.set_column(c, &column);
         }
         let mut reflectors = Reflectors::new(n);
         let mut dependent = Vec::new();
@@ -1416,12 +1474,15 @@ mod tests {
                 // Upper triangular J: the leading columns skipped, the same numbers (bits:
                 // the signs of zeros included).
                 let upper = j.upper_triangle();
-                for id in [2 * n + i, 2 * n + 6 + i] {
+                for id in [2 * n + i, 2 * n + 6 + i, i % n, n + i % n] {
                     let bits = |v: DVector<f64>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-                    assert_eq!(
-                        bits(cons.upper_jt_times_normal(id, &upper)),
-                        bits(cons.jt_times_normal(id, &upper))
+                    let mut scratch = Vec::new();
+                    let from_transpose = cons.upper_jt_times_normal_from_transpose(
+                        id,
+                        &upper.transpose(),
+                        &mut scratch,
                     );
+                    assert_eq!(bits(from_transpose), bits(cons.jt_times_normal(id, &upper)));
                 }
             }
         }
