@@ -141,10 +141,12 @@ impl<'a> Constraints<'a> {
 
     /// [`Constraints::jt_times_row`] from `jt = Jᵀ` (so that row k of J is column k of `jt`,
     /// contiguous), the same numbers to the bit: each nonzero `aᵢₖ` scales a whole row of J
-    /// into the partial-sum column `k mod 8` of `scratch` (8 columns of J's width), and the
-    /// columns are combined as `jt_times_row` combines its eight partial sums, one output entry
-    /// at a time in the same order. J's columns `..skip` are left at +0 as there. One pass over
-    /// each touched row of J instead of one short gather per column of J.
+    /// into the partial-sum column `k mod 8` of `scratch` (the first to reach a column writes
+    /// `0 + x·a`, as the sum starting at +0 would), and the columns are combined as
+    /// `jt_times_row` combines its eight partial sums, one output entry at a time in the same
+    /// order, a column no nonzero reached reading as +0 (`scratch`'s ninth column, never
+    /// written). J's columns `..skip` are left at +0 as there. One pass over each touched row
+    /// of J instead of one short gather per column of J.
     fn jt_times_row_from_transpose(
         &self,
         i: usize,
@@ -155,23 +157,34 @@ impl<'a> Constraints<'a> {
         let (cols, vals) = self.row(i);
         let tail = dense_dot_tail(cols, self.n);
         let width = jt.nrows();
+        if scratch.len() != 9 * width {
+            scratch.clear();
+            scratch.resize(9 * width, 0.0);
+        }
         let entries = jt.as_slice();
         let row_of_j = |k: usize| &entries[k * width + skip..(k + 1) * width];
-        scratch.clear();
-        scratch.resize(8 * width, 0.0);
+        let mut reached = [false; 8];
         for (&k, &a) in cols[..tail].iter().zip(vals) {
             let p = k % 8;
             let partial = &mut scratch[p * width + skip..(p + 1) * width];
-            for (s, &x) in partial.iter_mut().zip(row_of_j(k)) {
-                *s += x * a;
+            if std::mem::replace(&mut reached[p], true) {
+                for (s, &x) in partial.iter_mut().zip(row_of_j(k)) {
+                    *s += x * a;
+                }
+            } else {
+                for (s, &x) in partial.iter_mut().zip(row_of_j(k)) {
+                    *s = 0.0 + x * a;
+                }
             }
         }
+        let column = |p: usize| {
+            let c = if reached[p] { p } else { 8 };
+            &scratch[c * width + skip..(c + 1) * width]
+        };
         let mut out = DVector::<f64>::zeros(width);
         let o = &mut out.as_mut_slice()[skip..];
         for p in 0..4 {
-            let low = &scratch[p * width + skip..(p + 1) * width];
-            let high = &scratch[(p + 4) * width + skip..(p + 5) * width];
-            for ((oi, &x), &y) in o.iter_mut().zip(low).zip(high) {
+            for ((oi, &x), &y) in o.iter_mut().zip(column(p)).zip(column(p + 4)) {
                 *oi += x + y;
             }
         }
@@ -1467,6 +1480,9 @@ mod tests {
             let dense = DMatrix::from(&p.a);
             let v = DVector::from_fn(n, |_, _| rng.random_range(-1e3..1e3));
             let j = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
+            // One scratch for all products, as in the equality phase: what a product leaves
+            // in it must not reach the next one.
+            let mut scratch = Vec::new();
             for i in 0..6 {
                 let row = dense.row(i).transpose();
                 assert_eq!(cons.row_dot(i, &v), row.dot(&v));
@@ -1476,7 +1492,6 @@ mod tests {
                 let upper = j.upper_triangle();
                 for id in [2 * n + i, 2 * n + 6 + i, i % n, n + i % n] {
                     let bits = |v: DVector<f64>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-                    let mut scratch = Vec::new();
                     let from_transpose = cons.upper_jt_times_normal_from_transpose(
                         id,
                         &upper.transpose(),
