@@ -115,16 +115,13 @@ impl<'a> Constraints<'a> {
 
     /// Jᵀaᵢ for row `i` of A: the sum of aᵢⱼ times row j of J (the dense product's numbers,
     /// [`dense_dot_tail`]). Column by column of J, with the eight partial sums on the stack.
-    /// J's columns `..skip` are not read: their entries of the product are left at +0, which
-    /// is the dense product's number when those columns are zero on the row's nonzeros (every
-    /// term a zero product, ±0, which changes no sum that starts at +0).
-    fn jt_times_row(&self, i: usize, j: &DMatrix<f64>, skip: usize) -> DVector<f64> {
+    fn jt_times_row(&self, i: usize, j: &DMatrix<f64>) -> DVector<f64> {
         let (cols, vals) = self.row(i);
         let tail = dense_dot_tail(cols, self.n);
         let n = j.nrows().max(1);
         let mut out = DVector::<f64>::zeros(j.ncols());
         let columns = j.as_slice().chunks_exact(n).zip(out.iter_mut());
-        for (column, o) in columns.skip(skip) {
+        for (column, o) in columns {
             let mut partial = [0.0; 8];
             for (&c, &a) in cols[..tail].iter().zip(vals) {
                 partial[c % 8] += column[c] * a;
@@ -145,8 +142,10 @@ impl<'a> Constraints<'a> {
     /// `0 + x·a`, as the sum starting at +0 would), and the columns are combined as
     /// `jt_times_row` combines its eight partial sums, one output entry at a time in the same
     /// order, a column no nonzero reached reading as +0 (`scratch`'s ninth column, never
-    /// written). J's columns `..skip` are left at +0 as there. One pass over each touched row
-    /// of J instead of one short gather per column of J.
+    /// written). One pass over each touched row of J instead of one short gather per column of
+    /// J. J's columns `..skip` are not read: their entries of the product are left at +0, which
+    /// is the dense product's number when those columns are zero on the row's nonzeros (every
+    /// term a zero product, ±0, which changes no sum that starts at +0).
     fn jt_times_row_from_transpose(
         &self,
         i: usize,
@@ -269,8 +268,8 @@ impl<'a> Constraints<'a> {
         match side_of(id, self.n, self.m) {
             ConstraintSide::VarLower(c) => j.row(c).transpose(),
             ConstraintSide::VarUpper(c) => -j.row(c).transpose(),
-            ConstraintSide::RowLower(i) => self.jt_times_row(i, j, 0),
-            ConstraintSide::RowUpper(i) => -self.jt_times_row(i, j, 0),
+            ConstraintSide::RowLower(i) => self.jt_times_row(i, j),
+            ConstraintSide::RowUpper(i) => -self.jt_times_row(i, j),
         }
     }
 
@@ -1486,7 +1485,7 @@ mod tests {
             for i in 0..6 {
                 let row = dense.row(i).transpose();
                 assert_eq!(cons.row_dot(i, &v), row.dot(&v));
-                assert_eq!(cons.jt_times_row(i, &j, 0), j.tr_mul(&row));
+                assert_eq!(cons.jt_times_row(i, &j), j.tr_mul(&row));
                 // Upper triangular J: the leading columns skipped, the same numbers (bits:
                 // the signs of zeros included).
                 let upper = j.upper_triangle();
