@@ -12,7 +12,9 @@
 //! With `[quality] coarse_resolution` the start is a coarse solution refined level by level
 //! ([`multilevel`], [`subdivide`]); with `[refine] levels` the solution is refined ×2 level
 //! after level and the areas' convergence judged ([`refinement`]). Every solution's stability
-//! (smallest eigenvalues of the area's second variation) is reported ([`stability`]).
+//! (smallest eigenvalues of the area's second variation) is reported ([`stability`]), and its
+//! non-minimal junctions counted; with `[topology] pop` they are popped and the film solved
+//! again ([`pop`], [`topology`]).
 //! The final mesh is also written as `model.glb` ([`export`]).
 
 pub mod area;
@@ -32,6 +34,7 @@ pub mod nlp;
 pub mod octahedron;
 pub mod orientation;
 pub mod polygon_complex;
+pub mod pop;
 pub mod preview;
 pub mod prolong;
 pub mod refinement;
@@ -43,6 +46,7 @@ pub mod spec;
 pub mod stability;
 pub mod subdivide;
 pub mod tangential;
+pub mod topology;
 pub mod variables;
 pub mod volume;
 
@@ -328,7 +332,9 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         rescues: Vec::new(),
     };
     let mut stopped = None;
+    let mut pops = Vec::new();
     if let Some(staged) = staged {
+        pops = staged.pops;
         nlp = staged.nlp;
         coarse_stages = staged.stages;
         tally = Tally {
@@ -361,6 +367,17 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let rounds;
     (nlp, solution, rounds) =
         improve_in_rounds(problem, nlp, solution, &options, flip_rounds, &mut tally)?;
+    if problem.spec.file.topology.pop && !coarse_result {
+        let stage = if staged_run { "full" } else { "" };
+        let mut rescues = Vec::new();
+        let rounds;
+        (nlp, solution, rounds) =
+            topology::pop_and_resolve(nlp, solution, &options, stage, &mut rescues, &mut |s| {
+                tally.add(s)
+            })?;
+        tally.rescues.extend(rescues);
+        pops.extend(rounds);
+    }
     let study = if problem.spec.file.refine.levels > 1 && !coarse_result {
         let (finer, finest, study) =
             refine_in_levels(problem, nlp, solution, &options, &mut tally)?;
@@ -402,6 +419,26 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
                 let figure = stability_figure(&nlp, &mesh, reported, opts)?;
                 obj.insert("stability".into(), figure);
             }
+        }
+        let census = pop::census(&mesh);
+        if !census.is_minimal() {
+            opts.say(&format!("topology: {}", non_minimal_sentence(&census)));
+        }
+        obj.insert(
+            "topology".into(),
+            serde_json::json!({
+                "non_minimal_lines": census.lines.len(),
+                "non_minimal_vertices": census.vertices.len(),
+                "pops": serde_json::to_value(&pops)
+                    .map_err(|e| Error::Runtime(format!("pops: {e}")))?,
+            }),
+        );
+        if !census.is_minimal() {
+            summary.status_message = format!(
+                "{} {}",
+                summary.status_message,
+                non_minimal_sentence(&census)
+            );
         }
         if let Some(study) = &study {
             insert_json(obj, "refinement", study)?;
@@ -453,6 +490,17 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             },
         ],
     })
+}
+
+/// What the film's non-minimal junctions mean, one sentence.
+fn non_minimal_sentence(census: &pop::Census) -> String {
+    format!(
+        "The film has {} line(s) where four or more films meet and {} non-minimal vertex(es): \
+         a critical point of its fixed topology, not a soap film ([topology] pop = true pops \
+         them).",
+        census.lines.len(),
+        census.vertices.len()
+    )
 }
 
 /// Inserts `value` as JSON under `key`.

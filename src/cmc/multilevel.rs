@@ -36,6 +36,7 @@ use super::prolong::prolong;
 use super::remesh::equiangulate;
 use super::rescue::{self, Rescue};
 use super::subdivide::subdivide;
+use super::topology::{PopRound, pop_and_resolve};
 
 /// One coarse level's solve.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -89,6 +90,8 @@ pub struct Staged {
     /// The solution of a coarse level that ended short of a usable one; `nlp` is then that
     /// level's (not refined) and the run stops there.
     pub stopped: Option<Solution>,
+    /// The coarse levels' topology events (`[topology] pop`, [`super::topology`]).
+    pub pops: Vec<PopRound>,
 }
 
 /// The first level `d` (largest divisor of `resolution` not above `coarse`) and the
@@ -130,6 +133,7 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
     let mut nlp = problem.with_resolution(first).build()?;
     let (mut stages, mut log, mut evaluations) = (Vec::new(), Vec::new(), Evaluations::default());
     let mut rescues = Vec::new();
+    let mut pops = Vec::new();
     let mut resolution = first;
     for (level, &factor) in factors.iter().enumerate() {
         let mut iterations = 0;
@@ -156,6 +160,17 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
                 add(&mut evaluations, &solution.evaluations);
             }
         }
+        if solved && problem.spec.file.topology.pop {
+            let mut account = |s: &Solution| {
+                iterations += s.iterations;
+                log.extend_from_slice(&s.log);
+                add(&mut evaluations, &s.evaluations);
+            };
+            let rounds;
+            (nlp, solution, rounds) =
+                pop_and_resolve(nlp, solution, options, &stage, &mut rescues, &mut account)?;
+            pops.extend(rounds);
+        }
         let mesh = nlp
             .mesh_at(&solution.x)
             .map_err(|e| runtime("coarse mesh", &e))?;
@@ -169,6 +184,7 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
                 evaluations,
                 rescues,
                 stopped: Some(solution),
+                pops,
             }));
         }
         let finer = subdivide(&mesh, factor).map_err(|e| runtime("subdivision", &e))?;
@@ -185,6 +201,7 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
         evaluations,
         rescues,
         stopped: None,
+        pops,
     }))
 }
 
@@ -215,6 +232,7 @@ fn prolonged(problem: &Problem, options: &Options, coarse: usize) -> Result<Stag
             evaluations,
             rescues,
             stopped: Some(solution),
+            pops: Vec::new(),
         });
     }
     let fine = problem.build()?;
@@ -234,6 +252,7 @@ fn prolonged(problem: &Problem, options: &Options, coarse: usize) -> Result<Stag
         evaluations,
         rescues,
         stopped: None,
+        pops: Vec::new(),
     })
 }
 

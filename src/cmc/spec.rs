@@ -83,6 +83,9 @@ pub struct CmcFile {
     /// Stability analysis.
     #[serde(default)]
     pub stability: StabilitySpec,
+    /// Topology events.
+    #[serde(default)]
+    pub topology: TopologySpec,
     /// Chord-length constraints.
     #[serde(default)]
     pub chord: Vec<ChordSpec>,
@@ -152,6 +155,16 @@ pub struct StabilitySpec {
     /// analysis off (no `figures.stability`); default [`super::stability::REPORTED`].
     #[serde(default = "default_eigenvalues")]
     pub eigenvalues: usize,
+}
+
+/// `[topology]`: topology events ([`super::topology`]).
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TopologySpec {
+    /// Pop the non-minimal junctions after each solve and solve again (Surface Evolver's `O`
+    /// and `o`, [`super::pop`]); default false: they are counted and reported only.
+    #[serde(default)]
+    pub pop: bool,
 }
 
 /// Most eigenvalues `[stability] eigenvalues` may ask for.
