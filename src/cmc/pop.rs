@@ -85,9 +85,6 @@ pub struct PopEvent {
 /// Why a mesh could not be popped.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PopError {
-    /// The popped mesh is not a valid mesh.
-    #[error("popped mesh: {0}")]
-    Mesh(#[from] MeshError),
     /// More than [`MAX_POPS`] changes.
     #[error("more than {MAX_POPS} topology changes: the junctions do not resolve")]
     TooMany,
@@ -162,12 +159,14 @@ fn pop_each(
         else {
             return Ok(());
         };
-        match attempt(current, &junction, events.len() + 1)? {
-            Some((next, event)) => {
+        // A change whose mesh is invalid (a zero-area triangle) is refused like one that
+        // does not apply.
+        match attempt(current, &junction, events.len() + 1) {
+            Ok(Some((next, event))) => {
                 *current = next;
                 events.push(event);
             }
-            None => refused.push(junction),
+            Ok(None) | Err(_) => refused.push(junction),
         }
     }
 }

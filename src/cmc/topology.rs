@@ -35,6 +35,10 @@ pub const MAX_POP_ROUNDS: usize = 6;
 /// edge.
 pub const COLLAPSE_FRACTION: f64 = 0.1;
 
+/// Iteration cap of the first re-solve after a pop: its films only need to grow or shrink
+/// towards their size before the edge flips and the next round's merges.
+pub const POP_SOLVE_ITERATIONS: usize = 50;
+
 /// One pop and the re-solve after it.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct PopRound {
@@ -113,7 +117,9 @@ pub fn pop_and_resolve(
         let mut next = nlp
             .remeshed(popped)
             .map_err(|e| runtime("popped mesh", &e))?;
-        let mut resolved = rescue::solve(&mut next, options, &pop_stage, rescues);
+        let mut capped = options.clone();
+        capped.max_iterations = capped.max_iterations.min(POP_SOLVE_ITERATIONS);
+        let mut resolved = rescue::solve(&mut next, &capped, &pop_stage, rescues);
         account(&resolved);
         let mut iterations = resolved.iterations;
         if let Ok(after) = next.mesh_at(&resolved.x) {
