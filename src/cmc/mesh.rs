@@ -445,6 +445,12 @@ impl Mesh {
         lengths
     }
 
+    /// The median edge length (the upper one of an even count), m; 0 without edges.
+    pub fn median_edge_length(&self) -> f64 {
+        let lengths = self.sorted_edge_lengths();
+        lengths.get(lengths.len() / 2).copied().unwrap_or(0.0)
+    }
+
     /// Triangles of surface `s`.
     pub fn surface_triangles(&self, s: usize) -> impl Iterator<Item = usize> + '_ {
         (0..self.triangles.len()).filter(move |&t| self.triangle_surface[t] == s)

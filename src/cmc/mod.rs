@@ -22,6 +22,7 @@ pub mod catenoid;
 pub mod cluster;
 pub mod curvature;
 pub mod curvature_hessian;
+pub mod descend;
 pub mod evolver;
 pub mod export;
 pub mod figures;
@@ -367,16 +368,25 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     let rounds;
     (nlp, solution, rounds) =
         improve_in_rounds(problem, nlp, solution, &options, flip_rounds, &mut tally)?;
-    if problem.spec.file.topology.pop && !coarse_result {
-        let stage = if staged_run { "full" } else { "" };
+    let mut descents = Vec::new();
+    if !coarse_result {
         let mut rescues = Vec::new();
-        let rounds;
-        (nlp, solution, rounds) =
-            topology::pop_and_resolve(nlp, solution, &options, stage, &mut rescues, &mut |s| {
-                tally.add(s)
-            })?;
+        let mut account = |s: &solver::Solution| tally.add(s);
+        let mut resolver = rescue::Resolver {
+            options: &options,
+            stage: if staged_run { "full" } else { "" },
+            rescues: &mut rescues,
+            account: &mut account,
+        };
+        if problem.spec.file.topology.pop {
+            let rounds;
+            (nlp, solution, rounds) = topology::pop_and_resolve(nlp, solution, &mut resolver)?;
+            pops.extend(rounds);
+        }
+        if problem.spec.file.stability.descend {
+            (nlp, solution, descents) = descend::descend(nlp, solution, &mut resolver)?;
+        }
         tally.rescues.extend(rescues);
-        pops.extend(rounds);
     }
     let study = if problem.spec.file.refine.levels > 1 && !coarse_result {
         let (finer, finest, study) =
@@ -439,6 +449,9 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
                 summary.status_message,
                 non_minimal_sentence(&census)
             );
+        }
+        if !descents.is_empty() {
+            insert_json(obj, "stability_descents", &descents)?;
         }
         if let Some(study) = &study {
             insert_json(obj, "refinement", study)?;
@@ -557,7 +570,7 @@ fn improve_in_rounds(
         .file
         .quality
         .refine
-        .map(|r| r * median_edge_length(nlp.mesh()));
+        .map(|r| r * nlp.mesh().median_edge_length());
     for round in 0..rounds {
         let feasible_stop = matches!(solution.status, Status::Stalled | Status::IterationLimit)
             && solution.max_violation <= options.constraint_tolerance;
@@ -644,7 +657,7 @@ fn refine_in_levels(
             if finer.flags().iter().any(|f| f.fixed) {
                 let resolution = problem.resolution << (level - 1);
                 if let Ok(wire) = problem.spec.build(resolution) {
-                    let reach = 0.3 * median_edge_length(&finer);
+                    let reach = 0.3 * finer.median_edge_length();
                     let snapped = refinement::snap_fixed_vertices(&finer, &wire.0.mesh, reach);
                     let moved = refinement::follow_wires(&finer, snapped);
                     finer
@@ -722,12 +735,6 @@ pub fn check_options(n: usize) -> CheckOptions {
         kink_threshold: Some(0.1 * CHECK_TOLERANCE),
         ..CheckOptions::default()
     }
-}
-
-/// Median edge length of a mesh, m.
-fn median_edge_length(mesh: &mesh::Mesh) -> f64 {
-    let lengths = mesh.sorted_edge_lengths();
-    lengths.get(lengths.len() / 2).copied().unwrap_or(0.0)
 }
 
 #[cfg(test)]

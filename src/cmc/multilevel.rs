@@ -34,7 +34,7 @@ use super::mesh::Mesh;
 use super::nlp::CmcNlp;
 use super::prolong::prolong;
 use super::remesh::equiangulate;
-use super::rescue::{self, Rescue};
+use super::rescue::{self, Rescue, Resolver};
 use super::subdivide::subdivide;
 use super::topology::{PopRound, pop_and_resolve};
 
@@ -166,9 +166,14 @@ pub fn coarse_to_fine(problem: &Problem, options: &Options) -> Result<Option<Sta
                 log.extend_from_slice(&s.log);
                 add(&mut evaluations, &s.evaluations);
             };
+            let mut resolver = Resolver {
+                options,
+                stage: &stage,
+                rescues: &mut rescues,
+                account: &mut account,
+            };
             let rounds;
-            (nlp, solution, rounds) =
-                pop_and_resolve(nlp, solution, options, &stage, &mut rescues, &mut account)?;
+            (nlp, solution, rounds) = pop_and_resolve(nlp, solution, &mut resolver)?;
             pops.extend(rounds);
         }
         let mesh = nlp

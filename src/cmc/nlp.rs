@@ -589,17 +589,9 @@ impl CmcNlp {
     /// failed round's iterations, evaluations and log; `self` becomes that problem, which
     /// rebuilds in normal coordinates again ([`CmcNlp::remeshed`], e.g. for the next level).
     fn fall_back(&mut self, failed: Solution, options: &Options, stage: &str) -> Solution {
-        let Ok(area) = CmcNlp::with_formulation(
-            self.start.clone(),
-            self.volumes.clone(),
-            self.chords.clone(),
-            self.weight,
-            Formulation::Area,
-        ) else {
+        let Ok(area) = self.in_area_formulation(self.start.clone()) else {
             return failed;
         };
-        let mut area = area.with_rounds(self.max_rounds, self.relaxation_gain);
-        area.rebuilt_as = self.rebuilt_as;
         let mut options = options.clone();
         options.log.stage = match stage {
             "" => "area formulation".to_string(),
@@ -608,6 +600,22 @@ impl CmcNlp {
         let solution = crate::solver::solve(&area, &options);
         *self = area;
         merged(failed, solution)
+    }
+
+    /// The same problem (volumes, chords, weight, rounds) on `mesh` in the area formulation
+    /// (three coordinates per vertex), which rebuilds in this problem's formulation
+    /// ([`CmcNlp::remeshed`], e.g. for the next level).
+    pub fn in_area_formulation(&self, mesh: Mesh) -> Result<CmcNlp, BuildError> {
+        let mut area = CmcNlp::with_formulation(
+            mesh,
+            self.volumes.clone(),
+            self.chords.clone(),
+            self.weight,
+            Formulation::Area,
+        )?
+        .with_rounds(self.max_rounds, self.relaxation_gain);
+        area.rebuilt_as = self.rebuilt_as;
+        Ok(area)
     }
 
     /// The same problem with at most `max_rounds` normal-coordinate rounds per solve (at

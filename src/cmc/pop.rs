@@ -699,11 +699,7 @@ fn pop_vertex(mesh: &Mesh, v: usize, index: usize) -> Result<Option<(Mesh, PopEv
 /// Evolver's `t`); the junction it leaves is popped next. Returns the mesh and the number of
 /// merges (the mesh itself when there are none).
 pub fn collapse_short_edges(mesh: &Mesh, fraction: f64) -> Result<(Mesh, usize), PopError> {
-    let median = {
-        let lengths = mesh.sorted_edge_lengths();
-        lengths.get(lengths.len() / 2).copied().unwrap_or(0.0)
-    };
-    let threshold = fraction * median;
+    let threshold = fraction * mesh.median_edge_length();
     let mut current = mesh.clone();
     let mut merges = 0;
     // Edges whose merge would leave an invalid mesh (a zero-area triangle), by their ends'

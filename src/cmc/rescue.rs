@@ -121,6 +121,51 @@ pub fn judged(name: &str, status: Status, mesh: &Mesh, weight: f64) -> Status {
     judged
 }
 
+/// Whether a solve ended at a film worth working on: converged, or stalled or out of
+/// iterations at a feasible point.
+pub fn settled(solution: &Solution, options: &Options) -> bool {
+    solution.status.is_success()
+        || (matches!(solution.status, Status::Stalled | Status::IterationLimit)
+            && solution.max_violation <= options.constraint_tolerance)
+}
+
+/// The name of a solve `name` within `stage` (`name` alone when the stage has none).
+pub fn substage(stage: &str, name: &str) -> String {
+    match stage {
+        "" => name.to_string(),
+        _ => format!("{stage} {name}"),
+    }
+}
+
+/// What the steps after a solve (pops, descents) need to solve again: the solver options,
+/// the stage their solves are named under, the record of repeats, and `account`, which sees
+/// every re-solve (for the run's totals).
+pub struct Resolver<'a> {
+    /// Solver options of the re-solves.
+    pub options: &'a Options,
+    /// Stage of the solve before ("" for a lone solve, "level 1", "full", ...).
+    pub stage: &'a str,
+    /// Repeats at a larger tangential weight ([`solve`]).
+    pub rescues: &'a mut Vec<Rescue>,
+    /// Sees every re-solve.
+    pub account: &'a mut dyn FnMut(&Solution),
+}
+
+impl Resolver<'_> {
+    /// [`solve`] under `options` as the solve `name` within the stage, accounted.
+    pub fn solve_with(&mut self, nlp: &mut CmcNlp, options: &Options, name: &str) -> Solution {
+        let solution = solve(nlp, options, &substage(self.stage, name), self.rescues);
+        (self.account)(&solution);
+        solution
+    }
+
+    /// [`Resolver::solve_with`] the resolver's options.
+    pub fn solve(&mut self, nlp: &mut CmcNlp, name: &str) -> Solution {
+        let options = self.options;
+        self.solve_with(nlp, options, name)
+    }
+}
+
 /// `nlp.solve(options, stage)`, repeated from the same start at larger tangential weights
 /// while its mesh is collapsed (module header); each repeat is appended to `rescues`. `nlp`
 /// becomes the last solve's problem; the returned solution carries every solve's iterations,

@@ -155,6 +155,10 @@ pub struct StabilitySpec {
     /// analysis off (no `figures.stability`); default [`super::stability::REPORTED`].
     #[serde(default = "default_eigenvalues")]
     pub eigenvalues: usize,
+    /// When the solution is a saddle, move it along the negative mode and solve again
+    /// ([`super::descend`]); default false.
+    #[serde(default)]
+    pub descend: bool,
 }
 
 /// `[topology]`: topology events ([`super::topology`]).
@@ -178,6 +182,7 @@ impl Default for StabilitySpec {
     fn default() -> Self {
         StabilitySpec {
             eigenvalues: default_eigenvalues(),
+            descend: false,
         }
     }
 }

@@ -89,6 +89,11 @@ pub struct Stability {
     /// Pressures `p_i` of the bodies, 1/m (J/m³ per unit surface tension): prescribed, or
     /// fitted for the held volumes.
     pub pressures: Vec<f64>,
+    /// For a saddle: the eigenvector of the smallest eigenvalue as a motion of each vertex
+    /// (normal motion, zero at fixed and guided vertices), scaled to a largest displacement of
+    /// 1 (dimensionless; multiply by a length). Not written to `result.json`.
+    #[serde(skip)]
+    pub descent: Option<Vec<Point>>,
 }
 
 /// Analyses `mesh` (a solution) with its bodies: each region with its prescribed pressure
@@ -131,6 +136,7 @@ fn analyse_with(
         negative: 0,
         verdict: String::new(),
         pressures: Vec::new(),
+        descent: None,
     };
     if k == 0 || k > SPARSE_LIMIT {
         result.verdict =
@@ -243,6 +249,26 @@ fn analyse_with(
     };
 
     result.negative = spectrum.negative;
+    if spectrum.negative > 0
+        && let Some(&lowest) = spectrum.smallest.first()
+        && let Ok(Some(w)) = lowest_mode(k, &entries, &basis, lowest)
+    {
+        // Back from the weighted coordinates (w = M^{1/2} u) to each vertex's motion.
+        let mut motion: Vec<Point> = (0..mesh.vertex_count())
+            .map(|v| {
+                dofs[v]
+                    .iter()
+                    .enumerate()
+                    .map(|(d, e)| e * (weight[v] * w[start[v] + d]))
+                    .sum()
+            })
+            .collect();
+        let largest = motion.iter().map(|m| m.norm()).fold(0.0, f64::max);
+        if largest > 0.0 {
+            motion.iter_mut().for_each(|m| *m /= largest);
+            result.descent = Some(motion);
+        }
+    }
     result.smallest_eigenvalues = spectrum.smallest;
     result.eigenvalue_errors = spectrum.errors;
     result.verdict = verdict(
@@ -252,6 +278,38 @@ fn analyse_with(
     );
     result.pressures = pressures;
     result
+}
+
+/// Inverse-iteration steps of [`lowest_mode`].
+const MODE_STEPS: usize = 30;
+
+/// The eigenvector of K (k×k, `entries` of both triangles) on the complement of the orthonormal
+/// `basis` for its smallest eigenvalue `lowest` (as computed): inverse iteration with the
+/// bordered matrix factored at a shift a tenth of |lowest| below it, from a deterministic
+/// spread start; `None` when the shift does not factor.
+fn lowest_mode(
+    k: usize,
+    entries: &[(usize, usize, f64)],
+    basis: &[DVector<f64>],
+    lowest: f64,
+) -> Result<Option<DVector<f64>>, crate::solver::kkt::KktError> {
+    let mut bordered = bordered::Bordered::new(k, entries, basis)?;
+    let shift = lowest - 0.1 * lowest.abs().max(f64::MIN_POSITIVE);
+    if bordered.count(shift)? != 0 {
+        return Ok(None);
+    }
+    let mut x: Vec<f64> = (0..k)
+        .map(|i| ((i + 1) as f64 * 0.618_033_988_749_895).fract() - 0.5)
+        .collect();
+    for _ in 0..MODE_STEPS {
+        bordered.solve(&mut x);
+        let norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if !(norm > 0.0 && norm.is_finite()) {
+            return Ok(None);
+        }
+        x.iter_mut().for_each(|v| *v /= norm);
+    }
+    Ok(Some(DVector::from_vec(x)))
 }
 
 /// The one-line verdict: a saddle when the certified count of negative eigenvalues is
@@ -473,8 +531,17 @@ mod tests {
         assert_eq!(s.verdict, "stable");
         // Measured at 36 segments per ring: 6.67 (stable), −7.28 then 2.12 (unstable).
         assert!(s.smallest_eigenvalues[0] > 1.0, "{s:?}");
-        let u = analyse(&catenoid_mesh(unstable, 3), &[], REPORTED);
+        assert!(s.descent.is_none());
+        let mesh = catenoid_mesh(unstable, 3);
+        let u = analyse(&mesh, &[], REPORTED);
         assert_eq!(u.negative, 1, "{u:?}");
+        // The negative mode as a vertex motion: largest displacement 1, the rings held.
+        let motion = u.descent.as_ref().unwrap();
+        let largest = motion.iter().map(|m| m.norm()).fold(0.0, f64::max);
+        assert!((largest - 1.0).abs() < 1e-12);
+        for (m, f) in motion.iter().zip(mesh.flags()) {
+            assert!(!f.fixed || m.norm() == 0.0);
+        }
         assert!(u.verdict.starts_with("saddle"), "{u:?}");
         assert!(u.smallest_eigenvalues[0] < -1.0, "{u:?}");
         assert!(u.smallest_eigenvalues[1] > 0.0, "{u:?}");

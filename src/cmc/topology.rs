@@ -16,13 +16,13 @@
 //! resolution's solve.
 
 use crate::error::Error;
-use crate::solver::{Options, Solution, Status};
+use crate::solver::Solution;
 
 use super::area::total_area;
 use super::nlp::CmcNlp;
 use super::pop::{self, PopEvent};
 use super::remesh::equiangulate;
-use super::rescue::{self, Rescue};
+use super::rescue::{self, Resolver};
 
 /// At most this many pop rounds after one solve.
 pub const MAX_POP_ROUNDS: usize = 6;
@@ -81,18 +81,12 @@ fn bounding_surfaces(nlp: &CmcNlp) -> Vec<bool> {
 pub fn pop_and_resolve(
     mut nlp: CmcNlp,
     mut solution: Solution,
-    options: &Options,
-    stage: &str,
-    rescues: &mut Vec<Rescue>,
-    account: &mut dyn FnMut(&Solution),
+    resolver: &mut Resolver,
 ) -> Result<(CmcNlp, Solution, Vec<PopRound>), Error> {
     let runtime = |what: &str, e: &dyn std::fmt::Display| Error::Runtime(format!("{what}: {e}"));
     let mut rounds = Vec::new();
     for round in 0..MAX_POP_ROUNDS {
-        let converged = solution.status.is_success()
-            || (matches!(solution.status, Status::Stalled | Status::IterationLimit)
-                && solution.max_violation <= options.constraint_tolerance);
-        if !converged {
+        if !rescue::settled(&solution, resolver.options) {
             break;
         }
         let mesh = nlp
@@ -110,17 +104,13 @@ pub fn pop_and_resolve(
             break;
         }
         let area_popped = total_area(&popped);
-        let pop_stage = match stage {
-            "" => format!("pop {}", round + 1),
-            _ => format!("{stage} pop {}", round + 1),
-        };
+        let pop_stage = format!("pop {}", round + 1);
         let mut next = nlp
             .remeshed(popped)
             .map_err(|e| runtime("popped mesh", &e))?;
-        let mut capped = options.clone();
+        let mut capped = resolver.options.clone();
         capped.max_iterations = capped.max_iterations.min(POP_SOLVE_ITERATIONS);
-        let mut resolved = rescue::solve(&mut next, &capped, &pop_stage, rescues);
-        account(&resolved);
+        let mut resolved = resolver.solve_with(&mut next, &capped, &pop_stage);
         let mut iterations = resolved.iterations;
         if let Ok(after) = next.mesh_at(&resolved.x) {
             let (flipped, flips) = equiangulate(&after, 10).map_err(|e| runtime("flips", &e))?;
@@ -129,8 +119,7 @@ pub fn pop_and_resolve(
                     .remeshed(flipped)
                     .map_err(|e| runtime("flipped mesh", &e))?;
                 let flipped_stage = format!("{pop_stage} remeshed");
-                resolved = rescue::solve(&mut next, options, &flipped_stage, rescues);
-                account(&resolved);
+                resolved = resolver.solve(&mut next, &flipped_stage);
                 iterations += resolved.iterations;
             }
         }
@@ -139,7 +128,7 @@ pub fn pop_and_resolve(
             .map(|m| total_area(&m))
             .map_err(|e| runtime("mesh after the pop", &e))?;
         rounds.push(PopRound {
-            stage: stage.to_string(),
+            stage: resolver.stage.to_string(),
             merges,
             events,
             area_before: total_area(&mesh),
