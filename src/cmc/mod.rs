@@ -370,23 +370,10 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         improve_in_rounds(problem, nlp, solution, &options, flip_rounds, &mut tally)?;
     let mut descents = Vec::new();
     if !coarse_result {
-        let mut rescues = Vec::new();
-        let mut account = |s: &solver::Solution| tally.add(s);
-        let mut resolver = rescue::Resolver {
-            options: &options,
-            stage: if staged_run { "full" } else { "" },
-            rescues: &mut rescues,
-            account: &mut account,
-        };
-        if problem.spec.file.topology.pop {
-            let rounds;
-            (nlp, solution, rounds) = topology::pop_and_resolve(nlp, solution, &mut resolver)?;
-            pops.extend(rounds);
-        }
-        if problem.spec.file.stability.descend {
-            (nlp, solution, descents) = descend::descend(nlp, solution, &mut resolver)?;
-        }
-        tally.rescues.extend(rescues);
+        let stage = if staged_run { "full" } else { "" };
+        (nlp, solution, descents) = pop_and_descend(
+            problem, nlp, solution, &options, stage, &mut pops, &mut tally,
+        )?;
     }
     let study = if problem.spec.file.refine.levels > 1 && !coarse_result {
         let (finer, finest, study) =
@@ -430,25 +417,11 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
                 obj.insert("stability".into(), figure);
             }
         }
-        let census = pop::census(&mesh);
-        if !census.is_minimal() {
-            opts.say(&format!("topology: {}", non_minimal_sentence(&census)));
-        }
-        obj.insert(
-            "topology".into(),
-            serde_json::json!({
-                "non_minimal_lines": census.lines.len(),
-                "non_minimal_vertices": census.vertices.len(),
-                "pops": serde_json::to_value(&pops)
-                    .map_err(|e| Error::Runtime(format!("pops: {e}")))?,
-            }),
-        );
-        if !census.is_minimal() {
-            summary.status_message = format!(
-                "{} {}",
-                summary.status_message,
-                non_minimal_sentence(&census)
-            );
+        let (figure, warning) = topology_figure(&mesh, &pops)?;
+        obj.insert("topology".into(), figure);
+        if let Some(sentence) = warning {
+            opts.say(&format!("topology: {sentence}"));
+            summary.status_message = format!("{} {sentence}", summary.status_message);
         }
         if !descents.is_empty() {
             insert_json(obj, "stability_descents", &descents)?;
@@ -471,24 +444,93 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     if !coarse_stages.is_empty() {
         summary.timings.insert("coarse".into(), coarse_seconds);
     }
+    finish(problem, summary, solution.status, &mesh, &tally.log)
+}
+
+/// After the solve and its flip rounds: the pops (`[topology] pop`, [`topology`]; their
+/// rounds appended to `pops`) and the descents from a saddle (`[stability] descend`,
+/// [`descend`]), each re-solve counted in `tally`.
+fn pop_and_descend(
+    problem: &Problem,
+    mut nlp: CmcNlp,
+    mut solution: solver::Solution,
+    options: &solver::Options,
+    stage: &str,
+    pops: &mut Vec<topology::PopRound>,
+    tally: &mut Tally,
+) -> Result<(CmcNlp, solver::Solution, Vec<descend::Descent>), Error> {
+    let mut rescues = Vec::new();
+    let mut account = |s: &solver::Solution| tally.add(s);
+    let mut resolver = rescue::Resolver {
+        options,
+        stage,
+        rescues: &mut rescues,
+        account: &mut account,
+    };
+    if problem.spec.file.topology.pop {
+        let rounds;
+        (nlp, solution, rounds) = topology::pop_and_resolve(nlp, solution, &mut resolver)?;
+        pops.extend(rounds);
+    }
+    let mut descents = Vec::new();
+    if problem.spec.file.stability.descend {
+        (nlp, solution, descents) = descend::descend(nlp, solution, &mut resolver)?;
+    }
+    tally.rescues.extend(rescues);
+    Ok((nlp, solution, descents))
+}
+
+/// `figures.topology` of the final `mesh` (its [`pop::census`] and the run's pop rounds), and,
+/// when it has non-minimal junctions, the sentence that says what they mean.
+fn topology_figure(
+    mesh: &mesh::Mesh,
+    pops: &[topology::PopRound],
+) -> Result<(serde_json::Value, Option<String>), Error> {
+    let census = pop::census(mesh);
+    let figure = serde_json::json!({
+        "non_minimal_lines": census.lines.len(),
+        "non_minimal_vertices": census.vertices.len(),
+        "pops": serde_json::to_value(pops).map_err(|e| Error::Runtime(format!("pops: {e}")))?,
+    });
+    let sentence = (!census.is_minimal()).then(|| {
+        format!(
+            "The film has {} line(s) where four or more films meet and {} non-minimal \
+             vertex(es): a critical point of its fixed topology, not a soap film ([topology] \
+             pop = true pops them).",
+            census.lines.len(),
+            census.vertices.len()
+        )
+    });
+    Ok((figure, sentence))
+}
+
+/// The run's outcome: `summary` with the export's timing, and its artifacts (iteration log
+/// files, `model.glb`, `preview.svg`) of the final `mesh` ended with `status`.
+fn finish(
+    problem: &Problem,
+    mut summary: ResultSummary,
+    status: Status,
+    mesh: &mesh::Mesh,
+    log: &[solver::IterationRecord],
+) -> Result<Outcome, Error> {
     // The caption's area is the headline's (the figures' total is the same sum).
     let caption = format!(
         "{}: {}, {}",
         problem.name,
         summary.headline.text(),
-        solution.status.sentence()
+        status.sentence()
     );
     let export_started = Instant::now();
-    let model = export::glb(&mesh).map_err(|e| Error::Runtime(e.to_string()))?;
-    let picture = preview::svg(&mesh, 800.0, &caption).into_bytes();
+    let model = export::glb(mesh).map_err(|e| Error::Runtime(e.to_string()))?;
+    let picture = preview::svg(mesh, 800.0, &caption).into_bytes();
     summary
         .timings
         .insert("export".into(), export_started.elapsed().as_secs_f64());
     let [iterations, convergence] =
-        crate::io::result::iteration_files(&problem.name, &summary.headline, &tally.log);
+        crate::io::result::iteration_files(&problem.name, &summary.headline, log);
     Ok(Outcome {
         summary,
-        status: Some(solution.status),
+        status: Some(status),
         check_passed: None,
         artifacts: vec![
             iterations,
@@ -503,17 +545,6 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
             },
         ],
     })
-}
-
-/// What the film's non-minimal junctions mean, one sentence.
-fn non_minimal_sentence(census: &pop::Census) -> String {
-    format!(
-        "The film has {} line(s) where four or more films meet and {} non-minimal vertex(es): \
-         a critical point of its fixed topology, not a soap film ([topology] pop = true pops \
-         them).",
-        census.lines.len(),
-        census.vertices.len()
-    )
 }
 
 /// Inserts `value` as JSON under `key`.

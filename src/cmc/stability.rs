@@ -254,20 +254,11 @@ fn analyse_with(
         && let Ok(Some(w)) = lowest_mode(k, &entries, &basis, lowest)
     {
         // Back from the weighted coordinates (w = M^{1/2} u) to each vertex's motion.
-        let mut motion: Vec<Point> = (0..mesh.vertex_count())
-            .map(|v| {
-                dofs[v]
-                    .iter()
-                    .enumerate()
-                    .map(|(d, e)| e * (weight[v] * w[start[v] + d]))
-                    .sum()
-            })
-            .collect();
-        let largest = motion.iter().map(|m| m.norm()).fold(0.0, f64::max);
-        if largest > 0.0 {
-            motion.iter_mut().for_each(|m| *m /= largest);
-            result.descent = Some(motion);
-        }
+        let motion = (0..mesh.vertex_count()).map(|v| {
+            let amplitude = |(d, e): (usize, &Point)| e * (weight[v] * w[start[v] + d]);
+            dofs[v].iter().enumerate().map(amplitude).sum()
+        });
+        result.descent = unit_motion(motion.collect());
     }
     result.smallest_eigenvalues = spectrum.smallest;
     result.eigenvalue_errors = spectrum.errors;
@@ -278,6 +269,15 @@ fn analyse_with(
     );
     result.pressures = pressures;
     result
+}
+
+/// `motion` scaled to a largest vertex displacement of 1; `None` when it is all zero.
+fn unit_motion(mut motion: Vec<Point>) -> Option<Vec<Point>> {
+    let largest = motion.iter().map(|m| m.norm()).fold(0.0, f64::max);
+    (largest > 0.0).then(|| {
+        motion.iter_mut().for_each(|m| *m /= largest);
+        motion
+    })
 }
 
 /// Inverse-iteration steps of [`lowest_mode`].
