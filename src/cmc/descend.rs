@@ -73,6 +73,19 @@ fn energy(nlp: &CmcNlp, mesh: &Mesh, pressures: &[f64]) -> f64 {
     total_area(mesh) - work
 }
 
+/// `mesh` with every vertex moved by `step` times its `motion` (m); `None` when a triangle
+/// degenerates.
+fn moved_along(mesh: &Mesh, motion: &[Point], step: f64) -> Option<Mesh> {
+    let mut moved = mesh.clone();
+    let positions = mesh
+        .positions()
+        .iter()
+        .zip(motion)
+        .map(|(p, m)| p + m * step)
+        .collect();
+    (moved.set_positions(positions).is_ok() && moved.check_areas().is_ok()).then_some(moved)
+}
+
 /// While the solved film is a saddle, moves it along the negative mode and solves again
 /// (module header). `account` sees every re-solve. Returns the last problem and solution and
 /// the descents; `nlp` and `solution` themselves when the solution is no saddle, had not
@@ -91,12 +104,7 @@ pub fn descend(
         let mesh = nlp
             .mesh_at(&solution.x)
             .map_err(|e| runtime("mesh at the saddle", &e))?;
-        let bodies: Vec<(&super::volume::Region, Option<f64>)> = nlp
-            .volumes()
-            .iter()
-            .map(|v| (&v.region, v.pressure))
-            .collect();
-        let analysis = stability::analyse(&mesh, &bodies, 1);
+        let analysis = stability::analyse(&mesh, &nlp.bodies(), 1);
         let (Some(motion), Some(&eigenvalue)) =
             (&analysis.descent, analysis.smallest_eigenvalues.first())
         else {
@@ -110,16 +118,9 @@ pub fn descend(
             let mut best: Option<(f64, f64, Mesh)> = None;
             for j in 0..=STEP_DOUBLINGS {
                 let step = sign * h * 0.25 * f64::powi(2.0, j as i32);
-                let mut moved = mesh.clone();
-                let positions: Vec<Point> = mesh
-                    .positions()
-                    .iter()
-                    .zip(motion)
-                    .map(|(p, m)| p + m * step)
-                    .collect();
-                if moved.set_positions(positions).is_err() || moved.check_areas().is_err() {
+                let Some(moved) = moved_along(&mesh, motion, step) else {
                     continue;
-                }
+                };
                 let e = energy(&nlp, &moved, &analysis.pressures);
                 if e < at_saddle && best.as_ref().is_none_or(|b| e < b.0) {
                     best = Some((e, step, moved));
@@ -170,38 +171,20 @@ pub fn descend(
 mod tests {
     use super::*;
     use crate::cmc::load;
-    use crate::cmc::nlp::Formulation;
+    use crate::cmc::testing::{onto_catenoid, unit_catenoid_branches};
     use crate::solver::Options;
     use std::path::PathBuf;
 
     /// The catenoid problem (unit rings 1 apart) at `resolution`, started on `r = a·cosh(y/a)`.
-    fn catenoid_from(a: f64, resolution: usize, formulation: Formulation) -> CmcNlp {
+    fn catenoid_from(a: f64, resolution: usize) -> CmcNlp {
         let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("problems/cmc/catenoid.toml");
-        let mut problem = load(&path).unwrap().with_resolution(resolution);
-        problem.spec.file.formulation = formulation;
-        let nlp = problem.build().unwrap();
-        let mut mesh = nlp.mesh().clone();
-        let moved = mesh
-            .positions()
-            .iter()
-            .map(|p| {
-                let s = a * (p.y / a).cosh() / p.x.hypot(p.z);
-                Point::new(p.x * s, p.y, p.z * s)
-            })
-            .collect();
-        mesh.set_positions(moved).unwrap();
+        let nlp = load(&path)
+            .unwrap()
+            .with_resolution(resolution)
+            .build()
+            .unwrap();
+        let mesh = onto_catenoid(nlp.mesh().clone(), a);
         nlp.remeshed(mesh).unwrap()
-    }
-
-    /// The unstable root of `a·cosh(1/(2a)) = 1` (bisection).
-    fn unstable_branch() -> f64 {
-        let g = |a: f64| a * (0.5 / a).cosh() - 1.0;
-        let (mut lo, mut hi) = (0.1, 0.4);
-        for _ in 0..100 {
-            let mid = 0.5 * (lo + hi);
-            if g(mid) > 0.0 { lo = mid } else { hi = mid }
-        }
-        0.5 * (lo + hi)
     }
 
     #[test]
@@ -214,7 +197,8 @@ mod tests {
         // curvature), so the saddle is given as a solution: the exact unstable catenoid, the
         // solve stopped before its first iteration.
         let options = Options::default();
-        let mut saddle = catenoid_from(unstable_branch(), 3, Formulation::Normal);
+        let (stable_a, unstable_a) = unit_catenoid_branches();
+        let mut saddle = catenoid_from(unstable_a, 3);
         let mut stop = options.clone();
         stop.max_iterations = 0;
         let at_saddle = saddle.solve(&stop, "");
@@ -228,17 +212,7 @@ mod tests {
         // The mode is a direction of negative curvature of the area: a negative second
         // difference.
         let motion = analysis.descent.clone().unwrap();
-        let area_along = |step: f64| {
-            let mut moved = mesh.clone();
-            let p: Vec<Point> = mesh
-                .positions()
-                .iter()
-                .zip(&motion)
-                .map(|(p, m)| p + m * step)
-                .collect();
-            moved.set_positions(p).unwrap();
-            total_area(&moved)
-        };
+        let area_along = |step: f64| total_area(&moved_along(&mesh, &motion, step).unwrap());
         let t = 1e-3;
         assert!(area_along(t) + area_along(-t) - 2.0 * total_area(&mesh) < 0.0);
         // Descended and solved again: the stable catenoid of the same mesh.
@@ -251,7 +225,7 @@ mod tests {
         let (descended, solution, descents) = descend(saddle, at_saddle, &mut resolver).unwrap();
         assert!(descents.last().is_some_and(|d| d.kept), "{descents:?}");
         assert!(solution.status.is_success(), "{descents:?}");
-        let mut stable = catenoid_from(0.848338, 3, Formulation::Normal);
+        let mut stable = catenoid_from(stable_a, 3);
         let direct = rescue::solve(&mut stable, &options, "", &mut Vec::new());
         let (a, b) = (
             total_area(&descended.mesh_at(&solution.x).unwrap()),

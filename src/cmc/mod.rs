@@ -288,12 +288,7 @@ fn stability_figure(
     reported: usize,
     opts: &RunOptions,
 ) -> Result<serde_json::Value, Error> {
-    let bodies: Vec<(&volume::Region, Option<f64>)> = nlp
-        .volumes()
-        .iter()
-        .map(|v| (&v.region, v.pressure))
-        .collect();
-    let stability = stability::analyse(mesh, &bodies, reported);
+    let stability = stability::analyse(mesh, &nlp.bodies(), reported);
     opts.say(&format!(
         "stability: {} (smallest eigenvalues [{}] 1/m², {} normal degrees of freedom)",
         stability.verdict,
@@ -349,10 +344,10 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
     // A coarse level that ended short is the run's result (cmc::multilevel).
     let coarse_result = stopped.is_some();
     let staged_run = !tally.log.is_empty() || problem.spec.file.quality.flip_rounds > 0;
+    let stage = if staged_run { "full" } else { "" };
     let mut solution = match stopped {
         Some(solution) => solution,
         None => {
-            let stage = if staged_run { "full" } else { "" };
             let solution = rescue::solve(&mut nlp, &options, stage, &mut tally.rescues);
             tally.add(&solution);
             solution
@@ -370,7 +365,6 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Outcome, Error> {
         improve_in_rounds(problem, nlp, solution, &options, flip_rounds, &mut tally)?;
     let mut descents = Vec::new();
     if !coarse_result {
-        let stage = if staged_run { "full" } else { "" };
         (nlp, solution, descents) = pop_and_descend(
             problem, nlp, solution, &options, stage, &mut pops, &mut tally,
         )?;

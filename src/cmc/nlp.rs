@@ -683,6 +683,15 @@ impl CmcNlp {
         &self.volumes
     }
 
+    /// Each body's region with its prescribed pressure (1/m), or `None` when its volume is
+    /// held: the bodies as [`super::stability::analyse`] takes them.
+    pub fn bodies(&self) -> Vec<(&Region, Option<f64>)> {
+        self.volumes
+            .iter()
+            .map(|v| (&v.region, v.pressure))
+            .collect()
+    }
+
     /// The tangential regularization weight `w`.
     pub fn tangential_weight(&self) -> f64 {
         self.weight

@@ -38,9 +38,10 @@
 //! vertices whose link is disconnected (two cones touching) or has a face that is not a simple
 //! polygon.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 use super::mesh::{Mesh, MeshError, Point, VertexFlags, orthonormal_pair};
+use super::remesh::ordered;
 
 /// How far each copy of a popped line's vertex moves off the old line (on opposite sides), as
 /// a fraction of the vertex's shortest edge.
@@ -244,12 +245,12 @@ fn lines(mesh: &Mesh) -> Vec<Vec<usize>> {
                     .is_some_and(|fans| fans.len() == valence(ks[0]))
         })
     };
+    let inner: BTreeSet<usize> = at.keys().copied().filter(|&v| through(v)).collect();
     let mut used = vec![false; mesh.edges().len()];
     let mut chains = Vec::new();
     // Open chains from their ends first, then the closed loops left.
-    let starts: Vec<usize> = at.keys().copied().filter(|&v| !through(v)).collect();
-    let loop_starts: Vec<usize> = at.keys().copied().filter(|&v| through(v)).collect();
-    for start in starts.into_iter().chain(loop_starts) {
+    let ends = at.keys().copied().filter(|v| !inner.contains(v));
+    for start in ends.chain(inner.iter().copied()) {
         for &first in &at[&start] {
             if used[first] {
                 continue;
@@ -260,7 +261,7 @@ fn lines(mesh: &Mesh) -> Vec<Vec<usize>> {
                 used[k] = true;
                 let next = other(k, v);
                 chain.push(next);
-                if next == start || !through(next) {
+                if next == start || !inner.contains(&next) {
                     break;
                 }
                 let Some(&onward) = at[&next].iter().find(|&&j| !used[j]) else {
@@ -287,13 +288,9 @@ fn bisect(mesh: &Mesh, a: usize, b: usize) -> Result<Mesh, MeshError> {
         },
     );
     for (t, &tri) in mesh.triangles().iter().enumerate() {
-        let Some(i) = (0..3).find(|&i| {
-            let (p, q) = (tri[i], tri[(i + 1) % 3]);
-            (p == a && q == b) || (p == b && q == a)
-        }) else {
+        let Some((p, q, r)) = ordered(tri, [a, b]) else {
             continue;
         };
-        let (p, q, r) = (tri[i], tri[(i + 1) % 3], tri[(i + 2) % 3]);
         edit.triangles[t] = [p, m, r];
         edit.triangle([m, q, r], mesh.triangle_surface()[t]);
     }
@@ -506,43 +503,35 @@ fn link_is_minimal(mesh: &Mesh, v: usize) -> bool {
         .filter(|(_, a)| a.len() == 3)
         .map(|(&w, _)| w)
         .collect();
-    // Follow each arc from a branch node through two-arc nodes to the next branch node.
-    let walk = |from: usize, (t0, first): (usize, usize)| -> usize {
+    // Follow an arc from `from` through two-arc nodes until a branch node or `from` again: the
+    // node reached and the nodes passed on the way.
+    let walk = |from: usize, (t0, first): (usize, usize)| -> (usize, usize) {
         let (mut prev_t, mut node) = (t0, first);
-        let mut steps = 0;
-        while arcs[&node].len() == 2 && node != from && steps <= arcs.len() {
+        let mut passed = 0;
+        while arcs[&node].len() == 2 && node != from && passed <= arcs.len() {
             let &(t, onward) = arcs[&node]
                 .iter()
                 .find(|&&(t, _)| t != prev_t)
                 .expect("a two-arc node has another arc");
             (prev_t, node) = (t, onward);
-            steps += 1;
+            passed += 1;
         }
-        node
+        (node, passed)
     };
     match branches.len() {
         0 => {
             // One cycle through every node.
             let (&start, first) = arcs.iter().next().expect("a vertex has triangles");
-            let (mut prev_t, mut node, mut count) = (first[0].0, first[0].1, 1);
-            while node != start && count <= arcs.len() {
-                let &(t, onward) = arcs[&node]
-                    .iter()
-                    .find(|&&(t, _)| t != prev_t)
-                    .expect("a two-arc node has another arc");
-                (prev_t, node) = (t, onward);
-                count += 1;
-            }
-            count == arcs.len()
+            walk(start, first[0]) == (start, arcs.len() - 1)
         }
         2 => arcs[&branches[0]]
             .iter()
-            .all(|&arc| walk(branches[0], arc) == branches[1]),
+            .all(|&arc| walk(branches[0], arc).0 == branches[1]),
         4 => {
             let mut pairs: Vec<(usize, usize)> = Vec::new();
             for &b in &branches {
                 for &arc in &arcs[&b] {
-                    let end = walk(b, arc);
+                    let (end, _) = walk(b, arc);
                     if end == b {
                         return false;
                     }
@@ -594,17 +583,17 @@ fn pop_vertex(mesh: &Mesh, v: usize, index: usize) -> Result<Option<(Mesh, PopEv
         .collect();
     // Faces with their interior on the left: arriving at b along arc t from a, leave along
     // the arc before t in b's counter-clockwise rotation.
-    let mut used: BTreeMap<(usize, usize), bool> = BTreeMap::new();
+    let mut used: BTreeSet<(usize, usize)> = BTreeSet::new();
     let mut faces: Vec<Vec<usize>> = Vec::new();
     for (&a, list) in &rotation {
         for &(t, b) in list {
-            if used.contains_key(&(t, a)) {
+            if used.contains(&(t, a)) {
                 continue;
             }
             let mut face = Vec::new();
             let (mut from, mut arc, mut to) = (a, t, b);
             loop {
-                if used.insert((arc, from), true).is_some() {
+                if !used.insert((arc, from)) {
                     return Ok(None);
                 }
                 face.push(from);
@@ -735,52 +724,25 @@ pub fn collapse_short_edges(mesh: &Mesh, fraction: f64) -> Result<(Mesh, usize),
 /// The mesh with vertex `b` merged into `a` (module header of [`collapse_short_edges`]);
 /// vertices left in no triangle are dropped.
 fn merge_vertices(mesh: &Mesh, a: usize, b: usize) -> Result<Mesh, MeshError> {
-    let p = mesh.positions();
-    let mut seen = std::collections::BTreeSet::new();
-    let mut kept: Vec<([usize; 3], usize)> = Vec::new();
+    let mut edit = Surgery::of(mesh);
+    edit.positions[a] = (mesh.positions()[a] + mesh.positions()[b]) / 2.0;
+    edit.flags[a].excluded &= mesh.flags()[b].excluded;
+    edit.triangles.clear();
+    edit.surface_of.clear();
+    let mut seen = BTreeSet::new();
     for (t, tri) in mesh.triangles().iter().enumerate() {
         if tri.contains(&a) && tri.contains(&b) {
             continue;
         }
-        let new = tri.map(|v| if v == b { a } else { v });
-        let mut key = new;
-        key.sort_unstable();
-        if seen.insert(key) {
-            kept.push((new, mesh.triangle_surface()[t]));
+        let merged = tri.map(|v| if v == b { a } else { v });
+        let mut corners = merged;
+        corners.sort_unstable();
+        if seen.insert(corners) {
+            edit.triangle(merged, mesh.triangle_surface()[t]);
         }
     }
-    let mut used = vec![false; mesh.vertex_count()];
-    for (tri, _) in &kept {
-        for &v in tri {
-            used[v] = true;
-        }
-    }
-    let mut index = vec![usize::MAX; mesh.vertex_count()];
-    let mut positions = Vec::new();
-    let mut flags = Vec::new();
-    for v in (0..mesh.vertex_count()).filter(|&v| used[v]) {
-        index[v] = positions.len();
-        let mut f = mesh.flags()[v];
-        if v == a {
-            f.excluded = f.excluded && mesh.flags()[b].excluded;
-            positions.push((p[a] + p[b]) / 2.0);
-        } else {
-            positions.push(p[v]);
-        }
-        flags.push(f);
-    }
-    let (triangles, surface_of) = kept
-        .into_iter()
-        .map(|(tri, s)| (tri.map(|v| index[v]), s))
-        .unzip();
-    Mesh::new(
-        positions,
-        triangles,
-        surface_of,
-        mesh.surfaces().to_vec(),
-        flags,
-        mesh.guides().to_vec(),
-    )
+    edit.drop_unused_vertices();
+    edit.build()
 }
 
 /// A mesh under change: its arrays, edited in place and rebuilt into a [`Mesh`].
@@ -836,6 +798,29 @@ impl Surgery {
                 self.surfaces.push(format!("popped {kind} {index}"));
                 self.surfaces.len() - 1
             }
+        }
+    }
+
+    /// Removes the vertices in no triangle, renumbering the rest in order.
+    fn drop_unused_vertices(&mut self) {
+        let mut used = vec![false; self.positions.len()];
+        for tri in &self.triangles {
+            for &v in tri {
+                used[v] = true;
+            }
+        }
+        let mut index = vec![usize::MAX; used.len()];
+        let mut kept = 0;
+        for v in (0..used.len()).filter(|&v| used[v]) {
+            index[v] = kept;
+            self.positions[kept] = self.positions[v];
+            self.flags[kept] = self.flags[v];
+            kept += 1;
+        }
+        self.positions.truncate(kept);
+        self.flags.truncate(kept);
+        for tri in &mut self.triangles {
+            *tri = tri.map(|v| index[v]);
         }
     }
 

@@ -211,7 +211,7 @@ fn splittable(a: &VertexFlags, b: &VertexFlags, triangles: usize) -> bool {
 
 /// Triangle `tri` rotated to `(first, second, third)` if it contains the directed edge
 /// `edge[0] → edge[1]`, or the reverse edge (then rotated to start at `edge[1]`).
-fn ordered(tri: [usize; 3], edge: [usize; 2]) -> Option<(usize, usize, usize)> {
+pub(super) fn ordered(tri: [usize; 3], edge: [usize; 2]) -> Option<(usize, usize, usize)> {
     for k in 0..3 {
         let (p, q, r) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
         if (p, q) == (edge[0], edge[1]) || (p, q) == (edge[1], edge[0]) {

@@ -491,40 +491,17 @@ fn tolerances(theta: &[f64], reported: usize, g: f64) -> Vec<f64> {
 mod tests {
     use super::*;
     use crate::cmc::catenoid::catenoid;
+    use crate::cmc::testing::{onto_catenoid, unit_catenoid_branches};
 
     /// The catenoid `r = a·cosh(y/a)` between unit rings 1 apart, meshed like the generator's
     /// cylinder at `levels` and moved radially onto it.
     fn catenoid_mesh(a: f64, levels: usize) -> Mesh {
-        let mut mesh = catenoid(1.0, 1.0, levels).unwrap().mesh;
-        let moved = mesh
-            .positions()
-            .iter()
-            .map(|p| {
-                let r = a * (p.y / a).cosh();
-                let s = r / p.x.hypot(p.z);
-                Point::new(p.x * s, p.y, p.z * s)
-            })
-            .collect();
-        mesh.set_positions(moved).unwrap();
-        mesh
-    }
-
-    /// The two roots of `a·cosh(1/(2a)) = 1`.
-    fn branches() -> (f64, f64) {
-        let (stable, _) = crate::cmc::catenoid::exact_catenoid(1.0, 1.0).unwrap();
-        let g = |a: f64| a * (0.5 / a).cosh() - 1.0;
-        let (mut lo, mut hi) = (0.1, 0.4);
-        assert!(g(lo) > 0.0 && g(hi) < 0.0);
-        for _ in 0..100 {
-            let mid = 0.5 * (lo + hi);
-            if g(mid) > 0.0 { lo = mid } else { hi = mid }
-        }
-        (stable, 0.5 * (lo + hi))
+        onto_catenoid(catenoid(1.0, 1.0, levels).unwrap().mesh, a)
     }
 
     #[test]
     fn the_stable_catenoid_is_stable_and_the_unstable_branch_a_saddle() {
-        let (stable, unstable) = branches();
+        let (stable, unstable) = unit_catenoid_branches();
         assert!((unstable - 0.2350).abs() < 1e-3, "{unstable}");
         let s = analyse(&catenoid_mesh(stable, 3), &[], REPORTED);
         assert_eq!(s.negative, 0, "{s:?}");
@@ -604,7 +581,7 @@ mod tests {
         // The catenoid's unstable branch (one negative eigenvalue, no restriction rows but the
         // rigid motions' normal parts), the sphere under its volume (a five-fold cluster) and
         // at a prescribed pressure (a negative eigenvalue: the shift steps down below it).
-        let (_, unstable) = branches();
+        let (_, unstable) = unit_catenoid_branches();
         let catenoid = catenoid_mesh(unstable, 3);
         let sphere = crate::cmc::generators::icosphere(2.0, 2, "skin").unwrap();
         let region = Region {

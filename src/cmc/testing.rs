@@ -84,3 +84,31 @@ pub fn near_right_angle(mesh: &Mesh, v: usize, tol: f64) -> bool {
 pub fn has_obtuse(mesh: &Mesh, v: usize) -> bool {
     angle_cosines(mesh, v).iter().any(|&c| c < 0.0)
 }
+
+/// `mesh` moved radially (about the y axis) onto the catenoid `r = a·cosh(y/a)` (m).
+pub fn onto_catenoid(mut mesh: Mesh, a: f64) -> Mesh {
+    let moved = mesh
+        .positions()
+        .iter()
+        .map(|p| {
+            let s = a * (p.y / a).cosh() / p.x.hypot(p.z);
+            Point::new(p.x * s, p.y, p.z * s)
+        })
+        .collect();
+    mesh.set_positions(moved).unwrap();
+    mesh
+}
+
+/// The catenoids between unit rings 1 m apart: the roots (stable, unstable) of
+/// `a·cosh(1/(2a)) = 1`, m.
+pub fn unit_catenoid_branches() -> (f64, f64) {
+    let (stable, _) = super::catenoid::exact_catenoid(1.0, 1.0).unwrap();
+    let g = |a: f64| a * (0.5 / a).cosh() - 1.0;
+    let (mut lo, mut hi) = (0.1, 0.4);
+    assert!(g(lo) > 0.0 && g(hi) < 0.0);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if g(mid) > 0.0 { lo = mid } else { hi = mid }
+    }
+    (stable, 0.5 * (lo + hi))
+}
