@@ -72,7 +72,17 @@ struct Constraints<'a> {
     m: usize,
     /// Euclidean norm of each row of A.
     row_norms: Vec<f64>,
+    /// The inequality sides with a finite right-hand side, in id order, each with its bₖ and
+    /// ‖nₖ‖: the constraints the dual iteration's scan for a violated one looks at.
+    inequalities: Vec<Inequality>,
     problem: &'a QpProblem<'a>,
+}
+
+/// An inequality side `nₖᵀd ≥ bₖ` with a finite bₖ (see [`Constraints::inequalities`]).
+struct Inequality {
+    id: ConstraintId,
+    rhs: f64,
+    normal_norm: f64,
 }
 
 impl<'a> Constraints<'a> {
@@ -80,12 +90,24 @@ impl<'a> Constraints<'a> {
         let row_norms = (problem.a.row_iter())
             .map(|row| row.values().iter().map(|v| v * v).sum::<f64>().sqrt())
             .collect();
-        Constraints {
+        let mut cons = Constraints {
             n: problem.g.len(),
             m: problem.a.nrows(),
             row_norms,
+            inequalities: Vec::new(),
             problem,
-        }
+        };
+        cons.inequalities = (0..cons.count())
+            .filter(|&id| !cons.is_equality_lower(id) && !cons.is_equality_upper(id))
+            .filter_map(|id| {
+                cons.rhs(id).map(|rhs| Inequality {
+                    id,
+                    rhs,
+                    normal_norm: cons.normal_norm(id),
+                })
+            })
+            .collect();
+        cons
     }
 
     /// Row `i` of A: its column indices and values.
@@ -722,6 +744,12 @@ fn solve_factored(
     }
 }
 
+/// The violation below which a constraint with right-hand side `b` and normal norm
+/// `normal_norm` counts as met at an x with `‖x‖∞ = x_max`.
+fn tolerance_of(b: f64, normal_norm: f64, x_max: f64) -> f64 {
+    1e-11 * (1.0 + b.abs() + normal_norm * x_max)
+}
+
 /// The dual active-set iteration in progress: the constraints, the factored active set, the
 /// primal iterate `x` and the counters.
 struct DualIteration<'a> {
@@ -816,7 +844,7 @@ impl<'a> DualIteration<'a> {
     /// The violation below which constraint `id` (right-hand side `b`) counts as met at `x`,
     /// `x_max` being `‖x‖∞` (passed in: the scan over all constraints computes it once).
     fn violation_tol(&self, id: ConstraintId, b: f64, x_max: f64) -> f64 {
-        1e-11 * (1.0 + b.abs() + self.cons.normal_norm(id) * x_max)
+        tolerance_of(b, self.cons.normal_norm(id), x_max)
     }
 
     /// Factors the equalities `equalities` (the lower sides of equality constraints with a
@@ -894,16 +922,20 @@ impl<'a> DualIteration<'a> {
         let cons = &self.cons;
         let mut best: Option<(ConstraintId, f64, bool)> = None;
         let x_max = self.x.amax();
-        for id in 0..cons.count() {
-            if self.active[id] || cons.is_equality_lower(id) || cons.is_equality_upper(id) {
+        for &Inequality {
+            id,
+            rhs: b,
+            normal_norm,
+        } in &cons.inequalities
+        {
+            if self.active[id] {
                 continue;
             }
-            let Some(b) = cons.rhs(id) else { continue };
             let s = cons.dot(id, &self.x) - b;
-            if s >= -self.violation_tol(id, b, x_max) {
+            if s >= -tolerance_of(b, normal_norm, x_max) {
                 continue;
             }
-            let score = s / cons.normal_norm(id);
+            let score = s / normal_norm;
             let pref = self.preferred[id];
             let better = match best {
                 None => true,
