@@ -224,6 +224,7 @@ fn independent_rows(rows: &DMatrix<f64>) -> RowBasis {
 /// the same number): eight partial sums over blocks of eight, added to 0 as (s₀ + s₄),
 /// (s₁ + s₅), (s₂ + s₆), (s₃ + s₇), then the tail one by one. Its norms are `dense_dot(v, v)`
 /// (`norm_squared`, 0 + the dot) and its square root.
+#[inline(always)]
 fn dense_dot(a: &[f64], b: &[f64]) -> f64 {
     let blocks = a.len() / 8 * 8;
     let mut partial = [0.0; 8];
