@@ -18,11 +18,19 @@
 //! window uses. Objective decrease alone does not see a design that still walks toward a
 //! topology change at an almost constant objective (crane_derrick's fifth round: a member's
 //! force going to zero over 90 iterations at 248.28 → 248.22 kg), so such an end is kept only if
-//! the clean-up of that point changes the design; else the round goes on from that point with
-//! the window alone (a new solve, the rest of the iteration budget). Cost: nothing per
-//! iteration; one clean-up per such end. Measured on the 18 shipped files (docs/notes/truss.md,
-//! 2026-11-28): through_deck_cantilever 744 → 427 iterations; a round that ends after the
-//! first drop of a staircase (cantilever_bridge's third round) can end heavier (+0.67 %).
+//! the clean-up of that point changes the design. Else the round goes on from that point as a
+//! solve of its own without the creep test, to the solver's own tests (the rest of the
+//! iteration budget): the design has converged as far as the objective tells, so what is left
+//! is either that walk, which ends at its bound (a force at zero, a beam at its minimum length)
+//! for the next clean-up to act on, or the last digits. Going on with the window instead crept
+//! a full window of 50 iterations before the same point (measured 2026-11-29, all 30 files of
+//! docs/notes/truss.md, one thread: the same masses to six digits, iterations crane_derrick 958
+//! → 805, crane_derrick_linear 184 → 177, generated pier_2 244 → 204, pier_3 61 → 62, the rest
+//! the same; crane seeds 1–20: seed 17 Stalled at 206.32 kg → Optimal at 116.20 kg). Cost:
+//! nothing per iteration; one clean-up per such end. Measured on the 18 shipped files
+//! (docs/notes/truss.md, 2026-11-28): through_deck_cantilever 744 → 427 iterations; a round
+//! that ends after the first drop of a staircase (cantilever_bridge's third round) can end
+//! heavier (+0.67 %).
 //!
 //! With `linear` mass two more defaults apply. A round is cleaned up once after
 //! [`CLEAN_UP_CHECK`] iterations and ends there if that changes the design (else it goes on
@@ -124,21 +132,19 @@ pub fn solve_rounds(
     // Iterations the current round spent before its clean-up check or creep end that changed
     // nothing (0: none yet).
     let mut checked = 0;
-    // The current round ended once by a creep test without a clean-up change: it goes on with
-    // the window alone.
-    let mut stretch_checked = false;
+    // The current round ended once by a creep test without a clean-up change: it goes on
+    // without the creep test (module header).
+    let mut settle = false;
     loop {
         let mut options = options.clone();
         options.log = options.log.with_objective(nlp.objective_unit());
         if rounds > 1 {
             options.log.stage = format!("round {}", round + 1);
         }
-        if creep_test && restarts == 0 {
+        if creep_test && restarts == 0 && !settle {
             options.progress_window = CREEP_WINDOW;
             options.progress_tolerance = CREEP_TOLERANCE;
-            if !stretch_checked {
-                options.progress_stretch = CREEP_STRETCH;
-            }
+            options.progress_stretch = CREEP_STRETCH;
         }
         let check = creep_test
             && nlp.settings().mass_linear_in_force()
@@ -165,21 +171,21 @@ pub fn solve_rounds(
             logs.push(solution.log.clone());
         }
         // The clean-up check's end, or a creep end (by the stretches or the window: the status
-        // does not tell) while the stretches are on: kept only if the clean-up changes the
-        // design, else the round goes on from here (after a creep end with the window alone).
+        // does not tell): kept only if the clean-up changes the design, else the round goes on
+        // from here (after a creep end without the creep test).
         let creep_end =
             creep_test && options.progress_stretch > 0 && solution.status == Status::SlowProgress;
         if creep_end || (check && solution.status == Status::IterationLimit) {
             let (_, _, report) = clean_up_at(&nlp, &solution, clean_up);
             if report.changes_nothing() {
-                stretch_checked |= creep_end;
+                settle |= creep_end;
                 checked += solution.iterations;
                 nlp = resumed_at(&nlp, &solution.x)
                     .map_err(|e| Error::Runtime(format!("round {}: {e}", round + 1)))?;
                 continue;
             }
         }
-        stretch_checked = false;
+        settle = false;
         checked = 0;
         round += 1;
         let optimal = solution.status == Status::Optimal;
