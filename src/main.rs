@@ -21,9 +21,9 @@ use optimize::solver::log::LogTarget;
 /// J and R, about 100 KB each). By default glibc gives the top of the heap back to the kernel
 /// once 128 KB are free there, and serves blocks above a threshold that starts at 128 KB by
 /// `mmap`, so the next iteration's matrices come back as fresh pages the kernel must fault in
-/// and zero. Measured (2026-11-29, `pier_cantilever_linear.toml`, 40 runs × 3, one core):
-/// 1,447 → 761 page faults per run and 85 → 73 ms CPU (user + system) per run, the same
-/// results. The trim threshold of 256 MiB bounds the memory kept; blocks above 32 MiB (glibc's
+/// and zero. Measured (2026-11-29, `pier_cantilever_linear.toml`, one core, 60 runs of each
+/// binary interleaved): 1,447 → 762 page faults per run, median CPU (user + system) 71.9 →
+/// 69.1 ms, the same results. The trim threshold of 256 MiB bounds the memory kept; blocks above 32 MiB (glibc's
 /// largest `mmap` threshold) are still mapped and unmapped one by one. Other platforms keep
 /// their allocator's defaults.
 #[cfg(all(target_os = "linux", target_env = "gnu"))]

@@ -87,7 +87,7 @@ fn moved_along(mesh: &Mesh, motion: &[Point], step: f64) -> Option<Mesh> {
 }
 
 /// While the solved film is a saddle, moves it along the negative mode and solves again
-/// (module header). `account` sees every re-solve. Returns the last problem and solution and
+/// (module header). The resolver's `account` sees every re-solve. Returns the last problem and solution and
 /// the descents; `nlp` and `solution` themselves when the solution is no saddle, had not
 /// converged, or no trial step lowers the energy.
 pub fn descend(
@@ -95,7 +95,6 @@ pub fn descend(
     mut solution: Solution,
     resolver: &mut Resolver,
 ) -> Result<(CmcNlp, Solution, Vec<Descent>), Error> {
-    let runtime = |what: &str, e: &dyn std::fmt::Display| Error::Runtime(format!("{what}: {e}"));
     let mut descents = Vec::new();
     for _ in 0..MAX_DESCENTS {
         if !rescue::settled(&solution, resolver.options) {
@@ -103,7 +102,7 @@ pub fn descend(
         }
         let mesh = nlp
             .mesh_at(&solution.x)
-            .map_err(|e| runtime("mesh at the saddle", &e))?;
+            .map_err(|e| rescue::step_failed("mesh at the saddle", &e))?;
         let analysis = stability::analyse(&mesh, &nlp.bodies(), 1);
         let (Some(motion), Some(&eigenvalue)) =
             (&analysis.descent, analysis.smallest_eigenvalues.first())
@@ -137,12 +136,12 @@ pub fn descend(
             let descent_stage = format!("descent {}", descents.len() + 1);
             let mut next = nlp
                 .in_area_formulation(moved)
-                .map_err(|e| runtime("moved mesh", &e))?;
+                .map_err(|e| rescue::step_failed("moved mesh", &e))?;
             let resolved = resolver.solve(&mut next, &descent_stage);
             let area_after = next
                 .mesh_at(&resolved.x)
                 .map(|m| total_area(&m))
-                .map_err(|e| runtime("mesh after the descent", &e))?;
+                .map_err(|e| rescue::step_failed("mesh after the descent", &e))?;
             let converged = resolved.status.is_success();
             descents.push(Descent {
                 eigenvalue,

@@ -17,6 +17,7 @@
 //! of order `w` times the film's tangential strain, so the record shows what the larger
 //! weight cost.
 
+use crate::error::Error;
 use crate::solver::{Options, Solution, Status};
 
 use super::area::total_area;
@@ -135,6 +136,11 @@ pub fn substage(stage: &str, name: &str) -> String {
         "" => name.to_string(),
         _ => format!("{stage} {name}"),
     }
+}
+
+/// The run-time error of a step after a solve (a pop, a descent): `what` failed with `e`.
+pub fn step_failed(what: &str, e: &dyn std::fmt::Display) -> Error {
+    Error::Runtime(format!("{what}: {e}"))
 }
 
 /// What the steps after a solve (pops, descents) need to solve again: the solver options,

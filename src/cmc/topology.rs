@@ -75,7 +75,8 @@ fn bounding_surfaces(nlp: &CmcNlp) -> Vec<bool> {
 }
 
 /// Pops the solved film's non-minimal junctions and solves again, in rounds (module header).
-/// `account` sees every re-solve (for the run's iteration and evaluation totals). Returns the
+/// The resolver's `account` sees every re-solve (for the run's iteration and evaluation
+/// totals). Returns the
 /// last problem and solution and the rounds; `nlp` and `solution` themselves when nothing
 /// popped or the solve had not converged.
 pub fn pop_and_resolve(
@@ -83,7 +84,6 @@ pub fn pop_and_resolve(
     mut solution: Solution,
     resolver: &mut Resolver,
 ) -> Result<(CmcNlp, Solution, Vec<PopRound>), Error> {
-    let runtime = |what: &str, e: &dyn std::fmt::Display| Error::Runtime(format!("{what}: {e}"));
     let mut rounds = Vec::new();
     for round in 0..MAX_POP_ROUNDS {
         if !rescue::settled(&solution, resolver.options) {
@@ -91,15 +91,15 @@ pub fn pop_and_resolve(
         }
         let mesh = nlp
             .mesh_at(&solution.x)
-            .map_err(|e| runtime("mesh before the pop", &e))?;
+            .map_err(|e| rescue::step_failed("mesh before the pop", &e))?;
         // From the second round on, films that shrank to nothing leave first.
         let (collapsed, merges) = match round {
             0 => (mesh.clone(), 0),
             _ => pop::collapse_short_edges(&mesh, COLLAPSE_FRACTION)
-                .map_err(|e| runtime("short edges", &e))?,
+                .map_err(|e| rescue::step_failed("short edges", &e))?,
         };
-        let (popped, events) =
-            pop::pop(&collapsed, &bounding_surfaces(&nlp)).map_err(|e| runtime("pop", &e))?;
+        let (popped, events) = pop::pop(&collapsed, &bounding_surfaces(&nlp))
+            .map_err(|e| rescue::step_failed("pop", &e))?;
         if merges == 0 && events.is_empty() {
             break;
         }
@@ -107,17 +107,18 @@ pub fn pop_and_resolve(
         let pop_stage = format!("pop {}", round + 1);
         let mut next = nlp
             .remeshed(popped)
-            .map_err(|e| runtime("popped mesh", &e))?;
+            .map_err(|e| rescue::step_failed("popped mesh", &e))?;
         let mut capped = resolver.options.clone();
         capped.max_iterations = capped.max_iterations.min(POP_SOLVE_ITERATIONS);
         let mut resolved = resolver.solve_with(&mut next, &capped, &pop_stage);
         let mut iterations = resolved.iterations;
         if let Ok(after) = next.mesh_at(&resolved.x) {
-            let (flipped, flips) = equiangulate(&after, 10).map_err(|e| runtime("flips", &e))?;
+            let (flipped, flips) =
+                equiangulate(&after, 10).map_err(|e| rescue::step_failed("flips", &e))?;
             if flips > 0 {
                 next = next
                     .remeshed(flipped)
-                    .map_err(|e| runtime("flipped mesh", &e))?;
+                    .map_err(|e| rescue::step_failed("flipped mesh", &e))?;
                 let flipped_stage = format!("{pop_stage} remeshed");
                 resolved = resolver.solve(&mut next, &flipped_stage);
                 iterations += resolved.iterations;
@@ -126,7 +127,7 @@ pub fn pop_and_resolve(
         let area_after = next
             .mesh_at(&resolved.x)
             .map(|m| total_area(&m))
-            .map_err(|e| runtime("mesh after the pop", &e))?;
+            .map_err(|e| rescue::step_failed("mesh after the pop", &e))?;
         rounds.push(PopRound {
             stage: resolver.stage.to_string(),
             merges,
