@@ -132,6 +132,11 @@ settings! {
     /// (relative): decreases shrinking by ½ or faster per stretch have less than the last one
     /// left to gain, so the window need not wait. 0 (the default) turns it off.
     progress_stretch: usize = 0;
+    /// Second-order corrections the line search tries after a rejected full step, 1–20, each
+    /// from the constraint values at the last corrected point and kept only while the
+    /// violation falls by 1 % or more (IPOPT's `max_soc`, `kappa_soc`). `None`: 1, except in
+    /// the default rounds of a truss with `linear` mass, which try 4 (`truss::rounds`).
+    second_order_corrections: Option<usize> = None, valid: correction_count;
     /// Wall-clock limit for one solve in seconds (positive); `None`: unlimited.
     max_time: Option<f64> = None, valid: positive_seconds;
     /// Second-order information (see [`HessianMode`]).
@@ -186,6 +191,13 @@ fn at_least_one(n: &usize) -> Result<(), String> {
         Ok(())
     } else {
         Err("must be at least 1".into())
+    }
+}
+
+fn correction_count(n: &Option<usize>) -> Result<(), String> {
+    match n {
+        Some(n) if !(1..=20).contains(n) => Err("must be from 1 to 20".into()),
+        _ => Ok(()),
     }
 }
 
@@ -251,6 +263,13 @@ mod tests {
                     ..Options::default()
                 },
                 "`verbosity` must be 0, 1 or 2, got 3",
+            ),
+            (
+                Options {
+                    second_order_corrections: Some(0),
+                    ..Options::default()
+                },
+                "`second_order_corrections` must be from 1 to 20",
             ),
         ] {
             assert_eq!(options.validate().unwrap_err().message, message);

@@ -218,8 +218,11 @@ impl Sqp<'_> {
         Ok(())
     }
 
-    /// The corrected step `x + d + p` with p from the QP whose constraint bounds are shifted
-    /// by `c(x+d) − c(x) − J d`. Returns the accepted point, if the merit test passes.
+    /// The corrected step: the QP's step d̃ with its constraint bounds shifted by
+    /// `c(x+s) − c(x) − J s`, first for s = d, then (up to `Options::second_order_corrections`
+    /// in all) for s the last d̃, as long as each corrected point's ℓ1 violation is at most
+    /// 0.99 of the one before (Wächter & Biegler 2006, §2.4). Returns the first corrected
+    /// point that passes the merit test.
     pub(super) fn second_order_correction(
         &mut self,
         point: &Point,
@@ -228,39 +231,53 @@ impl Sqp<'_> {
         trial_values: &Values,
         test: &Acceptance,
     ) -> Result<Option<Point>, ()> {
-        let mut bounds = self.step_box(point);
-        let jd = jac * &DVector::from_column_slice(d);
-        for i in 0..bounds.bl.len() {
-            let shift = trial_values.c[i] - point.values.c[i] - jd[i];
-            bounds.bl[i] -= shift;
-            bounds.bu[i] -= shift;
-        }
-        let problem = bounds.problem(self.model.qp_hessian(), &point.derivatives.grad, jac);
-        let tol = self.qp_tolerance();
-        let sol = match &self.newton_base {
-            // A Newton step on the active set is corrected on the same active set.
-            Some(base) => {
-                let Some(sol) = self.warm.newton_step(&problem, base, tol) else {
-                    return Ok(None);
-                };
-                sol
+        let rounds = self.options.second_order_corrections.unwrap_or(1);
+        let mut step = d.to_vec();
+        let mut values = trial_values.clone();
+        let mut last_violation = f64::INFINITY;
+        for _ in 0..rounds {
+            let mut bounds = self.step_box(point);
+            let jd = jac * &DVector::from_column_slice(&step);
+            for i in 0..bounds.bl.len() {
+                let shift = values.c[i] - point.values.c[i] - jd[i];
+                bounds.bl[i] -= shift;
+                bounds.bu[i] -= shift;
             }
-            _ => {
-                let saved = self.warm.snapshot();
-                let sol = qp::solve(&problem, &mut self.warm, tol);
-                self.warm.restore(saved);
-                sol
+            let problem = bounds.problem(self.model.qp_hessian(), &point.derivatives.grad, jac);
+            let tol = self.qp_tolerance();
+            let sol = match &self.newton_base {
+                // A Newton step on the active set is corrected on the same active set.
+                Some(base) => {
+                    let Some(sol) = self.warm.newton_step(&problem, base, tol) else {
+                        return Ok(None);
+                    };
+                    sol
+                }
+                _ => {
+                    let saved = self.warm.snapshot();
+                    let sol = qp::solve(&problem, &mut self.warm, tol);
+                    self.warm.restore(saved);
+                    sol
+                }
+            };
+            if sol.status != QpStatus::Optimal {
+                return Ok(None);
             }
-        };
-        if sol.status != QpStatus::Optimal {
-            return Ok(None);
-        }
-        let x = self.trial(&point.x, &sol.d, 1.0);
-        let Some((values, x)) = self.evaluate(x)? else {
-            return Ok(None);
-        };
-        if self.accepts(test, &values, 1.0) {
-            return self.complete(x, values);
+            let x = self.trial(&point.x, &sol.d, 1.0);
+            let Some((corrected, x)) = self.evaluate(x)? else {
+                return Ok(None);
+            };
+            if self.accepts(test, &corrected, 1.0) {
+                return self.complete(x, corrected);
+            }
+            let violation = merit::l1_violation(&corrected.c, &self.ev.cl, &self.ev.cu);
+            let before = merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu);
+            if violation > 0.99 * last_violation.min(before) {
+                return Ok(None);
+            }
+            last_violation = violation;
+            step = sol.d.clone();
+            values = corrected;
         }
         Ok(None)
     }
