@@ -513,7 +513,7 @@ impl InertiaShift {
             }
             _ => h,
         };
-        let weighted = basis.map(|basis| WeightedRows::of(rows, basis));
+        let weighted = basis.map(|basis| WeightedRows::of(rows, basis, equalities));
         if probe
             && let (Some(weighted), Some(projector)) = (&weighted, &projector)
             && !weighted.basis.kept.is_empty()
@@ -523,14 +523,15 @@ impl InertiaShift {
             if !self.smallest_shift_passes(h, &weighted.gram, projector, scale) {
                 // Every trial before the schedule's first shift is below this one in the
                 // Loewner order, so it fails too: the schedule starts at its second shift.
-                return self.shifted(h, weighted, projector, equalities, scale, started, true);
+                return self.shifted(h, weighted, projector, scale, started, true);
             }
         }
         if let Some(factor) = definite_factor(h, scale) {
             self.last = 0.0;
             return Some(unmodified(h, factor));
         }
-        let weighted = weighted.unwrap_or_else(|| WeightedRows::of(rows, independent_rows(rows)));
+        let weighted =
+            weighted.unwrap_or_else(|| WeightedRows::of(rows, independent_rows(rows), equalities));
         let gammas: &[f64] = if self.converging {
             &PROJECTED_GAMMAS
         } else {
@@ -578,7 +579,7 @@ impl InertiaShift {
         }
         let h = flipped.as_ref().unwrap_or(h);
         let projector = projector.get_or_insert_with(|| weighted.basis.projector());
-        self.shifted(h, &weighted, projector, equalities, scale, started, false)
+        self.shifted(h, &weighted, projector, scale, started, false)
     }
 
     /// Whether the first trial of the projected shift's schedule after an iteration that
@@ -603,13 +604,11 @@ impl InertiaShift {
     /// The projected shift (h flipped where it had to be), and when none works, the shift of h
     /// plus the equality rows' term ([`FALLBACK_GAMMA`]). `skip_smallest`: the projected
     /// schedule's δ_min is known to fail ([`InertiaShift::smallest_shift_passes`]).
-    #[allow(clippy::too_many_arguments)]
     fn shifted(
         &mut self,
         h: &DMatrix<f64>,
         weighted: &WeightedRows,
         projector: &DMatrix<f64>,
-        equalities: usize,
         scale: f64,
         started: bool,
         skip_smallest: bool,
@@ -629,7 +628,7 @@ impl InertiaShift {
                     weighted: kept.clone(),
                 });
             }
-            let equality_rows = kept.iter().take_while(|&&k| k < equalities).count();
+            let equality_rows = weighted.equality_rows;
             if equality_rows > 0 {
                 let gram = gram_of(&weighted.unit.rows(0, equality_rows).into_owned());
                 base = (
@@ -665,16 +664,25 @@ struct WeightedRows {
     basis: RowBasis,
     unit: DMatrix<f64>,
     gram: DMatrix<f64>,
+    /// How many of the kept rows are equality rows (they come first).
+    equality_rows: usize,
 }
 
 impl WeightedRows {
-    fn of(rows: &DMatrix<f64>, basis: RowBasis) -> Self {
+    /// `rows`' first `equalities` rows are the equality rows.
+    fn of(rows: &DMatrix<f64>, basis: RowBasis, equalities: usize) -> Self {
         let mut unit = rows.select_rows(&basis.kept);
         for mut r in unit.row_iter_mut() {
             r /= r.norm();
         }
         let gram = gram_of(&unit);
-        WeightedRows { basis, unit, gram }
+        let equality_rows = basis.kept.iter().take_while(|&&k| k < equalities).count();
+        WeightedRows {
+            basis,
+            unit,
+            gram,
+            equality_rows,
+        }
     }
 }
 
