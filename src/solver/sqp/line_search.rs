@@ -234,7 +234,6 @@ impl Sqp<'_> {
         let rounds = self.options.second_order_corrections.unwrap_or(1);
         let mut step = d.to_vec();
         let mut values = trial_values.clone();
-        let mut last_violation = f64::INFINITY;
         for _ in 0..rounds {
             let mut bounds = self.step_box(point);
             let jd = jac * &DVector::from_column_slice(&step);
@@ -270,12 +269,11 @@ impl Sqp<'_> {
             if self.accepts(test, &corrected, 1.0) {
                 return self.complete(x, corrected);
             }
+            // Another correction only while this one lowered the violation by 1 % or more.
             let violation = merit::l1_violation(&corrected.c, &self.ev.cl, &self.ev.cu);
-            let before = merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu);
-            if violation > 0.99 * last_violation.min(before) {
+            if violation > 0.99 * merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu) {
                 return Ok(None);
             }
-            last_violation = violation;
             step = sol.d.clone();
             values = corrected;
         }
