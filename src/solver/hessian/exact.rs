@@ -82,9 +82,9 @@
 //! Cholesky pivots, so when a trial fails, every smaller one fails too. After an iteration that
 //! took a shift of the schedule, the schedule's first trial (δ_min with γ = [`PROJECTED_GAMMA`],
 //! on the flipped H) is made before the others; every trial the sequence above makes before it
-//! is smaller (no flip, no shift, a smaller γ), so when it fails they are skipped and the
-//! schedule goes on from its second δ. The factorizations kept are the same numbers as without
-//! the probe. Measured (pier_cantilever_linear, callgrind): 245 → 199 trial factorizations per
+//! is smaller (no flip, no shift or the same δ_min, a γ no larger), so when it fails they are
+//! skipped and the schedule goes on from its second δ. The factorizations kept are the same
+//! numbers as without the probe. Measured (pier_cantilever_linear, callgrind): 245 → 199 trial factorizations per
 //! run, 625 → 615 M instructions; all 39 truss files of the notes the same iterates.
 //!
 //! Damping floor: the SQP passes a floor δ_f (absolute) that it raises after a Newton step its
@@ -514,11 +514,14 @@ impl InertiaShift {
             _ => h,
         };
         let weighted = basis.map(|basis| WeightedRows::of(rows, basis, equalities));
+        // h with its negative diagonal entries flipped (see `qp::sparse`'s convexification): a
+        // separable concavity is corrected on its own variables before any shift damps every
+        // step. Tried after the γ term on h alone (below).
+        let flipped = flipped(h);
         if probe
             && let (Some(weighted), Some(projector)) = (&weighted, &projector)
             && !weighted.basis.kept.is_empty()
         {
-            let flipped = flipped(h);
             let h = flipped.as_ref().unwrap_or(h);
             if !self.smallest_shift_passes(h, &weighted.gram, projector, scale) {
                 // Every trial before the schedule's first shift is below this one in the
@@ -565,9 +568,6 @@ impl InertiaShift {
                 });
             }
         }
-        // Negative diagonal entries flipped (see `qp::sparse`'s convexification): a separable
-        // concavity is corrected on its own variables before any shift damps every step.
-        let flipped = flipped(h);
         if let Some(flipped) = &flipped {
             if let Some(factor) = definite_factor(flipped, scale) {
                 self.last = 0.0;
@@ -587,7 +587,8 @@ impl InertiaShift {
     /// ([`PROJECTED_GAMMA`]), is positive definite: the same numbers as that trial in
     /// [`InertiaShift::projected_shift`]. h is the flipped Hessian the schedule shifts. Every
     /// trial [`InertiaShift::convexify_with_rows`] makes before it is smaller in the Loewner
-    /// order (a smaller γ, no shift, no flip: each difference is positive semidefinite), and a
+    /// order (no flip, no shift or the same δ_min, a γ no larger: each difference is positive
+    /// semidefinite), and a
     /// smaller matrix has smaller Cholesky pivots (pivot j is `1/[(A₁..ⱼ)⁻¹]ⱼⱼ`), so when this
     /// one fails, they all fail: on pier_cantilever_linear, 10–15 trial factorizations of the
     /// iterations that needed a shift, each failing three quarters of the way through, are one.
