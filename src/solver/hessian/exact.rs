@@ -55,10 +55,10 @@
 //! optima. When γ alone fails there, a reduced Hessian that is only semidefinite is given δ_min
 //! on the rows' null space, still unflipped, before the flip: the shipped pier cantilever on a
 //! 1 m lattice (`spacing = 1.0`), whose last round crept 698 iterations (its optimality ×0.987
-//! per full step) and now takes 89: 1,676 → 1,067 in all, the same mass (489.152473 kg); the 39 truss
-//! files of the notes the same iterates, the Hock–Schittkowski set passing unchanged
-//! (2026-11-29). Solves watched for creep (truss rounds that a clean-up follows) keep the flip first:
-//! there the trial sent three generated decks to KKT points 0.5–0.7 % heavier (deck_3
+//! per full step) and now takes 89: 1,676 → 1,067 in all, the same mass (489.152473 kg); the
+//! 39 truss files of the notes the same iterates, the Hock–Schittkowski set passing unchanged
+//! (2026-11-29). Solves watched for creep (truss rounds that a clean-up follows) keep the flip
+//! first: there the trial sent three generated decks to KKT points 0.5–0.7 % heavier (deck_3
 //! 1,984.9 → 1,999.1 kg), which the clean-up does not leave.
 //!
 //! When no γ alone succeeds, the shift is first confined to the null space of all those rows
@@ -84,8 +84,9 @@
 //! on the flipped H) is made before the others; every trial the sequence above makes before it
 //! is smaller (no flip, no shift or the same δ_min, a γ no larger), so when it fails they are
 //! skipped and the schedule goes on from its second δ. The factorizations kept are the same
-//! numbers as without the probe. Measured (pier_cantilever_linear, callgrind): 245 → 199 trial factorizations per
-//! run, 625 → 615 M instructions; all 39 truss files of the notes the same iterates.
+//! numbers as without the probe. Measured (pier_cantilever_linear, callgrind): 245 → 199 trial
+//! factorizations per run, 625 → 615 M instructions; all 39 truss files of the notes the same
+//! iterates.
 //!
 //! Damping floor: the SQP passes a floor δ_f (absolute) that it raises after a Newton step its
 //! line search had to cut severely and lowers after full steps (`Sqp::damp_exact_steps`,
