@@ -23,9 +23,9 @@ use optimize::solver::log::LogTarget;
 /// `mmap`, so the next iteration's matrices come back as fresh pages the kernel must fault in
 /// and zero. Measured (2026-11-29, `pier_cantilever_linear.toml`, one core, 60 runs of each
 /// binary interleaved): 1,447 → 762 page faults per run, median CPU (user + system) 71.9 →
-/// 69.1 ms, the same results. The trim threshold of 256 MiB bounds the memory kept; blocks above 32 MiB (glibc's
-/// largest `mmap` threshold) are still mapped and unmapped one by one. Other platforms keep
-/// their allocator's defaults.
+/// 69.1 ms, the same results. The trim threshold of 256 MiB bounds the memory kept; blocks
+/// above 32 MiB (glibc's largest `mmap` threshold) are still mapped and unmapped one by one.
+/// Other platforms keep their allocator's defaults.
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
 fn keep_freed_memory() {
     // glibc's <malloc.h>: M_TRIM_THRESHOLD = -1, M_MMAP_THRESHOLD = -3.
