@@ -55,6 +55,21 @@ impl Linearization<'_> {
         l1_violation(&zero, self.bl, self.bu)
     }
 
+    /// An upper bound on the least ℓ1 violation reachable within `|d|∞ ≤ radius` (and the
+    /// bounds on d, which `step` must meet), from that one step: the ℓ1 violation of an affine
+    /// map is convex, so `t·step` with `t = min(1, radius/‖step‖∞)` reaches at most
+    /// `v(0) − t·(v(0) − v(step))`, and d = 0 reaches `v(0)`.
+    pub fn violation_bound(&self, step: &[f64], radius: f64) -> f64 {
+        let now = self.violation_now();
+        let longest = step.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+        let inside = if longest > radius {
+            radius / longest
+        } else {
+            1.0
+        };
+        (now - inside * (now - self.violation_after(step))).min(now)
+    }
+
     /// Decrease of each row's linearized violation along d: `vᵢ(0) − vᵢ(d)`.
     pub fn row_reductions(&self, d: &[f64]) -> Vec<f64> {
         let ad = self.a * &nalgebra::DVector::from_column_slice(d);
@@ -244,4 +259,76 @@ fn extended_bounds(dl: &[f64], du: &[f64], slacks: usize) -> (Vec<f64>, Vec<f64>
     l.extend(std::iter::repeat_n(0.0, slacks));
     u.extend(std::iter::repeat_n(f64::INFINITY, slacks));
     (l, u)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// A random linearization of `m` rows in `n` variables (half of them equalities), with a
+    /// step of length up to 4 in the box `|d|∞ ≤ 4`.
+    fn random_rows(rng: &mut ChaCha8Rng, n: usize, m: usize) -> (CsrMatrix<f64>, [Vec<f64>; 4]) {
+        let mut coo = CooMatrix::new(m, n);
+        for i in 0..m {
+            for j in 0..n {
+                if rng.random_range(0.0..1.0) < 0.6 {
+                    coo.push(i, j, rng.random_range(-2.0..2.0));
+                }
+            }
+        }
+        let (mut bl, mut bu) = (Vec::new(), Vec::new());
+        for i in 0..m {
+            let b: f64 = rng.random_range(-3.0..3.0);
+            bl.push(b);
+            bu.push(if i % 2 == 0 {
+                b
+            } else {
+                b + rng.random_range(0.0..1.0)
+            });
+        }
+        (CsrMatrix::from(&coo), [vec![-4.0; n], vec![4.0; n], bl, bu])
+    }
+
+    #[test]
+    fn the_bound_from_one_step_holds_and_is_met_by_the_least_violation() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for trial in 0..40 {
+            let (n, m) = (2 + trial % 4, 1 + trial % 5);
+            let (a, [dl, du, bl, bu]) = random_rows(&mut rng, n, m);
+            let lin = Linearization {
+                a: &a,
+                dl: &dl,
+                du: &du,
+                bl: &bl,
+                bu: &bu,
+            };
+            let step: Vec<f64> = (0..n).map(|_| rng.random_range(-4.0..4.0)).collect();
+            let radius = rng.random_range(0.1..2.0);
+            let bound = lin.violation_bound(&step, radius);
+            let longest = step.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+            // The scaled step itself reaches the convex combination or better, and d = 0 the
+            // current violation ...
+            let t = (radius / longest).min(1.0);
+            let scaled: Vec<f64> = step.iter().map(|v| t * v).collect();
+            let (now, after) = (lin.violation_now(), lin.violation_after(&step));
+            let combination = (1.0 - t) * now + t * after;
+            assert!(
+                lin.violation_after(&scaled) <= combination + 1e-12,
+                "trial {trial}"
+            );
+            assert!(
+                (bound - combination.min(now)).abs() <= 1e-12,
+                "trial {trial}"
+            );
+            // ... so the least violation within the radius is no larger.
+            let mut warm = WarmStart::default();
+            let (least, _) = least_violation(&lin, radius, &mut warm, 1e-10).expect("solved");
+            assert!(
+                least <= bound + 1e-7 * (1.0 + bound),
+                "trial {trial}: {least} > {bound}"
+            );
+        }
+    }
 }
