@@ -267,36 +267,46 @@ mod tests {
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
-    /// A random linearization of `m` rows in `n` variables (half of them equalities), with a
-    /// step of length up to 4 in the box `|d|∞ ≤ 4`.
-    fn random_rows(rng: &mut ChaCha8Rng, n: usize, m: usize) -> (CsrMatrix<f64>, [Vec<f64>; 4]) {
+    /// A random `m`×`n` matrix (60 % of its entries nonzero) and a point `target` in the box
+    /// `|d|∞ ≤ 4` that satisfies the rows: equalities (even rows) `A d = A·target`,
+    /// inequalities `A·target ≤ A d ≤ A·target + s` (s ≥ 0 random), which d = 0 violates
+    /// unless `A·target` happens to be 0.
+    fn random_rows(
+        rng: &mut ChaCha8Rng,
+        n: usize,
+        m: usize,
+        target: &[f64],
+    ) -> (CsrMatrix<f64>, Vec<f64>, Vec<f64>) {
         let mut coo = CooMatrix::new(m, n);
-        for i in 0..m {
-            for j in 0..n {
-                if rng.random_range(0.0..1.0) < 0.6 {
-                    coo.push(i, j, rng.random_range(-2.0..2.0));
-                }
-            }
-        }
         let (mut bl, mut bu) = (Vec::new(), Vec::new());
         for i in 0..m {
-            let b: f64 = rng.random_range(-3.0..3.0);
-            bl.push(b);
+            let mut centre = 0.0;
+            for (j, &t) in target.iter().enumerate() {
+                if rng.random_range(0.0..1.0) < 0.6 {
+                    let v = rng.random_range(-2.0..2.0);
+                    coo.push(i, j, v);
+                    centre += v * t;
+                }
+            }
+            bl.push(centre);
             bu.push(if i % 2 == 0 {
-                b
+                centre
             } else {
-                b + rng.random_range(0.0..1.0)
+                centre + rng.random_range(0.0..1.0)
             });
         }
-        (CsrMatrix::from(&coo), [vec![-4.0; n], vec![4.0; n], bl, bu])
+        (CsrMatrix::from(&coo), bl, bu)
     }
 
     #[test]
     fn the_bound_from_one_step_holds_and_is_met_by_the_least_violation() {
         let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let mut below_now = 0;
         for trial in 0..40 {
             let (n, m) = (2 + trial % 4, 1 + trial % 5);
-            let (a, [dl, du, bl, bu]) = random_rows(&mut rng, n, m);
+            let target: Vec<f64> = (0..n).map(|_| rng.random_range(-4.0..4.0)).collect();
+            let (a, bl, bu) = random_rows(&mut rng, n, m, &target);
+            let (dl, du) = (vec![-4.0; n], vec![4.0; n]);
             let lin = Linearization {
                 a: &a,
                 dl: &dl,
@@ -304,12 +314,17 @@ mod tests {
                 bl: &bl,
                 bu: &bu,
             };
-            let step: Vec<f64> = (0..n).map(|_| rng.random_range(-4.0..4.0)).collect();
+            // Every other trial a random step instead of one that meets the rows.
+            let step: Vec<f64> = if trial % 2 == 0 {
+                target.clone()
+            } else {
+                (0..n).map(|_| rng.random_range(-4.0..4.0)).collect()
+            };
             let radius = rng.random_range(0.1..2.0);
             let bound = lin.violation_bound(&step, radius);
             let longest = step.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
-            // The scaled step itself reaches the convex combination or better, and d = 0 the
-            // current violation ...
+            // The scaled step reaches the convex combination or better, and d = 0 the current
+            // violation ...
             let t = (radius / longest).min(1.0);
             let scaled: Vec<f64> = step.iter().map(|v| t * v).collect();
             let (now, after) = (lin.violation_now(), lin.violation_after(&step));
@@ -322,6 +337,7 @@ mod tests {
                 (bound - combination.min(now)).abs() <= 1e-12,
                 "trial {trial}"
             );
+            below_now += usize::from(bound < now - 1e-9);
             // ... so the least violation within the radius is no larger.
             let mut warm = WarmStart::default();
             let (least, _) = least_violation(&lin, radius, &mut warm, 1e-10).expect("solved");
@@ -330,5 +346,7 @@ mod tests {
                 "trial {trial}: {least} > {bound}"
             );
         }
+        // The steps that meet the rows give bounds below the current violation.
+        assert!(below_now >= 20, "{below_now} bounds below v");
     }
 }
