@@ -99,9 +99,9 @@
 //! is smaller (no flip, no shift or the same δ_min, a γ no larger), so when it fails they are
 //! skipped and the schedule goes on from its second δ; so are a converging solve's unflipped
 //! shifts above δ_min, which are not all smaller (above). Apart from those the factorizations
-//! kept are the same numbers as without the probe. Measured (pier_cantilever_linear, callgrind): 245 → 199 trial
-//! factorizations per run, 625 → 615 M instructions; all 39 truss files of the notes the same
-//! iterates.
+//! kept are the same numbers as without the probe. Measured (pier_cantilever_linear,
+//! callgrind): 245 → 199 trial factorizations per run, 625 → 615 M instructions; all 39 truss
+//! files of the notes the same iterates.
 //!
 //! Damping floor: the SQP passes a floor δ_f (absolute) that it raises after a Newton step its
 //! line search had to cut severely and lowers after full steps (`Sqp::damp_exact_steps`,
@@ -174,6 +174,11 @@ const DELTA_0: f64 = 1.0;
 pub const DELTA_0_LATER: f64 = 1e-4;
 const DELTA_MIN: f64 = 1e-10;
 const DELTA_MAX: f64 = 1e40;
+/// Growth of δ after a failed trial once a shift was needed (κ⁺); the first search grows by
+/// [`FIRST_SHIFT_GROWTH`] (κ̄⁺).
+const SHIFT_GROWTH: f64 = 8.0;
+/// Growth of δ in a first search (κ̄⁺).
+const FIRST_SHIFT_GROWTH: f64 = 100.0;
 /// Relative size of the smallest acceptable Cholesky pivot.
 const PIVOT_MIN: f64 = 1e-10;
 /// Augmentation weights tried, relative to the Hessian scale over the row scale.
@@ -533,7 +538,8 @@ impl InertiaShift {
         // h with its negative diagonal entries flipped (see `qp::sparse`'s convexification): a
         // separable concavity is corrected on its own variables before any shift damps every
         // step. Tried after the γ term on h alone (below).
-        let flipped = flipped(h);
+        let flip = negative_diagonal_flip(h);
+        let flipped = flipped(h, &flip);
         if probe
             && let (Some(weighted), Some(projector)) = (&weighted, &projector)
             && !weighted.basis.kept.is_empty()
@@ -565,12 +571,9 @@ impl InertiaShift {
             // would add: the smallest shift on the rows' null space, from δ_min up to the flip's
             // largest diagonal correction, before the flip (module header).
             let projector = projector.get_or_insert_with(|| weighted.basis.projector());
-            let flip = negative_diagonal_flip(h)
-                .iter()
-                .fold(0.0_f64, |a, &v| a.max(v))
-                / scale;
+            let largest_flip = flip.iter().fold(0.0_f64, |a, &v| a.max(v)) / scale;
             let mut delta = DELTA_MIN;
-            while delta == DELTA_MIN || delta <= flip {
+            while delta == DELTA_MIN || delta <= largest_flip {
                 let trial = projected_trial(
                     h,
                     &weighted.gram,
@@ -590,8 +593,7 @@ impl InertiaShift {
                         weighted: kept.clone(),
                     });
                 }
-                // κ⁺ of the schedule.
-                delta *= 8.0;
+                delta *= SHIFT_GROWTH;
             }
         }
         if let Some(flipped) = &flipped {
@@ -732,13 +734,11 @@ fn projected_trial(
     })
 }
 
-/// h with its negative diagonal entries flipped ([`negative_diagonal_flip`]), None when it has
-/// none.
-fn flipped(h: &DMatrix<f64>) -> Option<DMatrix<f64>> {
-    let flip = negative_diagonal_flip(h);
+/// h plus `flip` ([`negative_diagonal_flip`] of h) on its diagonal, None when nothing flips.
+fn flipped(h: &DMatrix<f64>, flip: &[f64]) -> Option<DMatrix<f64>> {
     flip.iter()
         .any(|&f| f > 0.0)
-        .then(|| h + DMatrix::from_diagonal(&DVector::from_vec(flip)))
+        .then(|| h + DMatrix::from_diagonal(&DVector::from_column_slice(flip)))
 }
 
 /// The δ schedule (module header): from the remembered shift `last` (or δ₀), growing until
@@ -756,14 +756,18 @@ fn shift_schedule<T>(
         (true, false) => DELTA_0,
         (true, true) => DELTA_0_LATER,
         // δ_min was tried above: the next one up, as the growth below would take.
-        (false, _) if last / 3.0 <= DELTA_MIN => 8.0 * DELTA_MIN,
+        (false, _) if last / 3.0 <= DELTA_MIN => SHIFT_GROWTH * DELTA_MIN,
         (false, _) => last / 3.0,
     };
     while delta <= DELTA_MAX {
         if let Some(found) = works(delta) {
             return Some((found, delta));
         }
-        delta *= if first { 100.0 } else { 8.0 };
+        delta *= if first {
+            FIRST_SHIFT_GROWTH
+        } else {
+            SHIFT_GROWTH
+        };
     }
     None
 }
@@ -898,7 +902,7 @@ mod tests {
             for pair in passed.windows(2) {
                 assert!(pair[1] || !pair[0], "a pass below a failure: {passed:?}");
             }
-            if let Some(f) = flipped(&a) {
+            if let Some(f) = flipped(&a, &negative_diagonal_flip(&a)) {
                 let top = gammas[3] * scale;
                 let flipped_passes = definite_factor_of_sum(&f, Some((&b, top)), scale).is_some();
                 assert!(flipped_passes || !passed[3]);

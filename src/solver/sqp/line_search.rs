@@ -232,8 +232,10 @@ impl Sqp<'_> {
         test: &Acceptance,
     ) -> Result<Option<Point>, ()> {
         let rounds = self.options.second_order_corrections.unwrap_or(1);
+        let tol = self.qp_tolerance();
         let mut step = d.to_vec();
         let mut values = trial_values.clone();
+        let mut violation = merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu);
         for _ in 0..rounds {
             let mut bounds = self.step_box(point);
             let jd = jac * &DVector::from_column_slice(&step);
@@ -243,7 +245,6 @@ impl Sqp<'_> {
                 bounds.bu[i] -= shift;
             }
             let problem = bounds.problem(self.model.qp_hessian(), &point.derivatives.grad, jac);
-            let tol = self.qp_tolerance();
             let sol = match &self.newton_base {
                 // A Newton step on the active set is corrected on the same active set.
                 Some(base) => {
@@ -270,11 +271,12 @@ impl Sqp<'_> {
                 return self.complete(x, corrected);
             }
             // Another correction only while this one lowered the violation by 1 % or more.
-            let violation = merit::l1_violation(&corrected.c, &self.ev.cl, &self.ev.cu);
-            if violation > 0.99 * merit::l1_violation(&values.c, &self.ev.cl, &self.ev.cu) {
+            let lowered = merit::l1_violation(&corrected.c, &self.ev.cl, &self.ev.cu);
+            if lowered > 0.99 * violation {
                 return Ok(None);
             }
-            step = sol.d.clone();
+            violation = lowered;
+            step = sol.d;
             values = corrected;
         }
         Ok(None)
