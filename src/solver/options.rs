@@ -132,6 +132,13 @@ settings! {
     /// (relative): decreases shrinking by ½ or faster per stretch have less than the last one
     /// left to gain, so the window need not wait. 0 (the default) turns it off.
     progress_stretch: usize = 0;
+    /// With `progress_stretch` on: the stretch test extrapolates instead of asking for ½. The
+    /// solve ends `SlowProgress` when the last two stretches' decreases Δ₁ ≥ Δ₂ ≥ 0, continued
+    /// geometrically (ratio Δ₂/Δ₁ per stretch) over the next `progress_window` iterations, add
+    /// up to at most `progress_tolerance` (relative): the window's test applied to the
+    /// decreases to come rather than to those seen. Off by default; the truss default rounds
+    /// with `linear` mass turn it on (`truss::rounds`).
+    progress_extrapolate: bool = false;
     /// Second-order corrections the line search tries after a rejected full step, 1–20, each
     /// from the constraint values at the last corrected point and kept only while the
     /// violation falls by 1 % or more (IPOPT's `max_soc`, `kappa_soc`). `None`: 1, except in

@@ -74,6 +74,7 @@ impl Sqp<'_> {
             self.options.progress_window,
             self.options.progress_tolerance,
             self.options.progress_stretch,
+            self.options.progress_extrapolate,
         ) {
             return Some(Next::Finish(Status::SlowProgress));
         }

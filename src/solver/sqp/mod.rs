@@ -25,7 +25,9 @@
 //!    `Options::progress_tolerance` over `Options::progress_window` iterations, or
 //!    (`Options::progress_stretch` = s) its decrease over the last s iterations at most half
 //!    that over the s before and below the tolerance: a geometric tail with ratio ≤ ½ per
-//!    stretch has less than the last stretch's decrease left. Cost: 2s + 1 stored objectives.
+//!    stretch has less than the last stretch's decrease left; or (`Options::progress_extrapolate`)
+//!    the two stretches' decreases, continued geometrically over the next window, within the
+//!    tolerance. Cost: 2s + 1 stored objectives.
 //! 4. Weights ρᵢ of the ℓ1 merit `φ = f + Σ ρᵢ viol(cᵢ)`: Powell's update from the QP
 //!    multipliers, raised where needed so the linearized violation decrease pays for the
 //!    model's objective change (see `merit`).

@@ -78,8 +78,10 @@ impl ProgressWatch {
     /// lowered the objective by no more than `tolerance·max(1, |f₀|)`, or (`stretch` > 0) when
     /// the decrease over the last `stretch` feasible iterations is at most half the decrease
     /// over the `stretch` before them and at most `tolerance·max(1, |f|)`: decreases that
-    /// shrink at least geometrically by ½ per stretch leave less than the last one to gain.
-    /// Never when `window` is 0.
+    /// shrink at least geometrically by ½ per stretch leave less than the last one to gain; or
+    /// (`extrapolate`) when the last two stretches' decreases Δ₁ > 0 and 0 ≤ Δ₂ ≤ Δ₁, continued
+    /// geometrically over the next `window` iterations, add up to at most that tolerance
+    /// (`Options::progress_extrapolate`). Never when `window` is 0.
     pub(super) fn creeping(
         &mut self,
         feasible: bool,
@@ -87,6 +89,7 @@ impl ProgressWatch {
         window: usize,
         tolerance: f64,
         stretch: usize,
+        extrapolate: bool,
     ) -> bool {
         if window == 0 || !feasible {
             self.length = 0;
@@ -101,7 +104,15 @@ impl ProgressWatch {
             if self.recent.len() == 2 * stretch + 1 {
                 let older = self.recent[0] - self.recent[stretch];
                 let last = self.recent[stretch] - f;
-                if older > 0.0 && last <= 0.5 * older && last <= tolerance * f.abs().max(1.0) {
+                let allowed = tolerance * f.abs().max(1.0);
+                if older > 0.0 && last <= 0.5 * older && last <= allowed {
+                    return true;
+                }
+                if extrapolate
+                    && older > 0.0
+                    && (0.0..=older).contains(&last)
+                    && geometric_tail(last, last / older, window / stretch) <= allowed
+                {
                     return true;
                 }
             }
@@ -120,6 +131,12 @@ impl ProgressWatch {
         self.length = 1;
         false
     }
+}
+
+/// `Σⱼ₌₁..ₙ Δ·rʲ`: the next n decreases of a sequence whose last decrease is Δ and whose
+/// decreases shrink by the ratio r each.
+fn geometric_tail(last: f64, ratio: f64, n: usize) -> f64 {
+    (1..=n).map(|j| last * ratio.powi(j as i32)).sum()
 }
 
 /// One accepted point with everything evaluated there.
@@ -349,10 +366,21 @@ mod tests {
         tolerance: f64,
         stretch: usize,
     ) -> Option<usize> {
+        first_creep_extrapolated(values, window, tolerance, stretch, false)
+    }
+
+    /// As `first_creep_by`, the stretch test extrapolating when `extrapolate`.
+    fn first_creep_extrapolated(
+        values: &[f64],
+        window: usize,
+        tolerance: f64,
+        stretch: usize,
+        extrapolate: bool,
+    ) -> Option<usize> {
         let mut watch = ProgressWatch::default();
         values
             .iter()
-            .position(|&f| watch.creeping(!f.is_nan(), f, window, tolerance, stretch))
+            .position(|&f| watch.creeping(!f.is_nan(), f, window, tolerance, stretch, extrapolate))
     }
 
     #[test]
@@ -400,5 +428,32 @@ mod tests {
         let mut interrupted = geometric.clone();
         interrupted[3] = f64::NAN;
         assert_eq!(first_creep_by(&interrupted, 50, 1e-3, 2), Some(8));
+    }
+
+    #[test]
+    fn a_slower_geometric_tail_ends_when_its_extrapolation_is_within_the_tolerance() {
+        // Decrements shrinking ×0.9 per iteration (objective 1000 − 20(1 − 0.9^k)): ×0.59 per
+        // stretch of 5, never the ½ the plain stretch test asks for, and 20 gained over the
+        // first window of 50. The last stretch's decrease 8.19·0.9^(k−5), continued at ×0.59
+        // over the ten stretches of a window, is ≈ 1.43 times it: at most 1e-3·1000 from k = 29.
+        let slow: Vec<f64> = (0..60)
+            .map(|k| 1000.0 - 20.0 * (1.0 - 0.9_f64.powi(k)))
+            .collect();
+        assert_eq!(first_creep_extrapolated(&slow, 50, 1e-3, 5, true), Some(29));
+        assert_eq!(first_creep_extrapolated(&slow, 50, 1e-3, 5, false), None);
+        // A steady decrease continues at its rate (ratio 1): 1e-3 per iteration is the
+        // window's creep (0.05 over 50), judged as soon as two stretches are full; 0.1 per
+        // iteration is progress for both tests.
+        let steady: Vec<f64> = (0..60).map(|k| 1000.0 - 1e-3 * k as f64).collect();
+        assert_eq!(
+            first_creep_extrapolated(&steady, 50, 1e-3, 5, true),
+            Some(10)
+        );
+        assert_eq!(
+            first_creep_extrapolated(&steady, 50, 1e-3, 5, false),
+            Some(50)
+        );
+        let progress: Vec<f64> = (0..60).map(|k| 1000.0 - 0.1 * k as f64).collect();
+        assert_eq!(first_creep_extrapolated(&progress, 50, 1e-3, 5, true), None);
     }
 }
