@@ -22,8 +22,8 @@
 //! solve of its own without the creep test, to the solver's own tests (the rest of the
 //! iteration budget): the design has converged as far as the objective tells, so what is left
 //! is either that walk, which ends at its bound (a force at zero, a beam at its minimum length)
-//! for the next clean-up to act on, or the last digits. Going on with the window instead crept
-//! a full window of 50 iterations before the same point (measured 2026-11-29, all 30 files of
+//! for the next clean-up to act on, or the last digits. Going on with the window instead crept a
+//! full window of 50 iterations before the same point (measured 2026-11-29, all 30 files of
 //! docs/notes/truss.md, one thread: the same masses to six digits, iterations crane_derrick 958
 //! → 805, crane_derrick_linear 184 → 177, generated pier_2 244 → 204, pier_3 61 → 62, the rest
 //! the same; crane seeds 1–20: seed 17 Stalled at 206.32 kg → Optimal at 116.20 kg). Cost:
@@ -32,33 +32,42 @@
 //! that ends after the first drop of a staircase (cantilever_bridge's third round) can end
 //! heavier (+0.67 %).
 //!
+//! With `linear` mass, that solve is cleaned up every [`CLEAN_UP_CHECK`] iterations, as a
+//! round is at its start. Nothing else ends its walk before the iteration budget: the shipped
+//! pier on a 0.5 m lattice walked one such round to its 1,000-iteration budget (484.858 kg,
+//! its steps cut to 0.01–0.15 every fifth iteration), 0.04 % lighter than where it began.
+//! Measured (2026-11-29, one thread): that pier 1,233 → 608 iterations in all, 64 → 33 s,
+//! 484.6638 → 484.6875 kg (still 1.19 % below its LP); on the 1 m lattice 291 → 281
+//! iterations, 489.1525 → 489.1546 kg; the Warren deck at 1 m 135 → 134, generated pier_2
+//! 241 → 137, crane_derrick_linear 82 → 64, at the same masses; the other 37 truss files of
+//! docs/notes/truss.md the same iterates.
+//!
 //! With `linear` mass four more defaults apply. The stretch test extrapolates
-//! (`Options::progress_extrapolate`): a round also ends when its last two stretches'
-//! decreases, continued geometrically over the next window, add up to at most
-//! [`CREEP_TOLERANCE`], the window's verdict up to 40 iterations sooner. A settling walk's
-//! decreases shrink slowly (generated pier_2's resumed rounds: ×0.92–0.95 per full step, ×0.6–0.8
-//! per stretch, 630.757 → 630.528 kg in 214 iterations, 50 at a time), which the ½ never sees. Measured (2026-11-29, `optimize truss F -q --threads 1`, the 39
-//! truss files of docs/notes/truss.md): pier_2 321 → 244 iterations, vpier_2 89 → 76,
-//! warren_deck_linear 68 → 60, deck_6 68 → 59, crane_tripod_linear 45 → 37,
-//! crane_derrick_linear 74 → 85, every mass the same to eight digits or lower; the shipped pier
-//! on a 1 m lattice 471 → 291 (the same mass). With Euler compression the objective falls in
-//! staircases, and a tail cut before the next step cost through_deck_cantilever 433 → 712
-//! iterations and cantilever_bridge 0.75 % mass. A round is cleaned up once after
-//! [`CLEAN_UP_CHECK`] iterations and ends there if that changes the design (else it goes on
-//! from that point). The rounds after the first keep only the sign's part of each loaded
-//! member's force, as the layout start does for the first. And a full step the line search
-//! rejects gets up to [`LINEAR_CORRECTIONS`] second-order corrections (IPOPT's `max_soc`)
-//! instead of the solver's one: a design that walks (joints sliding, a beam shortening) takes
-//! steps the balance rows' linearization cannot follow (their curvature is f/l, the larger the
-//! shorter the member), and one correction only halves the violation. Measured (2026-11-29,
-//! `optimize truss F -q --threads 1`, the 39 truss files of docs/notes/truss.md): the Warren
-//! deck on a 1 m lattice 393 → 130 iterations (1.8 → 0.6 s), the same mass; the 27 `linear`
-//! files of the set 2,602 → 1,971 iterations (vpier_0 309 → 135, vdeck_4 203 → 72, deck_7
-//! 138 → 72, footbridge 227 → 142, crane_derrick_linear 177 → 71; vdeck_0 117 → 220, pier_2
-//! 204 → 314), all Optimal; deck_3 and deck_5 end 0.13 % heavier in 29 iterations instead of
-//! 90 and 97, pier_2 0.03 % heavier, deck_6 0.13 % lighter. For every mass model it sent
-//! through_deck_cantilever (Euler mass) to Stalled at 11,244 kg (from Optimal at 10,767.50), so
-//! the other models keep one.
+//! (`Options::progress_extrapolate`): a round also ends when its last two stretches' decreases,
+//! continued geometrically over the next window, add up to at most [`CREEP_TOLERANCE`], the
+//! window's verdict up to 40 iterations sooner. A settling walk's decreases shrink slowly
+//! (generated pier_2's resumed rounds: ×0.92–0.95 per full step, ×0.6–0.8 per stretch,
+//! 630.757 → 630.528 kg in 214 iterations, 50 at a time), which the ½ never sees. Measured
+//! (2026-11-29, `optimize truss F -q --threads 1`, the 39 truss files of docs/notes/truss.md):
+//! pier_2 314 → 241 iterations, vpier_2 85 → 72, warren_deck_linear 64 → 56, deck_6 64 → 55,
+//! crane_tripod_linear 42 → 34, crane_derrick_linear 71 → 82, every mass the same to seven digits;
+//! the shipped pier on a 1 m lattice 471 → 291 (the same mass). With Euler compression the
+//! objective falls in staircases, and a tail cut before the next step cost through_deck_cantilever
+//! 427 → 702 iterations and cantilever_bridge 0.75 % mass. A round is cleaned up once after
+//! [`CLEAN_UP_CHECK`] iterations and ends there if that changes the design (else it goes on from
+//! that point). The rounds after the first keep only the sign's part of each loaded member's force,
+//! as the layout start does for the first. And a full step the line search rejects gets up to
+//! [`LINEAR_CORRECTIONS`] second-order corrections (IPOPT's `max_soc`) instead of the solver's one:
+//! a design that walks (joints sliding, a beam shortening) takes steps the balance rows'
+//! linearization cannot follow (their curvature is f/l, the larger the shorter the member), and one
+//! correction only halves the violation. Measured (2026-11-29, `optimize truss F -q --threads 1`,
+//! the 39 truss files of docs/notes/truss.md): the Warren deck on a 1 m lattice 393 → 130
+//! iterations (1.8 → 0.6 s), the same mass; the 27 `linear` files of the set 2,602 → 1,971
+//! iterations (vpier_0 309 → 135, vdeck_4 203 → 72, deck_7 138 → 72, footbridge 227 → 142,
+//! crane_derrick_linear 177 → 71; vdeck_0 117 → 220, pier_2 204 → 314), all Optimal; deck_3 and
+//! deck_5 end 0.13 % heavier in 29 iterations instead of 90 and 97, pier_2 0.03 % heavier, deck_6
+//! 0.13 % lighter. For every mass model it sent through_deck_cantilever (Euler mass) to Stalled at
+//! 11,244 kg (from Optimal at 10,767.50), so the other models keep one.
 
 use crate::error::Error;
 use crate::solver::{Evaluations, IterationRecord, Options, Solution, Status};
@@ -101,7 +110,9 @@ pub const CREEP_STRETCH: usize = CREEP_WINDOW / 10;
 /// clean-up change the design (a member's force gone to zero, two joints met, a straight run
 /// formed), the round ends there and the next one starts on the cleaned design; else the round
 /// goes on from that point. A round on a design that needs a topology change otherwise crawls
-/// toward it until the creep test ends it ([`CREEP_WINDOW`] iterations at the least). Not with
+/// toward it until the creep test ends it ([`CREEP_WINDOW`] iterations at the least). A round
+/// that goes on without the creep test after a creep end (module header) is checked again
+/// every this many iterations: nothing else ends its walk before the iteration budget. Not with
 /// Euler compression or the length objective: there a clean-up in mid-route (a member whose
 /// force passes through zero, joints that only pass near each other) cost crane_tripod 37 % mass
 /// and left crane_derrick and through_deck_cantilever Stalled, roof_warren Infeasible
@@ -183,8 +194,8 @@ pub fn solve_rounds(
         let check = creep_test
             && nlp.settings().mass_linear_in_force()
             && restarts == 0
-            && checked == 0
-            && options.max_iterations > CLEAN_UP_CHECK;
+            && (checked == 0 || settle)
+            && options.max_iterations > checked + CLEAN_UP_CHECK;
         if check {
             options.max_iterations = CLEAN_UP_CHECK;
         } else {
