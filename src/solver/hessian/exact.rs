@@ -572,28 +572,30 @@ impl InertiaShift {
             // largest diagonal correction, before the flip (module header).
             let projector = projector.get_or_insert_with(|| weighted.basis.projector());
             let largest_flip = flip.iter().fold(0.0_f64, |a, &v| a.max(v)) / scale;
-            let mut delta = DELTA_MIN;
-            while delta == DELTA_MIN || delta <= largest_flip {
-                let trial = projected_trial(
+            // The schedule as after a shift of δ_min: δ_min, then up by κ⁺ from 8·δ_min.
+            let unflipped = shift_schedule(DELTA_MIN, true, |delta| {
+                if delta > DELTA_MIN && delta > largest_flip {
+                    return None;
+                }
+                projected_trial(
                     h,
                     &weighted.gram,
                     projector,
                     delta,
                     &PROJECTED_GAMMAS,
                     scale,
-                );
-                if let Some((matrix, factor, row_weight)) = trial {
-                    self.last = delta;
-                    self.took_shift = true;
-                    return Some(Convexified {
-                        matrix,
-                        factor,
-                        shift: delta,
-                        row_weight,
-                        weighted: kept.clone(),
-                    });
-                }
-                delta *= SHIFT_GROWTH;
+                )
+            });
+            if let Some(((matrix, factor, row_weight), delta)) = unflipped {
+                self.last = delta;
+                self.took_shift = true;
+                return Some(Convexified {
+                    matrix,
+                    factor,
+                    shift: delta,
+                    row_weight,
+                    weighted: kept.clone(),
+                });
             }
         }
         if let Some(flipped) = &flipped {
